@@ -1,0 +1,74 @@
+//! What the Linux computer sends the flight core: velocity setpoints with a time-to-live, and
+//! mode commands. NED, m/s; times in MCU µs.
+
+/// A velocity setpoint from the mission computer (paper A: per-axis velocity over UART).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VelocitySetpoint {
+    pub vel_ned_mps: [f32; 3],
+    /// Heading to hold (rad, NED, from north towards east); `None` keeps the current heading.
+    pub yaw_rad: Option<f32>,
+    /// The setpoint is valid for this long after it arrives; then the core holds position.
+    pub ttl_ms: u16,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Command {
+    Arm,
+    Disarm,
+    /// Position hold at the current point.
+    Hold,
+    /// Land here; disarm on touchdown.
+    Land,
+    /// Follow external velocity setpoints (entered automatically by the first setpoint when armed).
+    Velocity,
+}
+
+/// Why a command was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandError {
+    /// Arm refused: gyro/baro calibration still running.
+    NotCalibrated,
+    /// Arm refused: no GPS home yet.
+    NoHome,
+    /// Arm refused: already flying / not on the ground.
+    NotLanded,
+    /// The command needs the vehicle armed.
+    Disarmed,
+    /// Setpoint with NaN/inf or absurd values.
+    InvalidSetpoint,
+}
+
+impl core::fmt::Display for CommandError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            CommandError::NotCalibrated => "calibration still running",
+            CommandError::NoHome => "no GPS home position yet",
+            CommandError::NotLanded => "vehicle is not landed",
+            CommandError::Disarmed => "vehicle is disarmed",
+            CommandError::InvalidSetpoint => "setpoint is not finite or out of range",
+        })
+    }
+}
+
+/// Flight mode of the core.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Disarmed,
+    Hold,
+    Velocity,
+    Land,
+}
+
+/// Why the core left the mode the operator asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FailsafeCause {
+    None,
+    /// Velocity setpoint older than its time-to-live → hold.
+    SetpointStale,
+    /// No fresh setpoint for `setpoint_lost_land_s` → land.
+    SetpointLost,
+    /// Outside the geofence → hold at the fence.
+    Geofence,
+    /// GPS lost in flight → altitude hold, then land.
+    GpsLost,
+}

@@ -1,0 +1,513 @@
+//! The 500 Hz flight step: sensors → navigation → mode logic → control cascade → mixer.
+//!
+//! This is the thin task (PX4's module wrapper) around the plain control structs in
+//! [`crate::control`]: it owns them, feeds them the navigation solution and the Linux computer's
+//! setpoints, and produces motor commands. Time is always an argument (`now_us`, MCU µs).
+
+use crate::commands::{Command, CommandError, FailsafeCause, Mode, VelocitySetpoint};
+use crate::control::accel::AccelController;
+use crate::control::attitude::{TiltPid, YawController};
+use crate::control::mixer::{Mixer, MixerSaturation};
+use crate::control::velocity::{CrossTrack, VelocityController};
+use crate::control::vertical::VerticalController;
+use crate::geometry::MOTOR_COUNT;
+use crate::nav::{NavNotReady, NavState, Navigator};
+use crate::params::Params;
+use crate::sensors::SensorInputs;
+use fcc_nav::observer::AccelObserver;
+use fcc_nav::GRAVITY_MPS2;
+
+/// Above this height over the take-off point the horizontal loops are active (below, on the
+/// ground, tilting would only scrape the legs).
+const AIRBORNE_ALT_M: f32 = 0.3;
+/// Largest velocity component a setpoint may carry before it is refused as absurd.
+const SETPOINT_ABS_LIMIT_MPS: f32 = 50.0;
+
+/// What one step did, for telemetry and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepTelemetry {
+    pub t_us: u64,
+    /// Horizontal velocity command after cross-track compensation, and vertical command (NED).
+    pub vel_cmd_ned_mps: [f32; 3],
+    /// Acceleration command (NED north, east).
+    pub accel_cmd_ne_mps2: [f32; 2],
+    /// Observer estimates in the heading frame (forward, right), m/s².
+    pub accel_est_fr_mps2: [f32; 2],
+    /// Raw gravity-compensated accelerometer in the heading frame (forward, right), m/s².
+    pub accel_meas_fr_mps2: [f32; 2],
+    pub roll_cmd_rad: f32,
+    pub pitch_cmd_rad: f32,
+    pub yaw_cmd_rad: f32,
+    pub thrust_n: f32,
+    pub torque_nm: [f32; 3],
+    pub cross_track_m: f32,
+    pub saturation: MixerSaturation,
+}
+
+pub struct FlightCore {
+    params: Params,
+    nav: Navigator,
+    mode: Mode,
+    failsafe: FailsafeCause,
+    setpoint: Option<(VelocitySetpoint, u64)>,
+    last_setpoint_us: Option<u64>,
+    hold_ne_m: [f32; 2],
+    hold_alt_m: f32,
+    yaw_hold_rad: f32,
+    takeoff_alt_m: f32,
+    landed: bool,
+    touchdown_s: f32,
+    cross_track: CrossTrack,
+    vel_ctrl: VelocityController,
+    accel_ctrl: [AccelController; 2],
+    observer: [AccelObserver; 2],
+    vert_ctrl: VerticalController,
+    roll_pid: TiltPid,
+    pitch_pid: TiltPid,
+    yaw_ctrl: YawController,
+    mixer: Mixer,
+    /// Last tilt command (forward, right), rad: the observer's θ_cmd input.
+    tilt_cmd_fr_rad: [f32; 2],
+    tilt_sat_fr: [f32; 2],
+    last_step_us: Option<u64>,
+    motors: [f32; MOTOR_COUNT],
+    telemetry: StepTelemetry,
+}
+
+impl FlightCore {
+    pub fn new(params: Params) -> Self {
+        let c = params.control;
+        let a = params.airframe;
+        let acc = AccelController::new(
+            c.model_k1_mps2_per_rad,
+            c.model_k2_per_s,
+            c.accel_p_rad_per_mps2,
+            c.accel_i_rad_per_mps,
+            c.accel_forgetting,
+            params.limits.max_tilt_deg.to_radians() * 0.5,
+        );
+        let obs = AccelObserver::new(c.observer_params());
+        Self {
+            params,
+            nav: Navigator::new(params.nav),
+            mode: Mode::Disarmed,
+            failsafe: FailsafeCause::None,
+            setpoint: None,
+            last_setpoint_us: None,
+            hold_ne_m: [0.0; 2],
+            hold_alt_m: 0.0,
+            yaw_hold_rad: 0.0,
+            takeoff_alt_m: 0.0,
+            landed: true,
+            touchdown_s: 0.0,
+            cross_track: CrossTrack::new(c.cross_track_k_per_s),
+            vel_ctrl: VelocityController::new(c.vel_p_per_s, c.vel_i_per_s2, c.vel_i_limit_mps2, c.accel_cmd_limit_mps2),
+            accel_ctrl: [acc, acc],
+            observer: [obs, obs],
+            vert_ctrl: VerticalController::new(a.mass_kg, c.vz_p_per_s, c.vz_i_per_s2, c.vz_i_limit_mps2),
+            roll_pid: TiltPid::new(c.att_p_nm_per_rad, c.att_i_nm_per_rad_s, c.att_d_nm_per_radps, c.att_i_limit_nm),
+            pitch_pid: TiltPid::new(c.att_p_nm_per_rad, c.att_i_nm_per_rad_s, c.att_d_nm_per_radps, c.att_i_limit_nm),
+            yaw_ctrl: YawController::new(
+                c.yaw_p_per_s,
+                c.yaw_rate_ff_nm_per_radps,
+                c.yaw_rate_p_nm_per_radps,
+                c.yaw_rate_i_nm_per_rad,
+                c.yaw_rate_forgetting,
+                c.yaw_rate_limit_radps,
+            ),
+            mixer: Mixer::new(a.arm_m, a.torque_to_thrust_m, a.max_thrust_per_motor_n, a.idle_cmd),
+            tilt_cmd_fr_rad: [0.0; 2],
+            tilt_sat_fr: [0.0; 2],
+            last_step_us: None,
+            motors: [0.0; MOTOR_COUNT],
+            telemetry: StepTelemetry::default(),
+        }
+    }
+
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+    pub fn failsafe(&self) -> FailsafeCause {
+        self.failsafe
+    }
+    pub fn armed(&self) -> bool {
+        self.mode != Mode::Disarmed
+    }
+    pub fn landed(&self) -> bool {
+        self.landed
+    }
+    pub fn nav(&self) -> &NavState {
+        self.nav.state()
+    }
+    pub fn navigator(&self) -> &Navigator {
+        &self.nav
+    }
+    pub fn telemetry(&self) -> &StepTelemetry {
+        &self.telemetry
+    }
+    pub fn motors(&self) -> &[f32; MOTOR_COUNT] {
+        &self.motors
+    }
+
+    /// Apply an operator command.
+    pub fn command(&mut self, now_us: u64, cmd: Command) -> Result<(), CommandError> {
+        let nav = *self.nav.state();
+        match cmd {
+            Command::Arm => {
+                if self.armed() {
+                    return Ok(());
+                }
+                match self.nav.ready() {
+                    Err(NavNotReady::Calibrating) => return Err(CommandError::NotCalibrated),
+                    Err(NavNotReady::NoGpsHome) => return Err(CommandError::NoHome),
+                    Ok(()) => {}
+                }
+                if !self.landed {
+                    return Err(CommandError::NotLanded);
+                }
+                self.reset_controllers();
+                self.takeoff_alt_m = -nav.pos_ned_m[2];
+                self.enter_hold(&nav);
+                self.failsafe = FailsafeCause::None;
+                self.last_setpoint_us = Some(now_us);
+            }
+            Command::Disarm => {
+                self.mode = Mode::Disarmed;
+                self.landed = true;
+                self.setpoint = None;
+            }
+            Command::Hold => {
+                if !self.armed() {
+                    return Err(CommandError::Disarmed);
+                }
+                self.enter_hold(&nav);
+                self.failsafe = FailsafeCause::None;
+            }
+            Command::Land => {
+                if !self.armed() {
+                    return Err(CommandError::Disarmed);
+                }
+                self.enter_land(&nav);
+            }
+            Command::Velocity => {
+                if !self.armed() {
+                    return Err(CommandError::Disarmed);
+                }
+                self.mode = Mode::Velocity;
+                self.failsafe = FailsafeCause::None;
+                self.last_setpoint_us = Some(now_us);
+            }
+        }
+        Ok(())
+    }
+
+    /// Accept a velocity setpoint from the mission computer. Out-of-limit speeds are clamped to
+    /// the MCU's limits; non-finite or absurd values are refused.
+    pub fn setpoint(&mut self, now_us: u64, sp: VelocitySetpoint) -> Result<(), CommandError> {
+        let finite = sp.vel_ned_mps.iter().all(|v| v.is_finite() && v.abs() <= SETPOINT_ABS_LIMIT_MPS)
+            && sp.yaw_rad.map_or(true, |y| y.is_finite());
+        if !finite {
+            return Err(CommandError::InvalidSetpoint);
+        }
+        if !self.armed() {
+            return Err(CommandError::Disarmed);
+        }
+        let l = &self.params.limits;
+        let mut v = sp.vel_ned_mps;
+        let h = libm::hypotf(v[0], v[1]);
+        if h > l.max_horiz_speed_mps {
+            v[0] *= l.max_horiz_speed_mps / h;
+            v[1] *= l.max_horiz_speed_mps / h;
+        }
+        v[2] = v[2].clamp(-l.max_climb_mps, l.max_descent_mps);
+        self.setpoint = Some((VelocitySetpoint { vel_ned_mps: v, ..sp }, now_us));
+        self.last_setpoint_us = Some(now_us);
+        // A fresh setpoint resumes velocity mode from hold (but never overrides a landing).
+        if self.mode == Mode::Hold {
+            self.mode = Mode::Velocity;
+            self.failsafe = FailsafeCause::None;
+        }
+        Ok(())
+    }
+
+    fn reset_controllers(&mut self) {
+        self.cross_track.reset();
+        self.vel_ctrl.reset();
+        for c in &mut self.accel_ctrl {
+            c.reset();
+        }
+        for o in &mut self.observer {
+            o.reset(0.0);
+        }
+        self.vert_ctrl.reset();
+        self.roll_pid.reset();
+        self.pitch_pid.reset();
+        self.yaw_ctrl.reset();
+        self.tilt_cmd_fr_rad = [0.0; 2];
+        self.tilt_sat_fr = [0.0; 2];
+    }
+
+    fn enter_hold(&mut self, nav: &NavState) {
+        self.mode = Mode::Hold;
+        self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
+        self.hold_alt_m = -nav.pos_ned_m[2];
+        self.yaw_hold_rad = nav.euler.yaw_rad;
+        self.cross_track.reset();
+    }
+
+    fn enter_land(&mut self, nav: &NavState) {
+        self.mode = Mode::Land;
+        self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
+        self.yaw_hold_rad = nav.euler.yaw_rad;
+        self.touchdown_s = 0.0;
+        self.cross_track.reset();
+    }
+
+    /// One 500 Hz step; returns the ESC commands (0..1).
+    pub fn step(&mut self, now_us: u64, inputs: &SensorInputs) -> [f32; MOTOR_COUNT] {
+        let dt_s = match self.last_step_us {
+            Some(t) if now_us > t => ((now_us - t) as f32 * 1e-6).min(0.02),
+            _ => 0.002,
+        };
+        self.last_step_us = Some(now_us);
+        let still = self.mode == Mode::Disarmed && self.landed;
+        let nav = *self.nav.step(now_us, inputs, still);
+        self.telemetry = StepTelemetry { t_us: now_us, ..Default::default() };
+        if self.mode == Mode::Disarmed {
+            self.motors = [0.0; MOTOR_COUNT];
+            return self.motors;
+        }
+        self.update_mode(now_us, &nav);
+        if self.mode == Mode::Disarmed {
+            self.motors = [0.0; MOTOR_COUNT];
+            return self.motors;
+        }
+        let (v_cmd_ne, vz_cmd_down, yaw_cmd) = self.guidance(now_us, &nav);
+        self.control(dt_s, &nav, v_cmd_ne, vz_cmd_down, yaw_cmd);
+        if self.mode == Mode::Land {
+            self.detect_touchdown(dt_s, &nav, vz_cmd_down);
+        }
+        self.motors
+    }
+
+    fn update_mode(&mut self, now_us: u64, nav: &NavState) {
+        let l = self.params.limits;
+        let since_sp_s = self.last_setpoint_us.map_or(f32::MAX, |t| now_us.saturating_sub(t) as f32 * 1e-6);
+        match self.mode {
+            Mode::Velocity => {
+                let stale = match self.setpoint {
+                    Some((sp, t)) => now_us.saturating_sub(t) > sp.ttl_ms as u64 * 1000,
+                    None => true,
+                };
+                if stale {
+                    self.enter_hold(nav);
+                    self.failsafe = FailsafeCause::SetpointStale;
+                }
+            }
+            Mode::Hold if self.failsafe == FailsafeCause::SetpointStale => {
+                if since_sp_s > l.setpoint_lost_land_s {
+                    self.enter_land(nav);
+                    self.failsafe = FailsafeCause::SetpointLost;
+                }
+            }
+            _ => {}
+        }
+        // GPS lost in flight: the horizontal estimate will drift → land on baro/accel.
+        if nav.home_set && !nav.gps_ok && !self.landed && self.mode != Mode::Land {
+            self.enter_land(nav);
+            self.failsafe = FailsafeCause::GpsLost;
+        }
+    }
+
+    /// Velocity command (NED north/east, down) and heading command for the current mode.
+    fn guidance(&mut self, now_us: u64, nav: &NavState) -> ([f32; 2], f32, f32) {
+        let l = self.params.limits;
+        let c = self.params.control;
+        let alt = -nav.pos_ned_m[2];
+        let hold_ne = |s: &Self| {
+            let e = [s.hold_ne_m[0] - nav.pos_ned_m[0], s.hold_ne_m[1] - nav.pos_ned_m[1]];
+            clamp_norm([c.pos_p_per_s * e[0], c.pos_p_per_s * e[1]], l.max_horiz_speed_mps)
+        };
+        let (mut v_ne, mut vz_down, yaw) = match self.mode {
+            Mode::Hold => {
+                let vz = (-(c.alt_p_per_s * (self.hold_alt_m - alt))).clamp(-l.max_climb_mps, l.max_descent_mps);
+                (hold_ne(self), vz, self.yaw_hold_rad)
+            }
+            Mode::Velocity => match self.setpoint {
+                Some((sp, _)) => {
+                    if let Some(y) = sp.yaw_rad {
+                        self.yaw_hold_rad = y;
+                    }
+                    ([sp.vel_ned_mps[0], sp.vel_ned_mps[1]], sp.vel_ned_mps[2], self.yaw_hold_rad)
+                }
+                None => (hold_ne(self), 0.0, self.yaw_hold_rad),
+            },
+            Mode::Land => {
+                let above_takeoff = alt - self.takeoff_alt_m;
+                let v = if above_takeoff > l.land_slow_alt_m { l.land_speed_mps } else { l.land_final_speed_mps };
+                (hold_ne(self), v, self.yaw_hold_rad)
+            }
+            Mode::Disarmed => ([0.0; 2], 0.0, nav.euler.yaw_rad),
+        };
+        // Geofence: no velocity component that takes the vehicle further outside.
+        let r = libm::hypotf(nav.pos_ned_m[0], nav.pos_ned_m[1]);
+        if r > l.fence_radius_m {
+            let out = [nav.pos_ned_m[0] / r, nav.pos_ned_m[1] / r];
+            let v_out = v_ne[0] * out[0] + v_ne[1] * out[1];
+            let pull = 0.5 * (r - l.fence_radius_m).min(2.0);
+            let remove = v_out.max(0.0) + pull;
+            v_ne = [v_ne[0] - remove * out[0], v_ne[1] - remove * out[1]];
+            self.failsafe = FailsafeCause::Geofence;
+        }
+        if alt - self.takeoff_alt_m > l.fence_alt_m && vz_down < 0.0 {
+            vz_down = 0.3;
+            self.failsafe = FailsafeCause::Geofence;
+        }
+        let _ = now_us;
+        (v_ne, vz_down, yaw)
+    }
+
+    fn control(&mut self, dt_s: f32, nav: &NavState, v_cmd_ne: [f32; 2], vz_cmd_down: f32, yaw_cmd: f32) {
+        let c = self.params.control;
+        let l = self.params.limits;
+        let e = nav.euler;
+        let alt_above_takeoff = -nav.pos_ned_m[2] - self.takeoff_alt_m;
+        if self.landed && vz_cmd_down < -0.2 {
+            self.landed = false;
+        }
+        let airborne = !self.landed && alt_above_takeoff > AIRBORNE_ALT_M;
+
+        // Horizontal: cross-track (velocity mode only) → velocity PI → acceleration command.
+        let v_ne = [nav.vel_ned_mps[0], nav.vel_ned_mps[1]];
+        let p_ne = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
+        let v_cmd = if self.mode == Mode::Velocity && airborne {
+            self.cross_track.update(dt_s, v_cmd_ne, p_ne, v_ne)
+        } else {
+            self.cross_track.reset();
+            v_cmd_ne
+        };
+        let (sy, cy) = (libm::sinf(e.yaw_rad), libm::cosf(e.yaw_rad));
+        let to_fr = |v: [f32; 2]| [cy * v[0] + sy * v[1], -sy * v[0] + cy * v[1]];
+        let sat_ne = [cy * self.tilt_sat_fr[0] - sy * self.tilt_sat_fr[1], sy * self.tilt_sat_fr[0] + cy * self.tilt_sat_fr[1]];
+        let sat_ne = [sign_or_zero(sat_ne[0]), sign_or_zero(sat_ne[1])];
+        let mut a_cmd_ne = if airborne { self.vel_ctrl.update(dt_s, v_cmd, v_ne, sat_ne) } else { [0.0; 2] };
+        if !airborne {
+            self.vel_ctrl.reset();
+        }
+        // Heading frame (forward, right): observer and acceleration controller per axis.
+        let a_cmd_fr = to_fr(a_cmd_ne);
+        let v_fr = to_fr(v_ne);
+        let a_meas_fr = to_fr([nav.accel_ned_mps2[0], nav.accel_ned_mps2[1]]);
+        let tilt_fr = [-e.pitch_rad, e.roll_rad];
+        let max_tilt = l.max_tilt_deg.to_radians();
+        let mut tilt_cmd = [0.0f32; 2];
+        let mut a_est = [0.0f32; 2];
+        for i in 0..2 {
+            a_est[i] = self.observer[i].update(tilt_fr[i], self.tilt_cmd_fr_rad[i], a_meas_fr[i], dt_s);
+            tilt_cmd[i] = if airborne {
+                self.accel_ctrl[i].update(dt_s, a_cmd_fr[i], a_est[i], v_fr[i], self.tilt_sat_fr[i])
+            } else {
+                self.accel_ctrl[i].reset();
+                0.0
+            };
+        }
+        let n = libm::hypotf(tilt_cmd[0], tilt_cmd[1]);
+        self.tilt_sat_fr = [0.0; 2];
+        if n > max_tilt {
+            self.tilt_sat_fr = [sign_or_zero(tilt_cmd[0]), sign_or_zero(tilt_cmd[1])];
+            tilt_cmd = [tilt_cmd[0] * max_tilt / n, tilt_cmd[1] * max_tilt / n];
+            a_cmd_ne = clamp_norm(a_cmd_ne, c.model_k1_mps2_per_rad * max_tilt);
+        }
+        self.tilt_cmd_fr_rad = tilt_cmd;
+        let pitch_cmd = -tilt_cmd[0];
+        let roll_cmd = tilt_cmd[1];
+
+        // Vertical: climb-rate PI → thrust.
+        let tilt_cos = libm::cosf(e.roll_rad) * libm::cosf(e.pitch_rad);
+        let thrust_n = if self.landed {
+            self.vert_ctrl.reset();
+            0.0
+        } else {
+            let sat = self.telemetry.saturation.thrust_shift_sign;
+            self.vert_ctrl.update(dt_s, -vz_cmd_down, -nav.vel_ned_mps[2], tilt_cos, sat)
+        };
+
+        // Attitude and yaw → torques → mixer.
+        let r = nav.rate_frd_radps;
+        let (torque, yaw_sat) = if airborne {
+            let t_roll = self.roll_pid.update(dt_s, roll_cmd, e.roll_rad, r[0], true);
+            let t_pitch = self.pitch_pid.update(dt_s, pitch_cmd, e.pitch_rad, r[1], true);
+            let yaw_rate = fcc_nav::attitude::euler_rates(r, e.roll_rad, e.pitch_rad)[2];
+            let ys = if self.telemetry.saturation.yaw_scale < 1.0 { 1.0 } else { 0.0 };
+            let t_yaw = self.yaw_ctrl.update(dt_s, yaw_cmd, e.yaw_rad, yaw_rate, ys * sign_or_zero(yaw_cmd - e.yaw_rad));
+            ([t_roll, t_pitch, t_yaw], ys)
+        } else {
+            self.roll_pid.reset();
+            self.pitch_pid.reset();
+            self.yaw_ctrl.reset();
+            // Rate damping only while near the ground.
+            let d = c.att_d_nm_per_radps;
+            ([-d * r[0], -d * r[1], 0.0], 0.0)
+        };
+        let _ = yaw_sat;
+        let (mut motors, sat) = self.mixer.mix(thrust_n, torque);
+        if self.landed {
+            motors = [self.params.airframe.idle_cmd; MOTOR_COUNT];
+        }
+        self.motors = motors;
+        self.telemetry = StepTelemetry {
+            t_us: nav.t_us,
+            vel_cmd_ned_mps: [v_cmd[0], v_cmd[1], vz_cmd_down],
+            accel_cmd_ne_mps2: a_cmd_ne,
+            accel_est_fr_mps2: a_est,
+            accel_meas_fr_mps2: a_meas_fr,
+            roll_cmd_rad: roll_cmd,
+            pitch_cmd_rad: pitch_cmd,
+            yaw_cmd_rad: yaw_cmd,
+            thrust_n,
+            torque_nm: torque,
+            cross_track_m: self.cross_track.error_m(),
+            saturation: sat,
+        };
+    }
+
+    fn detect_touchdown(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) {
+        let hover_n = self.params.airframe.mass_kg * GRAVITY_MPS2;
+        let descending_cmd = vz_cmd_down > 0.0;
+        let not_moving = libm::fabsf(nav.vel_ned_mps[2]) < 0.25;
+        let low_thrust = self.telemetry.thrust_n < 0.8 * hover_n;
+        if self.landed || (descending_cmd && not_moving && low_thrust) {
+            self.touchdown_s += dt_s;
+        } else {
+            self.touchdown_s = 0.0;
+        }
+        if self.touchdown_s >= self.params.limits.touchdown_s {
+            self.mode = Mode::Disarmed;
+            self.landed = true;
+            self.setpoint = None;
+            self.motors = [0.0; MOTOR_COUNT];
+        }
+    }
+}
+
+fn clamp_norm(v: [f32; 2], max: f32) -> [f32; 2] {
+    let n = libm::hypotf(v[0], v[1]);
+    if n > max && n > 0.0 {
+        [v[0] * max / n, v[1] * max / n]
+    } else {
+        v
+    }
+}
+
+fn sign_or_zero(x: f32) -> f32 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}

@@ -1,0 +1,243 @@
+//! Navigation task: wires sensor samples into the `fcc_nav` filters at 500 Hz.
+//!
+//! Inputs: IMU (every tick), magnetometer, barometer, GPS (as they arrive). Outputs a
+//! [`NavState`] in NED / FRD. Before arming, while still on the ground, it calibrates the gyro
+//! bias and the barometric reference over `calibration_s`. The first valid GPS fix becomes the
+//! local NED origin (home).
+
+use crate::params::NavParams;
+use crate::sensors::SensorInputs;
+use fcc_nav::attitude::{accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, AttitudeEstimator, Euler};
+use fcc_nav::geodesy::{Lla, LocalNed};
+use fcc_nav::horizontal::HorizontalEstimator;
+use fcc_nav::lowpass::LowPass2;
+use fcc_nav::vertical::{pressure_to_alt_m, VerticalEstimator};
+
+/// Largest accelerometer bias the navigation filters may attribute (m/s²).
+const ACCEL_BIAS_LIMIT_MPS2: f32 = 1.5;
+
+/// The navigation solution, NED relative to home, body FRD.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NavState {
+    pub t_us: u64,
+    pub euler: Euler,
+    /// Gyro rate after bias calibration, body FRD.
+    pub rate_frd_radps: [f32; 3],
+    pub pos_ned_m: [f32; 3],
+    pub vel_ned_mps: [f32; 3],
+    /// Gravity-compensated acceleration from the accelerometer, NED (raw, noisy).
+    pub accel_ned_mps2: [f32; 3],
+    /// Barometric altitude above the calibration point (m, up).
+    pub baro_alt_m: f32,
+    /// GPS currently feeding the horizontal filter.
+    pub gps_ok: bool,
+    /// Home (NED origin) known from GPS.
+    pub home_set: bool,
+    /// Gyro/baro calibration done.
+    pub calibrated: bool,
+}
+
+/// Why the navigation task is not ready to fly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NavNotReady {
+    Calibrating,
+    NoGpsHome,
+}
+
+pub struct Navigator {
+    params: NavParams,
+    att: AttitudeEstimator,
+    horiz: HorizontalEstimator,
+    vert: VerticalEstimator,
+    home: Option<LocalNed>,
+    gyro_bias_frd_radps: [f32; 3],
+    cal_gyro_sum: [f32; 3],
+    cal_accel_sum: [f32; 3],
+    cal_baro_sum: f32,
+    cal_imu_n: u32,
+    cal_baro_n: u32,
+    cal_start_us: Option<u64>,
+    calibrated: bool,
+    p0_pa: f32,
+    last_imu_us: Option<u64>,
+    last_gps_us: Option<u64>,
+    last_mag_frd: Option<[f32; 3]>,
+    /// Accelerometer low-pass for the tilt correction only (vibration before asin/atan2).
+    tilt_accel_lpf: [LowPass2; 3],
+    state: NavState,
+}
+
+impl Navigator {
+    pub fn new(params: NavParams) -> Self {
+        let mut horiz = HorizontalEstimator::new(params.horiz_gains());
+        horiz.n.set_bias_gain(params.horiz_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+        horiz.e.set_bias_gain(params.horiz_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+        let mut vert = VerticalEstimator::new(params.vert_gains());
+        vert.down.set_bias_gain(params.vert_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+        Self {
+            params,
+            att: AttitudeEstimator::new(params.tilt_gains(), params.yaw_gains(), params.declination_deg.to_radians()),
+            horiz,
+            vert,
+            home: None,
+            gyro_bias_frd_radps: [0.0; 3],
+            cal_gyro_sum: [0.0; 3],
+            cal_accel_sum: [0.0; 3],
+            cal_baro_sum: 0.0,
+            cal_imu_n: 0,
+            cal_baro_n: 0,
+            cal_start_us: None,
+            calibrated: false,
+            p0_pa: 101_325.0,
+            last_imu_us: None,
+            last_gps_us: None,
+            last_mag_frd: None,
+            tilt_accel_lpf: [LowPass2::new(params.tilt_accel_lpf_hz, 500.0); 3],
+            state: NavState::default(),
+        }
+    }
+
+    pub fn state(&self) -> &NavState {
+        &self.state
+    }
+
+    pub fn home(&self) -> Option<Lla> {
+        self.home.as_ref().map(|h| h.origin())
+    }
+
+    pub fn ready(&self) -> Result<(), NavNotReady> {
+        if !self.calibrated {
+            Err(NavNotReady::Calibrating)
+        } else if self.home.is_none() {
+            Err(NavNotReady::NoGpsHome)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// One 500 Hz step. `on_ground_disarmed`: calibration may run (vehicle still).
+    pub fn step(&mut self, now_us: u64, s: &SensorInputs, on_ground_disarmed: bool) -> &NavState {
+        let mut s = *s;
+        if let Some(m) = s.mag.as_mut() {
+            for i in 0..3 {
+                m.mag_frd_ut[i] -= self.params.mag_offset_frd_ut[i];
+            }
+            self.last_mag_frd = Some(m.mag_frd_ut);
+        }
+        if let Some(imu) = s.imu.as_mut() {
+            for i in 0..3 {
+                imu.accel_frd_mps2[i] -= self.params.accel_offset_frd_mps2[i];
+            }
+        }
+        let s = &s;
+        if !self.calibrated {
+            self.calibrate(now_us, s, on_ground_disarmed);
+        }
+        if let Some(imu) = s.imu {
+            let dt_s = match self.last_imu_us {
+                Some(t) if imu.t_us > t => ((imu.t_us - t) as f32 * 1e-6).min(0.02),
+                _ => 0.002,
+            };
+            self.last_imu_us = Some(imu.t_us);
+            let gyro = [
+                imu.gyro_frd_radps[0] - self.gyro_bias_frd_radps[0],
+                imu.gyro_frd_radps[1] - self.gyro_bias_frd_radps[1],
+                imu.gyro_frd_radps[2] - self.gyro_bias_frd_radps[2],
+            ];
+            let mag = s.mag.map(|m| m.mag_frd_ut);
+            let f = imu.accel_frd_mps2;
+            let f_lp = [
+                self.tilt_accel_lpf[0].update(f[0]),
+                self.tilt_accel_lpf[1].update(f[1]),
+                self.tilt_accel_lpf[2].update(f[2]),
+            ];
+            let euler = if self.calibrated {
+                self.att.update(gyro, Some(f_lp), mag, dt_s)
+            } else {
+                self.att.euler()
+            };
+            let a_ned = linear_accel_ned_mps2(&euler, imu.accel_frd_mps2);
+            if self.calibrated {
+                self.horiz.update([a_ned[0], a_ned[1]], dt_s);
+                self.vert.update(a_ned[2], dt_s);
+            }
+            self.state.euler = euler;
+            self.state.rate_frd_radps = gyro;
+            self.state.accel_ned_mps2 = a_ned;
+        }
+        if let Some(b) = s.baro {
+            let alt = pressure_to_alt_m(b.pressure_pa, self.p0_pa);
+            self.state.baro_alt_m = alt;
+            if self.calibrated {
+                self.vert.baro_alt(alt);
+            }
+        }
+        if let Some(g) = s.gps {
+            if g.fix_ok && g.lat_deg.is_finite() && g.lon_deg.is_finite() {
+                let lla = Lla { lat_deg: g.lat_deg, lon_deg: g.lon_deg, alt_m: g.alt_m as f64 };
+                if self.home.is_none() && self.calibrated {
+                    self.home = Some(LocalNed::new(lla));
+                    let p = self.state.pos_ned_m;
+                    self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
+                    self.state.pos_ned_m = [0.0, 0.0, p[2]];
+                }
+                if let Some(home) = &self.home {
+                    let ned = home.lla_to_ned(&lla);
+                    let delay_steps = (self.params.gps_latency_s / 0.002 + 0.5) as usize;
+                    self.horiz.gps([ned[0] as f32, ned[1] as f32], delay_steps);
+                    self.last_gps_us = Some(now_us);
+                }
+            }
+        }
+        let gps_ok = match self.last_gps_us {
+            Some(t) => now_us.saturating_sub(t) as f32 * 1e-6 < self.params.gps_timeout_s,
+            None => false,
+        };
+        if !gps_ok && self.last_gps_us.is_some() {
+            self.horiz.clear_gps();
+        }
+        let pn = self.horiz.pos_ne_m();
+        let vn = self.horiz.vel_ne_mps();
+        self.state.t_us = now_us;
+        self.state.pos_ned_m = [pn[0], pn[1], -self.vert.alt_m()];
+        self.state.vel_ned_mps = [vn[0], vn[1], self.vert.vel_down_mps()];
+        self.state.gps_ok = gps_ok;
+        self.state.home_set = self.home.is_some();
+        self.state.calibrated = self.calibrated;
+        &self.state
+    }
+
+    fn calibrate(&mut self, now_us: u64, s: &SensorInputs, still: bool) {
+        if !still {
+            return;
+        }
+        let start = *self.cal_start_us.get_or_insert(now_us);
+        if let Some(imu) = s.imu {
+            for i in 0..3 {
+                self.cal_gyro_sum[i] += imu.gyro_frd_radps[i];
+                self.cal_accel_sum[i] += imu.accel_frd_mps2[i];
+            }
+            self.cal_imu_n += 1;
+        }
+        if let Some(b) = s.baro {
+            self.cal_baro_sum += b.pressure_pa;
+            self.cal_baro_n += 1;
+        }
+        let elapsed_s = now_us.saturating_sub(start) as f32 * 1e-6;
+        if elapsed_s >= self.params.calibration_s && self.cal_imu_n > 100 && self.cal_baro_n > 5 {
+            let n = self.cal_imu_n as f32;
+            self.gyro_bias_frd_radps = [self.cal_gyro_sum[0] / n, self.cal_gyro_sum[1] / n, self.cal_gyro_sum[2] / n];
+            let f = [self.cal_accel_sum[0] / n, self.cal_accel_sum[1] / n, self.cal_accel_sum[2] / n];
+            self.p0_pa = self.cal_baro_sum / self.cal_baro_n as f32;
+            let (roll, pitch) = accel_tilt_rad(f);
+            let yaw = match self.last_mag_frd {
+                Some(m) => mag_heading_rad(m, roll, pitch, self.params.declination_deg.to_radians()),
+                None => 0.0,
+            };
+            self.att.reset(Euler { roll_rad: roll, pitch_rad: pitch, yaw_rad: yaw });
+            self.vert.reset(0.0, 0.0);
+            self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
+            self.calibrated = true;
+        }
+    }
+}

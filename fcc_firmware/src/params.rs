@@ -1,0 +1,329 @@
+//! Every gain and limit of the flight core in one struct, with documented defaults for paper A's
+//! octorotor (4.5 kg, 1.05 m, 8 × 10×4.5" props, 650 Kv, 5S).
+//!
+//! Units are in the field names. Defaults were tuned in the SITL against noisy sensor models
+//! (see `sitl::sensor_models`), not against perfect sensors.
+
+use fcc_nav::complementary::CfGains;
+use fcc_nav::observer::AccelObserverParams;
+
+/// Airframe constants the controller needs (the mixer's allocation and the thrust model).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AirframeParams {
+    pub mass_kg: f32,
+    /// Motor distance from the centre (1.05 m diameter frame → 0.525 m).
+    pub arm_m: f32,
+    /// Rotor torque / thrust ratio (m), for yaw allocation.
+    pub torque_to_thrust_m: f32,
+    /// Static thrust of one motor at full command (N). ESC command ∝ rotor speed, thrust ∝ speed².
+    pub max_thrust_per_motor_n: f32,
+    /// Motor command while armed on the ground (spinning, no lift).
+    pub idle_cmd: f32,
+}
+
+impl Default for AirframeParams {
+    fn default() -> Self {
+        Self {
+            mass_kg: 4.5,
+            arm_m: 0.525,
+            torque_to_thrust_m: 0.016,
+            max_thrust_per_motor_n: 12.0,
+            idle_cmd: 0.1,
+        }
+    }
+}
+
+/// Navigation filter tuning (complementary-filter crossovers, paper eq. 1).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NavParams {
+    /// Roll/pitch: accelerometer angles through F_L, gyro through F_H. Low crossover because the
+    /// in-flight accelerometer carries motor vibration and manoeuvre accelerations.
+    pub tilt_omega_radps: f32,
+    pub tilt_zeta: f32,
+    /// Yaw: tilt-compensated magnetometer through F_L (rides through short disturbances).
+    pub yaw_omega_radps: f32,
+    pub yaw_zeta: f32,
+    /// Horizontal: GPS position through F_L, NED acceleration through F_H.
+    pub horiz_omega_radps: f32,
+    pub horiz_zeta: f32,
+    /// Vertical: barometric altitude through F_L, vertical acceleration through F_H (eqs. 5–6).
+    pub vert_omega_radps: f32,
+    pub vert_zeta: f32,
+    /// Magnetic declination (east positive). Paper A's site in Korea: about 8° west.
+    pub declination_deg: f32,
+    /// GPS receiver latency compensated by the horizontal filter.
+    pub gps_latency_s: f32,
+    /// A GPS fix older than this is no longer applied (GPS lost).
+    pub gps_timeout_s: f32,
+    /// Low-pass cut-off on the accelerometer for the tilt correction (motor vibration).
+    pub tilt_accel_lpf_hz: f32,
+    /// Skip the accelerometer tilt correction when | |f| − g | exceeds this.
+    pub accel_gate_mps2: f32,
+    /// Time on the ground, disarmed and still, used to calibrate gyro bias and baro reference.
+    pub calibration_s: f32,
+    /// Accelerometer offsets from the pre-flight 6-orientation calibration (subtracted), FRD.
+    pub accel_offset_frd_mps2: [f32; 3],
+    /// Magnetometer hard-iron offsets from the compass calibration (subtracted), FRD.
+    pub mag_offset_frd_ut: [f32; 3],
+    /// Third pole of the vertical/horizontal filters that estimates the remaining accelerometer
+    /// bias (vibration rectification, drift); 0 = the paper's plain 2nd-order filter.
+    pub vert_bias_pole_radps: f32,
+    pub horiz_bias_pole_radps: f32,
+}
+
+impl Default for NavParams {
+    fn default() -> Self {
+        Self {
+            tilt_omega_radps: 0.1,
+            tilt_zeta: 1.0,
+            yaw_omega_radps: 0.1,
+            yaw_zeta: 1.0,
+            horiz_omega_radps: 1.0,
+            horiz_zeta: 0.8,
+            vert_omega_radps: 0.12,
+            vert_zeta: 1.0,
+            declination_deg: -8.0,
+            gps_latency_s: 0.12,
+            gps_timeout_s: 1.0,
+            tilt_accel_lpf_hz: 5.0,
+            accel_gate_mps2: 2.0,
+            calibration_s: 2.0,
+            accel_offset_frd_mps2: [0.0; 3],
+            mag_offset_frd_ut: [0.0; 3],
+            vert_bias_pole_radps: 0.03,
+            horiz_bias_pole_radps: 0.05,
+        }
+    }
+}
+
+impl NavParams {
+    pub fn tilt_gains(&self) -> CfGains {
+        CfGains::new(self.tilt_omega_radps, self.tilt_zeta)
+    }
+    pub fn yaw_gains(&self) -> CfGains {
+        CfGains::new(self.yaw_omega_radps, self.yaw_zeta)
+    }
+    pub fn horiz_gains(&self) -> CfGains {
+        CfGains::new(self.horiz_omega_radps, self.horiz_zeta)
+    }
+    pub fn vert_gains(&self) -> CfGains {
+        CfGains::new(self.vert_omega_radps, self.vert_zeta)
+    }
+}
+
+/// Control gains, paper A Fig. 10 cascade.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ControlParams {
+    /// Position hold: velocity command per metre of position error (1/s).
+    pub pos_p_per_s: f32,
+    /// Cross-track compensation gain K_ct (eq. 9), 1/s.
+    pub cross_track_k_per_s: f32,
+    /// Horizontal velocity PI → acceleration command.
+    pub vel_p_per_s: f32,
+    pub vel_i_per_s2: f32,
+    pub vel_i_limit_mps2: f32,
+    pub accel_cmd_limit_mps2: f32,
+    /// Acceleration controller: feedback PI on (a_cmd − â) with forgetting factor λ (eqs. 16–17).
+    pub accel_p_rad_per_mps2: f32,
+    pub accel_i_rad_per_mps: f32,
+    pub accel_forgetting: f32,
+    /// Luenberger observer and feed-forward model a = k1·θ − k2·v (eqs. 11, 14, 15). k1, k2 from
+    /// the least-squares fit (`fcc_nav::sysid`) on SITL flight data: reproduce with
+    /// `cargo test -p fcc_tests --release --test sysid -- --nocapture`.
+    pub model_k1_mps2_per_rad: f32,
+    pub model_k2_per_s: f32,
+    /// First-order model of the closed attitude loop θ̇ = −a·θ + b·θ_cmd.
+    pub att_model_a_per_s: f32,
+    pub att_model_b_per_s: f32,
+    pub observer_l_per_s: f32,
+    /// Vertical: altitude P (hold), vertical-speed PI → vertical acceleration → thrust.
+    pub alt_p_per_s: f32,
+    pub vz_p_per_s: f32,
+    pub vz_i_per_s2: f32,
+    pub vz_i_limit_mps2: f32,
+    /// Roll/pitch PID: torque (N·m) per rad of error, per rad·s of integral, per rad/s of rate.
+    pub att_p_nm_per_rad: f32,
+    pub att_i_nm_per_rad_s: f32,
+    pub att_d_nm_per_radps: f32,
+    pub att_i_limit_nm: f32,
+    /// Yaw: r_cmd = Kψ·(ψ_cmd − ψ); u_r = K_ff·r_cmd + Kp·e_r + Ki·I_r (eq. 18), I with forgetting.
+    pub yaw_p_per_s: f32,
+    pub yaw_rate_ff_nm_per_radps: f32,
+    pub yaw_rate_p_nm_per_radps: f32,
+    pub yaw_rate_i_nm_per_rad: f32,
+    pub yaw_rate_forgetting: f32,
+    pub yaw_rate_limit_radps: f32,
+}
+
+impl Default for ControlParams {
+    fn default() -> Self {
+        Self {
+            pos_p_per_s: 0.9,
+            cross_track_k_per_s: 1.0,
+            vel_p_per_s: 2.0,
+            vel_i_per_s2: 0.3,
+            vel_i_limit_mps2: 1.5,
+            accel_cmd_limit_mps2: 4.0,
+            accel_p_rad_per_mps2: 0.03,
+            accel_i_rad_per_mps: 0.06,
+            accel_forgetting: 0.9995,
+            model_k1_mps2_per_rad: 9.81,
+            model_k2_per_s: 0.25,
+            att_model_a_per_s: 4.0,
+            att_model_b_per_s: 4.0,
+            observer_l_per_s: 4.0,
+            alt_p_per_s: 1.2,
+            vz_p_per_s: 3.0,
+            vz_i_per_s2: 1.0,
+            vz_i_limit_mps2: 3.0,
+            att_p_nm_per_rad: 6.0,
+            att_i_nm_per_rad_s: 1.0,
+            att_d_nm_per_radps: 1.4,
+            att_i_limit_nm: 0.5,
+            yaw_p_per_s: 1.5,
+            yaw_rate_ff_nm_per_radps: 0.1,
+            yaw_rate_p_nm_per_radps: 0.8,
+            yaw_rate_i_nm_per_rad: 0.3,
+            yaw_rate_forgetting: 0.999,
+            yaw_rate_limit_radps: 1.0,
+        }
+    }
+}
+
+impl ControlParams {
+    pub fn observer_params(&self) -> AccelObserverParams {
+        AccelObserverParams {
+            k1_mps2_per_rad: self.model_k1_mps2_per_rad,
+            k2_per_s: self.model_k2_per_s,
+            att_a_per_s: self.att_model_a_per_s,
+            att_b_per_s: self.att_model_b_per_s,
+            gain_l_per_s: self.observer_l_per_s,
+        }
+    }
+}
+
+/// Hard limits and failsafe timing, enforced on the MCU whatever the Linux side sends.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LimitParams {
+    pub max_horiz_speed_mps: f32,
+    pub max_climb_mps: f32,
+    pub max_descent_mps: f32,
+    pub max_tilt_deg: f32,
+    /// Geofence: horizontal radius around home and ceiling above home.
+    pub fence_radius_m: f32,
+    pub fence_alt_m: f32,
+    /// A velocity setpoint older than its time-to-live → hold; no fresh setpoint for this long
+    /// (while in velocity mode or in the hold it caused) → land.
+    pub setpoint_lost_land_s: f32,
+    /// Landing: descent speed high up, and the slow final descent below `land_slow_alt_m`.
+    pub land_speed_mps: f32,
+    pub land_final_speed_mps: f32,
+    pub land_slow_alt_m: f32,
+    /// Touchdown: on ground for this long (low vertical speed, thrust well below hover) → disarm.
+    pub touchdown_s: f32,
+}
+
+impl Default for LimitParams {
+    fn default() -> Self {
+        Self {
+            max_horiz_speed_mps: 8.0,
+            max_climb_mps: 2.5,
+            max_descent_mps: 1.5,
+            max_tilt_deg: 25.0,
+            fence_radius_m: 200.0,
+            fence_alt_m: 100.0,
+            setpoint_lost_land_s: 3.0,
+            land_speed_mps: 0.8,
+            land_final_speed_mps: 0.35,
+            land_slow_alt_m: 2.0,
+            touchdown_s: 1.0,
+        }
+    }
+}
+
+/// All parameters of the flight core.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Params {
+    pub airframe: AirframeParams,
+    pub nav: NavParams,
+    pub control: ControlParams,
+    pub limits: LimitParams,
+}
+
+/// Why a parameter set was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ParamError {
+    pub field: &'static str,
+    pub reason: &'static str,
+}
+
+impl core::fmt::Display for ParamError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}: {}", self.field, self.reason)
+    }
+}
+
+impl Params {
+    /// Range checks, so a bad parameter file or a bad set over the link is refused with a reason.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        fn check(field: &'static str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
+            if !v.is_finite() {
+                return Err(ParamError { field, reason: "not finite" });
+            }
+            if v < lo || v > hi {
+                return Err(ParamError { field, reason: "out of range" });
+            }
+            Ok(())
+        }
+        let a = &self.airframe;
+        check("airframe.mass_kg", a.mass_kg, 0.2, 50.0)?;
+        check("airframe.arm_m", a.arm_m, 0.05, 3.0)?;
+        check("airframe.torque_to_thrust_m", a.torque_to_thrust_m, 0.001, 0.2)?;
+        check("airframe.max_thrust_per_motor_n", a.max_thrust_per_motor_n, 0.5, 500.0)?;
+        check("airframe.idle_cmd", a.idle_cmd, 0.0, 0.3)?;
+        let n = &self.nav;
+        check("nav.tilt_omega_radps", n.tilt_omega_radps, 0.001, 20.0)?;
+        check("nav.yaw_omega_radps", n.yaw_omega_radps, 0.001, 20.0)?;
+        check("nav.horiz_omega_radps", n.horiz_omega_radps, 0.001, 20.0)?;
+        check("nav.vert_omega_radps", n.vert_omega_radps, 0.001, 20.0)?;
+        check("nav.tilt_zeta", n.tilt_zeta, 0.1, 3.0)?;
+        check("nav.yaw_zeta", n.yaw_zeta, 0.1, 3.0)?;
+        check("nav.horiz_zeta", n.horiz_zeta, 0.1, 3.0)?;
+        check("nav.vert_zeta", n.vert_zeta, 0.1, 3.0)?;
+        check("nav.declination_deg", n.declination_deg, -180.0, 180.0)?;
+        check("nav.gps_latency_s", n.gps_latency_s, 0.0, 0.25)?;
+        check("nav.gps_timeout_s", n.gps_timeout_s, 0.2, 10.0)?;
+        check("nav.tilt_accel_lpf_hz", n.tilt_accel_lpf_hz, 0.5, 100.0)?;
+        check("nav.calibration_s", n.calibration_s, 0.1, 30.0)?;
+        check("nav.vert_bias_pole_radps", n.vert_bias_pole_radps, 0.0, 1.0)?;
+        check("nav.horiz_bias_pole_radps", n.horiz_bias_pole_radps, 0.0, 1.0)?;
+        for v in n.accel_offset_frd_mps2 {
+            check("nav.accel_offset_frd_mps2", v, -3.0, 3.0)?;
+        }
+        for v in n.mag_offset_frd_ut {
+            check("nav.mag_offset_frd_ut", v, -200.0, 200.0)?;
+        }
+        let l = &self.limits;
+        check("limits.max_horiz_speed_mps", l.max_horiz_speed_mps, 0.1, 30.0)?;
+        check("limits.max_climb_mps", l.max_climb_mps, 0.1, 10.0)?;
+        check("limits.max_descent_mps", l.max_descent_mps, 0.1, 10.0)?;
+        check("limits.max_tilt_deg", l.max_tilt_deg, 5.0, 60.0)?;
+        check("limits.fence_radius_m", l.fence_radius_m, 5.0, 10_000.0)?;
+        check("limits.fence_alt_m", l.fence_alt_m, 2.0, 1_000.0)?;
+        check("limits.setpoint_lost_land_s", l.setpoint_lost_land_s, 0.1, 60.0)?;
+        check("limits.land_speed_mps", l.land_speed_mps, 0.1, 3.0)?;
+        check("limits.land_final_speed_mps", l.land_final_speed_mps, 0.1, 1.0)?;
+        check("limits.touchdown_s", l.touchdown_s, 0.2, 10.0)?;
+        let c = &self.control;
+        check("control.accel_forgetting", c.accel_forgetting, 0.9, 1.0)?;
+        check("control.yaw_rate_forgetting", c.yaw_rate_forgetting, 0.9, 1.0)?;
+        check("control.model_k1_mps2_per_rad", c.model_k1_mps2_per_rad, 1.0, 30.0)?;
+        check("control.model_k2_per_s", c.model_k2_per_s, 0.0, 5.0)?;
+        Ok(())
+    }
+}

@@ -1,0 +1,232 @@
+//! An in-process stand-in for the Linux computer of paper A: it reads the MCU's navigation state,
+//! runs the plan (hover, a waypoint mission through `fcc_mission`, or nothing when carried) and
+//! sends velocity setpoints and commands at 20 Hz — what the bridge and mission node do over the
+//! UART in the full stack.
+
+use super::log::PlanPhase;
+use super::scenario::{FlightPlan, Scenario};
+use crate::commands::{Command, Mode, VelocitySetpoint};
+use crate::flight::FlightCore;
+use fcc_mission::{Mission, Phase, Request, WaypointFollower};
+
+/// Setpoint time-to-live sent with every velocity setpoint (ms): several 20 Hz periods.
+pub const SETPOINT_TTL_MS: u16 = 300;
+
+enum Plan {
+    Hover { alt_m: f32, hold_s: f32, hold_start_s: Option<f64>, settle_s: f64, landing: bool },
+    Mission { follower: WaypointFollower, land_sent: bool },
+    Carried,
+}
+
+pub struct LinuxSide {
+    plan: Plan,
+    phase: PlanPhase,
+    armed_once: bool,
+    done: bool,
+    events: Vec<(f64, String)>,
+}
+
+impl LinuxSide {
+    pub fn new(s: &Scenario) -> Result<Self, String> {
+        let plan = match &s.flight {
+            FlightPlan::Hover { alt_m, hold_s } => {
+                Plan::Hover { alt_m: *alt_m, hold_s: *hold_s, hold_start_s: None, settle_s: 0.0, landing: false }
+            }
+            FlightPlan::Mission { mission_file } => {
+                let text = std::fs::read_to_string(mission_file).map_err(|e| format!("{}: {e}", mission_file.display()))?;
+                let m: Mission =
+                    fcc_mission::from_yaml_str(&text).map_err(|e| format!("{}: {e}", mission_file.display()))?;
+                Plan::Mission { follower: WaypointFollower::new(m), land_sent: false }
+            }
+            FlightPlan::Elevator { .. } => Plan::Carried,
+        };
+        let phase = if matches!(plan, Plan::Carried) { PlanPhase::Carried } else { PlanPhase::Waiting };
+        Ok(Self { plan, phase, armed_once: false, done: false, events: Vec::new() })
+    }
+
+    pub fn status(&self) -> PlanPhase {
+        self.phase
+    }
+    pub fn done(&self) -> bool {
+        self.done
+    }
+    pub fn events(&self) -> &[(f64, String)] {
+        &self.events
+    }
+
+    fn event(&mut self, t_s: f64, what: String) {
+        self.events.push((t_s, what));
+    }
+
+    fn try_arm(armed_once: &mut bool, events: &mut Vec<(f64, String)>, t_us: u64, core: &mut FlightCore) -> bool {
+        if core.armed() {
+            return true;
+        }
+        if *armed_once {
+            // Disarmed after having flown: the flight is over.
+            return false;
+        }
+        if core.command(t_us, Command::Arm).is_ok() {
+            *armed_once = true;
+            events.push((t_us as f64 * 1e-6, "armed".into()));
+            true
+        } else {
+            false
+        }
+    }
+
+    pub fn update(&mut self, t_us: u64, core: &mut FlightCore) {
+        let t_s = t_us as f64 * 1e-6;
+        if self.armed_once && !core.armed() && !self.done {
+            self.done = true;
+            self.phase = PlanPhase::Done;
+            self.event(t_s, format!("disarmed ({:?})", core.failsafe()));
+            return;
+        }
+        let nav = *core.nav();
+        let sp = |v: [f32; 3], yaw: Option<f32>| VelocitySetpoint { vel_ned_mps: v, yaw_rad: yaw, ttl_ms: SETPOINT_TTL_MS };
+        match &mut self.plan {
+            Plan::Carried => {}
+            Plan::Hover { alt_m, hold_s, hold_start_s, settle_s, landing } => {
+                let (alt_m, hold_s) = (*alt_m, *hold_s);
+                if *landing {
+                    return;
+                }
+                if let Some(start) = *hold_start_s {
+                    if t_s - start >= hold_s as f64 {
+                        *landing = true;
+                        let _ = core.command(t_us, Command::Land);
+                        self.phase = PlanPhase::Landing;
+                        self.events.push((t_s, "hold done, landing".into()));
+                    }
+                    return;
+                }
+                if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
+                    return;
+                }
+                let alt = -nav.pos_ned_m[2];
+                let err = alt_m - alt;
+                let vz_up = (0.8 * err).clamp(-1.0, 1.5);
+                let _ = core.setpoint(t_us, sp([0.0, 0.0, -vz_up], None));
+                self.phase = PlanPhase::Climbing;
+                if err.abs() < 0.15 && nav.vel_ned_mps[2].abs() < 0.15 {
+                    *settle_s += 0.05;
+                } else {
+                    *settle_s = 0.0;
+                }
+                if *settle_s >= 3.0 && core.command(t_us, Command::Hold).is_ok() {
+                    *hold_start_s = Some(t_s);
+                    let hold = [nav.pos_ned_m[0], nav.pos_ned_m[1], nav.pos_ned_m[2]];
+                    self.phase = PlanPhase::Holding { hold_ned_m: hold };
+                    self.events.push((t_s, format!("holding at {:.2?} for {hold_s} s", hold)));
+                }
+            }
+            Plan::Mission { follower, land_sent } => {
+                if core.mode() == Mode::Disarmed && !self.armed_once && core.navigator().ready().is_err() {
+                    return; // wait for calibration and a GPS home before starting the mission
+                }
+                let g = follower.update(t_s, nav.pos_ned_m, nav.vel_ned_mps);
+                match g.request {
+                    Some(Request::Arm) => {
+                        if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
+                            return;
+                        }
+                    }
+                    Some(Request::Land) if !*land_sent => {
+                        *land_sent = true;
+                        let _ = core.command(t_us, Command::Land);
+                        self.phase = PlanPhase::Landing;
+                        self.events.push((t_s, "mission done, landing".into()));
+                        return;
+                    }
+                    _ => {}
+                }
+                if *land_sent {
+                    return;
+                }
+                let phase = match (g.phase, g.leg) {
+                    (Phase::Leg(i), Some(leg)) => PlanPhase::Leg { index: i, from_ned_m: leg.from_ned_m, to_ned_m: leg.to_ned_m },
+                    (Phase::Hold(i), _) => PlanPhase::HoldAtWaypoint(i),
+                    (Phase::Takeoff, _) => PlanPhase::Climbing,
+                    (Phase::Landing, _) => PlanPhase::Landing,
+                    (Phase::Done, _) => PlanPhase::Done,
+                    _ => PlanPhase::Waiting,
+                };
+                if phase != self.phase {
+                    let what = format!("{phase:?}");
+                    self.phase = phase;
+                    self.events.push((t_s, what));
+                }
+                if core.armed() {
+                    let _ = core.setpoint(t_us, sp(g.vel_ned_mps, g.yaw_rad));
+                }
+            }
+        }
+    }
+}
+
+/// The elevator ride (paper A Figs. 8–9): floors visited in order with a trapezoidal speed
+/// profile, dwelling `dwell_s` at each (and before the first move). Returns analytic
+/// [height m, vertical speed m/s, acceleration m/s²] every millisecond, heights relative to
+/// the first floor.
+pub fn elevator_profile(floors: &[i32], floor_height_m: f32, speed_mps: f32, accel_mps2: f32, dwell_s: f32) -> Vec<[f64; 3]> {
+    let (vmax, a) = (speed_mps as f64, accel_mps2 as f64);
+    let dt = 1e-3;
+    let mut out = Vec::new();
+    let hold = |out: &mut Vec<[f64; 3]>, h: f64, secs: f64| {
+        for _ in 0..(secs / dt).round() as usize {
+            out.push([h, 0.0, 0.0]);
+        }
+    };
+    let base = floors[0] as f64 * floor_height_m as f64;
+    let mut h = 0.0;
+    hold(&mut out, h, dwell_s as f64);
+    for w in floors.windows(2) {
+        let d = (w[1] - w[0]) as f64 * floor_height_m as f64;
+        let dist = d.abs();
+        let sgn = d.signum();
+        // Trapezoid (or triangle if too short).
+        let v = vmax.min((a * dist).sqrt());
+        let t_acc = v / a;
+        let d_acc = 0.5 * a * t_acc * t_acc;
+        let t_cruise = (dist - 2.0 * d_acc).max(0.0) / v;
+        let total = 2.0 * t_acc + t_cruise;
+        let n = (total / dt).round() as usize;
+        for k in 0..n {
+            let t = k as f64 * dt;
+            let (s, vel, acc) = if t < t_acc {
+                (0.5 * a * t * t, a * t, a)
+            } else if t < t_acc + t_cruise {
+                (d_acc + v * (t - t_acc), v, 0.0)
+            } else {
+                let td = t - t_acc - t_cruise;
+                (d_acc + v * t_cruise + v * td - 0.5 * a * td * td, v - a * td, -a)
+            };
+            out.push([h + sgn * s, sgn * vel, sgn * acc]);
+        }
+        h += d;
+        hold(&mut out, h, dwell_s as f64);
+    }
+    let _ = base;
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn elevator_profile_reaches_each_floor() {
+        let p = elevator_profile(&[3, 6, 4, 3], 3.5, 1.0, 0.5, 10.0);
+        let last = p.last().unwrap();
+        assert!(last[0].abs() < 1e-6 && last[1].abs() < 1e-9);
+        let max = p.iter().map(|x| x[0]).fold(f64::MIN, f64::max);
+        assert!((max - 10.5).abs() < 1e-3, "{max}");
+        // Integrating v reproduces h.
+        let mut h = 0.0;
+        for x in &p {
+            h += x[1] * 1e-3;
+        }
+        assert!(h.abs() < 0.02, "{h}");
+    }
+}

@@ -1,0 +1,78 @@
+//! What a simulated flight leaves behind: a 50 Hz log of truth beside estimates and commands,
+//! and the Linux side's events.
+
+use crate::commands::{FailsafeCause, Mode};
+use crate::flight::StepTelemetry;
+use crate::nav::NavState;
+use crate::geometry::MOTOR_COUNT;
+
+/// What the in-process Linux computer is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PlanPhase {
+    Waiting,
+    Climbing,
+    /// Hover hold window (paper A Fig. 16): the hold point (estimated NED).
+    Holding { hold_ned_m: [f32; 3] },
+    /// Flying the straight leg from → to (estimated NED) towards waypoint `index`.
+    Leg { index: usize, from_ned_m: [f32; 3], to_ned_m: [f32; 3] },
+    HoldAtWaypoint(usize),
+    Landing,
+    Done,
+    /// Carried (elevator): no flight.
+    Carried,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct LogSample {
+    pub t_s: f64,
+    pub mode: Mode,
+    pub failsafe: FailsafeCause,
+    pub armed: bool,
+    pub landed: bool,
+    pub plan: PlanPhase,
+    pub true_pos_ned_m: [f64; 3],
+    pub true_vel_ned_mps: [f64; 3],
+    /// Roll, pitch, yaw (ZYX), rad.
+    pub true_euler_rad: [f64; 3],
+    pub true_accel_ned_mps2: [f64; 3],
+    pub wind_ned_mps: [f64; 3],
+    pub nav: NavState,
+    pub tel: StepTelemetry,
+    /// True horizontal acceleration in the estimated heading frame (forward, right).
+    pub accel_true_fr_mps2: [f32; 2],
+    pub motors: [f32; MOTOR_COUNT],
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct FlightLog {
+    pub samples: Vec<LogSample>,
+    /// (time s, what happened)
+    pub events: Vec<(f64, String)>,
+}
+
+/// Write the log as CSV (one row per 50 Hz sample) for plotting elsewhere.
+pub fn write_csv(log: &FlightLog, path: &std::path::Path) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(
+        f,
+        "t_s,mode,armed,true_n_m,true_e_m,true_d_m,est_n_m,est_e_m,est_d_m,true_vn_mps,true_ve_mps,true_vd_mps,est_vn_mps,est_ve_mps,est_vd_mps,true_roll_rad,true_pitch_rad,true_yaw_rad,est_roll_rad,est_pitch_rad,est_yaw_rad,baro_alt_m,accel_est_fwd_mps2,accel_meas_fwd_mps2,accel_true_fwd_mps2,cross_track_m,vel_cmd_n_mps,vel_cmd_e_mps,vel_cmd_d_mps,thrust_n,roll_cmd_rad,pitch_cmd_rad,failsafe"
+    )?;
+    for s in &log.samples {
+        let n = &s.nav;
+        writeln!(
+            f,
+            "{:.3},{:?},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.4},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3},{:.3},{:.2},{:.4},{:.4},{:?}",
+            s.t_s, s.mode, s.armed as u8,
+            s.true_pos_ned_m[0], s.true_pos_ned_m[1], s.true_pos_ned_m[2],
+            n.pos_ned_m[0], n.pos_ned_m[1], n.pos_ned_m[2],
+            s.true_vel_ned_mps[0], s.true_vel_ned_mps[1], s.true_vel_ned_mps[2],
+            n.vel_ned_mps[0], n.vel_ned_mps[1], n.vel_ned_mps[2],
+            s.true_euler_rad[0], s.true_euler_rad[1], s.true_euler_rad[2],
+            n.euler.roll_rad, n.euler.pitch_rad, n.euler.yaw_rad,
+            n.baro_alt_m, s.tel.accel_est_fr_mps2[0], s.tel.accel_meas_fr_mps2[0], s.accel_true_fr_mps2[0], s.tel.cross_track_m,
+            s.tel.vel_cmd_ned_mps[0], s.tel.vel_cmd_ned_mps[1], s.tel.vel_cmd_ned_mps[2], s.tel.thrust_n, s.tel.roll_cmd_rad, s.tel.pitch_cmd_rad, s.failsafe
+        )?;
+    }
+    f.flush()
+}

@@ -1,0 +1,279 @@
+//! The lockstep simulation: physics and sensor models around the unchanged flight core, with an
+//! in-process stand-in for the Linux computer (the same waypoint logic `fcc_mission` uses).
+//!
+//! One call to [`Sim::tick`] advances 2 ms: four 0.5 ms physics substeps, the sensors sample the
+//! true state, the board trait hands them to [`crate::scheduler::tick`], and the motor commands
+//! go back to the physics on the next tick (one-tick actuation delay, as on the board).
+
+use super::linux::LinuxSide;
+use super::log::{FlightLog, LogSample};
+use super::physics::Octorotor;
+use super::scenario::{Fault, FlightPlan, Scenario};
+use super::sensor_models::{BaroModel, BatteryModel, GpsModel, ImuModel, MagModel};
+use super::wind::Wind;
+use crate::flight::FlightCore;
+use crate::geometry::MOTOR_COUNT;
+use crate::scheduler::{self, TICK_US};
+use crate::sensors::{MotorOutputs, SensorBoard, SensorInputs};
+use nalgebra::{UnitQuaternion, Vector3};
+
+const PHYSICS_SUBSTEPS: u32 = 4;
+/// Log every 10th tick (50 Hz).
+const LOG_EVERY_TICKS: u64 = 10;
+
+/// The simulated board: sensor models sampling the true state.
+pub struct SimBoard {
+    pub imu: ImuModel,
+    pub mag: MagModel,
+    pub baro: BaroModel,
+    pub gps: GpsModel,
+    pub battery: BatteryModel,
+    truth: Truth,
+}
+
+/// The true state the sensors see at the current tick.
+#[derive(Clone, Copy, Debug)]
+pub struct Truth {
+    pub pos_ned_m: Vector3<f64>,
+    pub vel_ned_mps: Vector3<f64>,
+    pub accel_ned_mps2: Vector3<f64>,
+    pub q_body_to_ned: UnitQuaternion<f64>,
+    pub omega_frd_radps: Vector3<f64>,
+    pub specific_force_frd_mps2: Vector3<f64>,
+    pub rotor_speed_mean: f64,
+    pub in_flight: bool,
+    pub current_a: f64,
+}
+
+impl SensorBoard for SimBoard {
+    fn poll(&mut self, now_us: u64) -> SensorInputs {
+        let t = self.truth;
+        SensorInputs {
+            imu: Some(self.imu.sample(now_us, t.omega_frd_radps, t.specific_force_frd_mps2, t.rotor_speed_mean)),
+            mag: self.mag.sample(now_us, &t.q_body_to_ned),
+            baro: self.baro.sample(now_us, -t.pos_ned_m.z, t.in_flight),
+            gps: self.gps.sample(now_us, t.pos_ned_m, t.vel_ned_mps),
+            laser: None,
+            sonar: None,
+            battery: self.battery.sample(now_us, t.current_a, TICK_US as f64 * 1e-6),
+        }
+    }
+}
+
+struct MotorLatch([f32; MOTOR_COUNT]);
+
+impl MotorOutputs for MotorLatch {
+    fn write(&mut self, _now_us: u64, cmd: &[f32; MOTOR_COUNT]) {
+        self.0 = *cmd;
+    }
+}
+
+/// Kinematic truth for scenarios where the vehicle is carried (elevator).
+struct Carried {
+    profile: Vec<[f64; 3]>,
+}
+
+pub struct Sim {
+    pub scenario: Scenario,
+    pub t_us: u64,
+    pub core: FlightCore,
+    pub body: Octorotor,
+    pub board: SimBoard,
+    wind: Wind,
+    wind_ned: Vector3<f64>,
+    motors: MotorLatch,
+    linux: LinuxSide,
+    carried: Option<Carried>,
+    ticks: u64,
+    pub log: FlightLog,
+}
+
+impl Sim {
+    pub fn new(scenario: Scenario) -> Result<Self, String> {
+        let seed = scenario.seed;
+        let body = Octorotor::new(scenario.vehicle.clone(), Vector3::zeros(), 0.0);
+        let s = &scenario.sensors;
+        let board = SimBoard {
+            imu: ImuModel::new(s.imu.clone(), seed),
+            mag: MagModel::new(s.mag.clone(), seed),
+            baro: BaroModel::new(s.baro.clone(), seed),
+            gps: GpsModel::new(s.gps.clone(), seed),
+            battery: BatteryModel::new(Default::default(), seed),
+            truth: Truth {
+                pos_ned_m: Vector3::zeros(),
+                vel_ned_mps: Vector3::zeros(),
+                accel_ned_mps2: Vector3::zeros(),
+                q_body_to_ned: UnitQuaternion::identity(),
+                omega_frd_radps: Vector3::zeros(),
+                specific_force_frd_mps2: Vector3::new(0.0, 0.0, -fcc_nav::GRAVITY_MPS2 as f64),
+                rotor_speed_mean: 0.0,
+                in_flight: false,
+                current_a: 0.5,
+            },
+        };
+        let linux = LinuxSide::new(&scenario)?;
+        let carried = match &scenario.flight {
+            FlightPlan::Elevator { floors, floor_height_m, speed_mps, accel_mps2, dwell_s } => Some(Carried {
+                profile: super::linux::elevator_profile(floors, *floor_height_m, *speed_mps, *accel_mps2, *dwell_s),
+            }),
+            _ => None,
+        };
+        let mut params = scenario.params;
+        if scenario.sensors.calibration.enabled {
+            calibrate(&mut params, &board, &scenario.sensors, seed);
+        }
+        Ok(Self {
+            core: FlightCore::new(params),
+            body,
+            board,
+            wind: Wind::new(scenario.wind.clone(), seed),
+            wind_ned: Vector3::zeros(),
+            motors: MotorLatch([0.0; MOTOR_COUNT]),
+            linux,
+            carried,
+            t_us: 0,
+            ticks: 0,
+            log: FlightLog::default(),
+            scenario,
+        })
+    }
+
+    pub fn t_s(&self) -> f64 {
+        self.t_us as f64 * 1e-6
+    }
+
+    /// Whether the run is over (duration reached, or the plan finished and the vehicle is
+    /// disarmed on the ground).
+    pub fn finished(&self) -> bool {
+        self.t_s() >= self.scenario.duration_s || self.linux.done()
+    }
+
+    fn apply_faults(&mut self) {
+        let t = self.t_s();
+        let mut mag_field = Vector3::zeros();
+        let mut gps_on = true;
+        for f in &self.scenario.faults {
+            let (a, b) = f.window();
+            if t < a || t >= b {
+                continue;
+            }
+            match f {
+                Fault::MagDisturbance { field_ned_ut, .. } => {
+                    mag_field += Vector3::new(field_ned_ut[0], field_ned_ut[1], field_ned_ut[2]);
+                }
+                Fault::GpsOutage { .. } => gps_on = false,
+            }
+        }
+        self.board.mag.set_disturbance(mag_field);
+        self.board.gps.set_available(gps_on);
+    }
+
+    /// Advance one 2 ms control tick.
+    pub fn tick(&mut self) {
+        let dt = TICK_US as f64 * 1e-6;
+        self.apply_faults();
+        let prev_vel = self.body.state.vel_ned_mps;
+        if let Some(c) = &self.carried {
+            let t = self.t_s() + dt;
+            let (z, v, a) = sample_profile(&c.profile, t);
+            self.body.state.pos_ned_m = Vector3::new(0.0, 0.0, -z);
+            self.body.state.vel_ned_mps = Vector3::new(0.0, 0.0, -v);
+            let g = fcc_nav::GRAVITY_MPS2 as f64;
+            let a_ned = Vector3::new(0.0, 0.0, -a);
+            let f_ned = a_ned - Vector3::new(0.0, 0.0, g);
+            let f_body = self.body.state.q_body_to_ned.inverse_transform_vector(&f_ned);
+            self.board.truth.specific_force_frd_mps2 = f_body;
+            self.board.truth.accel_ned_mps2 = a_ned;
+            self.board.truth.in_flight = false;
+        } else {
+            let height = (-self.body.state.pos_ned_m.z).max(0.0);
+            let air = (self.body.state.vel_ned_mps - self.wind_ned).norm();
+            self.wind_ned = self.wind.step(height, air, dt);
+            let sub = dt / PHYSICS_SUBSTEPS as f64;
+            for _ in 0..PHYSICS_SUBSTEPS {
+                self.body.step(&self.motors.0, self.wind_ned, 0.0, sub);
+            }
+            self.board.truth.specific_force_frd_mps2 = self.body.specific_force_frd_mps2();
+            self.board.truth.accel_ned_mps2 = (self.body.state.vel_ned_mps - prev_vel) / dt;
+            self.board.truth.in_flight = !self.body.on_ground();
+        }
+        self.t_us += TICK_US;
+        self.ticks += 1;
+        let st = &self.body.state;
+        self.board.truth.pos_ned_m = st.pos_ned_m;
+        self.board.truth.vel_ned_mps = st.vel_ned_mps;
+        self.board.truth.q_body_to_ned = st.q_body_to_ned;
+        self.board.truth.omega_frd_radps = st.omega_frd_radps;
+        let mean_speed = st.rotor_speed_frac.iter().sum::<f64>() / MOTOR_COUNT as f64;
+        self.board.truth.rotor_speed_mean = mean_speed;
+        self.board.truth.current_a = 0.5 + 60.0 * mean_speed.powi(3);
+
+        // The Linux computer runs at 20 Hz, before the MCU's tick at the same instant.
+        if self.ticks % 25 == 0 {
+            self.linux.update(self.t_us, &mut self.core);
+        }
+        scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
+        if self.ticks % LOG_EVERY_TICKS == 0 {
+            self.record();
+        }
+    }
+
+    fn record(&mut self) {
+        let st = &self.body.state;
+        let (roll, pitch, yaw) = st.q_body_to_ned.euler_angles();
+        let nav = *self.core.nav();
+        let tel = *self.core.telemetry();
+        let a = self.board.truth.accel_ned_mps2;
+        let (sy, cy) = (nav.euler.yaw_rad.sin() as f64, nav.euler.yaw_rad.cos() as f64);
+        let accel_true_fr = [(cy * a.x + sy * a.y) as f32, (-sy * a.x + cy * a.y) as f32];
+        self.log.samples.push(LogSample {
+            t_s: self.t_s(),
+            mode: self.core.mode(),
+            failsafe: self.core.failsafe(),
+            armed: self.core.armed(),
+            landed: self.core.landed(),
+            plan: self.linux.status(),
+            true_pos_ned_m: st.pos_ned_m.into(),
+            true_vel_ned_mps: st.vel_ned_mps.into(),
+            true_euler_rad: [roll, pitch, yaw],
+            true_accel_ned_mps2: a.into(),
+            wind_ned_mps: self.wind_ned.into(),
+            nav,
+            tel,
+            accel_true_fr_mps2: accel_true_fr,
+            motors: *self.core.motors(),
+        });
+    }
+
+    /// Run to the end; returns the log.
+    pub fn run(&mut self) -> &FlightLog {
+        while !self.finished() {
+            self.tick();
+        }
+        self.log.events = self.linux.events().to_vec();
+        &self.log
+    }
+}
+
+/// The operator's pre-flight calibrations: offsets measured with a residual error (see
+/// [`super::scenario::CalibrationParams`]).
+fn calibrate(params: &mut crate::params::Params, board: &SimBoard, s: &super::scenario::SensorParams, seed: u64) {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0xCA11_B8A7);
+    let (_, accel_bias) = board.imu.biases();
+    let c = &s.calibration;
+    let g = fcc_nav::GRAVITY_MPS2 as f64;
+    for i in 0..3 {
+        let r = super::sensor_models::normal(&mut rng, c.accel_residual_mg * 1e-3 * g);
+        params.nav.accel_offset_frd_mps2[i] = (accel_bias[i] + r) as f32;
+        let r = super::sensor_models::normal(&mut rng, c.mag_residual_ut);
+        params.nav.mag_offset_frd_ut[i] = (s.mag.hard_iron_frd_ut[i] + r) as f32;
+    }
+}
+
+/// Height (m, up), vertical speed (m/s, up) and acceleration of a carried profile at time `t`
+/// (the profile holds analytic values every millisecond; the last point holds afterwards).
+fn sample_profile(p: &[[f64; 3]], t: f64) -> (f64, f64, f64) {
+    let i = ((t * 1e3).round() as usize).min(p.len().saturating_sub(1));
+    p.get(i).map_or((0.0, 0.0, 0.0), |x| (x[0], x[1], x[2]))
+}

@@ -1,0 +1,325 @@
+//! Mean wind plus Dryden turbulence (MIL-F-8785C low-altitude model, h < 1000 ft).
+//!
+//! Turbulence intensities and scale lengths (h in ft, W20 = mean wind speed at 20 ft):
+//! - `L_w = h`, `L_u = L_v = h / (0.177 + 0.000823·h)^1.2`
+//! - `σ_w = 0.1·W20`, `σ_u = σ_v = σ_w / (0.177 + 0.000823·h)^0.4`
+//! - light turbulence: W20 = 15 kt (moderate 30 kt, severe 45 kt).
+//!
+//! Forming filters (temporal, airspeed V, driven by unit-intensity white noise):
+//! - `H_u(s) = σ_u·√(2L_u/(πV)) / (1 + (L_u/V)·s)`
+//! - `H_v(s) = σ_v·√(L_v/(πV))·(1 + √3·(L_v/V)·s) / (1 + (L_v/V)·s)²`, and `H_w` likewise
+//!   with `L_w`, `σ_w`.
+//!
+//! The spectra are the spec's one-sided spectra over ω ∈ [0, ∞) in rad/s; with that convention
+//! "unit white noise" has intensity π (two-sided, per rad/s… i.e. E[n(t)n(t+τ)] = π·δ(τ)),
+//! which makes each filter output's variance exactly σ². Each filter is discretised exactly at
+//! the caller's `dt` (zero-order hold on the state transition, Van Loan for the noise
+//! covariance), so the variance is right whatever `dt` and V are. Coefficients are recomputed
+//! when V, h or dt change by more than 0.5 %.
+//!
+//! Height: the low-altitude model is specified for h below 1000 ft (above that the spec's
+//! medium/high-altitude model applies, with L = 1750 ft); we clamp h to 1000 ft. As h → 0 the
+//! scale lengths vanish and the filters become singular, so h is also clamped to ≥ 3 ft (a floor
+//! chosen for the simulator — a multirotor sitting on the ground is outside the model's range
+//! anyway). `V = max(airspeed, mean wind, 1 m/s)` keeps the frozen-field time constants finite
+//! in hover.
+//!
+//! Axes: u along the mean-wind direction (the way the air moves), v horizontal and 90° to the
+//! right of u (seen from above), w down; rotated into NED. With no mean wind, u points along
+//! the configured direction anyway.
+
+use nalgebra::{Matrix2, Matrix4, Vector2, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::Deserialize;
+
+const FT_PER_M: f64 = 1.0 / 0.3048;
+const MPS_PER_KT: f64 = 1852.0 / 3600.0;
+/// Lower clamp of the height used in the Dryden formulas, ft.
+pub const DRYDEN_MIN_HEIGHT_FT: f64 = 3.0;
+/// Upper end of the MIL-F-8785C low-altitude model, ft.
+pub const DRYDEN_MAX_HEIGHT_FT: f64 = 1000.0;
+/// Light turbulence W20, kt.
+pub const W20_LIGHT_KT: f64 = 15.0;
+/// Moderate turbulence W20, kt.
+pub const W20_MODERATE_KT: f64 = 30.0;
+
+/// Wind configuration. Default: calm, no turbulence.
+#[derive(Clone, Debug, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct WindParams {
+    /// Mean horizontal wind speed, m/s.
+    pub mean_speed_mps: f64,
+    /// Meteorological direction: where the wind blows FROM, degrees clockwise from north.
+    pub from_direction_deg: f64,
+    /// Wind speed at 20 ft that sets the turbulence intensity, knots (0 = no turbulence;
+    /// 15 = light, 30 = moderate, 45 = severe).
+    pub w20_kt: f64,
+}
+
+/// Intensities (σ_u, σ_v, σ_w) in m/s and scale lengths (L_u, L_v, L_w) in m at `height_m`.
+pub fn dryden_low_altitude(height_m: f64, w20_kt: f64) -> ([f64; 3], [f64; 3]) {
+    let h_ft = (height_m * FT_PER_M).clamp(DRYDEN_MIN_HEIGHT_FT, DRYDEN_MAX_HEIGHT_FT);
+    let k = 0.177 + 0.000823 * h_ft;
+    let l_w_ft = h_ft;
+    let l_uv_ft = h_ft / k.powf(1.2);
+    let sigma_w = 0.1 * w20_kt.max(0.0) * MPS_PER_KT;
+    let sigma_uv = sigma_w / k.powf(0.4);
+    let l_uv = l_uv_ft / FT_PER_M;
+    let l_w = l_w_ft / FT_PER_M;
+    ([sigma_uv, sigma_uv, sigma_w], [l_uv, l_uv, l_w])
+}
+
+/// Exact discretisation of `ẋ = A·x + B·n`, `E[n(t)n(s)] = q·δ(t−s)`: (Φ, lower Cholesky factor of Q_d).
+fn discretise_2nd_order(a: f64, q: f64, dt: f64) -> (Matrix2<f64>, Matrix2<f64>) {
+    // Controllable canonical form of 1/(s + a)²: x1' = x2, x2' = −a²x1 − 2a·x2 + n.
+    let am = Matrix2::new(0.0, 1.0, -a * a, -2.0 * a);
+    let qc = Matrix2::new(0.0, 0.0, 0.0, q);
+    // Van Loan: exp([[−A, Qc], [0, Aᵀ]]·dt) = [[·, Φ⁻¹Q_d], [0, Φᵀ]].
+    let mut m = Matrix4::zeros();
+    m.fixed_view_mut::<2, 2>(0, 0).copy_from(&(-am * dt));
+    m.fixed_view_mut::<2, 2>(0, 2).copy_from(&(qc * dt));
+    m.fixed_view_mut::<2, 2>(2, 2)
+        .copy_from(&(am.transpose() * dt));
+    let e = m.exp();
+    let phi: Matrix2<f64> = e.fixed_view::<2, 2>(2, 2).transpose();
+    let g12: Matrix2<f64> = e.fixed_view::<2, 2>(0, 2).into_owned();
+    let mut qd = phi * g12;
+    qd = (qd + qd.transpose()) * 0.5;
+    let l11 = qd[(0, 0)].max(0.0).sqrt();
+    let l21 = if l11 > 0.0 { qd[(1, 0)] / l11 } else { 0.0 };
+    let l22 = (qd[(1, 1)] - l21 * l21).max(0.0).sqrt();
+    (phi, Matrix2::new(l11, 0.0, l21, l22))
+}
+
+#[derive(Clone, Debug)]
+struct Coeffs {
+    key: (f64, f64, f64), // (V, h, dt) they were computed for
+    sigma: [f64; 3],
+    phi_u: f64,
+    // v and w: transition, noise factor, output row
+    phi2: [Matrix2<f64>; 2],
+    chol2: [Matrix2<f64>; 2],
+    c2: [Vector2<f64>; 2],
+}
+
+/// Mean wind plus Dryden turbulence, deterministic from a seed.
+#[derive(Clone, Debug)]
+pub struct Wind {
+    pub params: WindParams,
+    rng: ChaCha8Rng,
+    /// Unit-gain-normalised u state (its value is the u turbulence, m/s).
+    u: f64,
+    /// v and w filter states (controllable canonical form).
+    xv: Vector2<f64>,
+    xw: Vector2<f64>,
+    coeffs: Option<Coeffs>,
+    last_turbulence_uvw: Vector3<f64>,
+}
+
+impl Wind {
+    pub fn new(p: WindParams, seed: u64) -> Self {
+        Self {
+            params: p,
+            rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5749_4E44_0000_0001),
+            u: 0.0,
+            xv: Vector2::zeros(),
+            xw: Vector2::zeros(),
+            coeffs: None,
+            last_turbulence_uvw: Vector3::zeros(),
+        }
+    }
+
+    /// Mean wind velocity, NED, m/s (the direction the air moves).
+    pub fn mean_ned_mps(&self) -> Vector3<f64> {
+        let d = self.params.from_direction_deg.to_radians();
+        -self.params.mean_speed_mps * Vector3::new(d.cos(), d.sin(), 0.0)
+    }
+
+    /// Turbulence of the last step in (u along-wind, v lateral-right, w down), m/s.
+    pub fn last_turbulence_uvw_mps(&self) -> Vector3<f64> {
+        self.last_turbulence_uvw
+    }
+
+    fn coeffs_for(&mut self, v: f64, h: f64, dt: f64) -> Coeffs {
+        if let Some(c) = &self.coeffs {
+            let close = |a: f64, b: f64| (a - b).abs() <= 0.005 * b.abs().max(1e-9);
+            if close(v, c.key.0) && close(h, c.key.1) && close(dt, c.key.2) {
+                return c.clone();
+            }
+        }
+        let (sigma, l) = dryden_low_altitude(h, self.params.w20_kt);
+        let a = [v / l[0], v / l[1], v / l[2]];
+        let phi_u = (-a[0] * dt).exp();
+        let mut phi2 = [Matrix2::zeros(); 2];
+        let mut chol2 = [Matrix2::zeros(); 2];
+        let mut c2 = [Vector2::zeros(); 2];
+        for (k, axis) in [1usize, 2].iter().enumerate() {
+            let ak = a[*axis];
+            // H = K(1 + √3·s/a)/(1 + s/a)² = K·a²·(1 + √3·s/a)/(s + a)²,
+            // K = σ·√(L/(πV)) = σ/√(π·a); output y = K·a²·x1 + K·√3·a·x2.
+            let gain = sigma[*axis] / (core::f64::consts::PI * ak).sqrt();
+            let (phi, chol) = discretise_2nd_order(ak, core::f64::consts::PI, dt);
+            phi2[k] = phi;
+            chol2[k] = chol;
+            c2[k] = Vector2::new(gain * ak * ak, gain * 3f64.sqrt() * ak);
+        }
+        let c = Coeffs {
+            key: (v, h, dt),
+            sigma,
+            phi_u,
+            phi2,
+            chol2,
+            c2,
+        };
+        self.coeffs = Some(c.clone());
+        c
+    }
+
+    /// Advance by `dt_s` and return the wind velocity (mean + turbulence), NED, m/s.
+    /// `height_m` is height above ground, `airspeed_mps` the vehicle's airspeed.
+    pub fn step(&mut self, height_m: f64, airspeed_mps: f64, dt_s: f64) -> Vector3<f64> {
+        let mean = self.mean_ned_mps();
+        if self.params.w20_kt <= 0.0 || dt_s.is_nan() || dt_s <= 0.0 {
+            self.last_turbulence_uvw = Vector3::zeros();
+            return mean;
+        }
+        let v = airspeed_mps.max(self.params.mean_speed_mps).max(1.0);
+        let h_m = height_m.max(DRYDEN_MIN_HEIGHT_FT / FT_PER_M);
+        let c = self.coeffs_for(v, h_m, dt_s);
+
+        // u: first-order Gauss–Markov, exact: u' = φu + σ√(1−φ²)·n.
+        let n: f64 = StandardNormal.sample(&mut self.rng);
+        self.u = c.phi_u * self.u + c.sigma[0] * (1.0 - c.phi_u * c.phi_u).max(0.0).sqrt() * n;
+
+        let mut out = [0.0; 2];
+        #[allow(clippy::needless_range_loop)]
+        for k in 0..2 {
+            let n1: f64 = StandardNormal.sample(&mut self.rng);
+            let n2: f64 = StandardNormal.sample(&mut self.rng);
+            let x = if k == 0 { &mut self.xv } else { &mut self.xw };
+            *x = c.phi2[k] * *x + c.chol2[k] * Vector2::new(n1, n2);
+            out[k] = c.c2[k].dot(x);
+        }
+        let uvw = Vector3::new(self.u, out[0], out[1]);
+        self.last_turbulence_uvw = uvw;
+
+        // Rotate: u along the direction the wind blows to, v 90° clockwise from it, w down.
+        let to = (self.params.from_direction_deg + 180.0).to_radians();
+        let (s, co) = to.sin_cos();
+        let n_comp = uvw.x * co - uvw.y * s;
+        let e_comp = uvw.x * s + uvw.y * co;
+        mean + Vector3::new(n_comp, e_comp, uvw.z)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn std_of(v: &[f64]) -> f64 {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / v.len() as f64).sqrt()
+    }
+
+    #[test]
+    fn calm_and_mean_direction() {
+        let mut w = Wind::new(
+            WindParams {
+                mean_speed_mps: 5.0,
+                from_direction_deg: 0.0,
+                w20_kt: 0.0,
+            },
+            1,
+        );
+        for _ in 0..100 {
+            let v = w.step(10.0, 0.0, 0.002);
+            assert_eq!(v, Vector3::new(-5.0, 0.0, 0.0)); // from north → towards south
+        }
+        let mut w = Wind::new(
+            WindParams {
+                mean_speed_mps: 4.0,
+                from_direction_deg: 270.0,
+                w20_kt: 0.0,
+            },
+            1,
+        );
+        let v = w.step(10.0, 0.0, 0.002);
+        assert!((v - Vector3::new(0.0, 4.0, 0.0)).norm() < 1e-9, "{v:?}"); // from west → east
+    }
+
+    #[test]
+    fn dryden_figures() {
+        // h = 1000 ft: k = 1.0 → L_u = L_w = 1000 ft, σ_u = σ_w.
+        let (s, l) = dryden_low_altitude(1000.0 * 0.3048, 15.0);
+        assert!((l[0] - 304.8).abs() < 1e-6 && (l[2] - 304.8).abs() < 1e-6);
+        assert!((s[2] - 1.5 * MPS_PER_KT).abs() < 1e-12 && (s[0] - s[2]).abs() < 1e-9);
+        // Low altitude: σ_u > σ_w, L_u > L_w.
+        let (s, l) = dryden_low_altitude(10.0, 15.0);
+        assert!(s[0] > s[2] && l[0] > l[2]);
+    }
+
+    #[test]
+    fn turbulence_std_matches_sigma() {
+        let p = WindParams {
+            mean_speed_mps: 3.0,
+            from_direction_deg: 30.0,
+            w20_kt: W20_LIGHT_KT,
+        };
+        let mut w = Wind::new(p.clone(), 42);
+        let (h, v, dt) = (10.0, 15.0, 0.01);
+        let (sigma, l) = dryden_low_altitude(h, p.w20_kt);
+        let n = 400_000; // 4000 s ≈ 900 correlation times of u
+        let mut us = Vec::with_capacity(n);
+        let mut vs = Vec::with_capacity(n);
+        let mut ws = Vec::with_capacity(n);
+        for _ in 0..n {
+            w.step(h, v, dt);
+            let t = w.last_turbulence_uvw_mps();
+            us.push(t.x);
+            vs.push(t.y);
+            ws.push(t.z);
+        }
+        let (su, sv, sw) = (std_of(&us), std_of(&vs), std_of(&ws));
+        assert!(
+            (su / sigma[0] - 1.0).abs() < 0.15,
+            "σu {su} vs {} (L {})",
+            sigma[0],
+            l[0]
+        );
+        assert!(
+            (sv / sigma[1] - 1.0).abs() < 0.15,
+            "σv {sv} vs {}",
+            sigma[1]
+        );
+        assert!(
+            (sw / sigma[2] - 1.0).abs() < 0.15,
+            "σw {sw} vs {}",
+            sigma[2]
+        );
+    }
+
+    #[test]
+    fn deterministic_and_rotated() {
+        let p = WindParams {
+            mean_speed_mps: 2.0,
+            from_direction_deg: 90.0,
+            w20_kt: 15.0,
+        };
+        let mut a = Wind::new(p.clone(), 7);
+        let mut b = Wind::new(p.clone(), 7);
+        let mut c = Wind::new(p, 8);
+        let mut diff = 0.0;
+        for _ in 0..1000 {
+            let x = a.step(5.0, 1.0, 0.002);
+            assert_eq!(x, b.step(5.0, 1.0, 0.002));
+            diff += (x - c.step(5.0, 1.0, 0.002)).norm();
+            // from east → u towards west (−E); v to the right of west = north.
+            let t = a.last_turbulence_uvw_mps();
+            let m = Vector3::new(0.0, -2.0, 0.0);
+            assert!((x - m - Vector3::new(t.y, -t.x, t.z)).norm() < 1e-9);
+        }
+        assert!(diff > 0.0);
+    }
+}

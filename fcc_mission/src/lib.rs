@@ -1,0 +1,54 @@
+//! Linux-side waypoint logic of the flight stack (paper A: the Linux
+//! computer runs the mission and sends per-axis velocity commands to the
+//! flight MCU over UART; the MCU does cross-track compensation and control).
+//!
+//! Pure logic: `std` only, no I/O besides parsing a YAML string. A ROS 2 node
+//! or the simulator calls it in-process.
+//!
+//! # Inputs
+//! * A [`Mission`] (YAML via [`from_yaml_str`], validated by
+//!   [`Mission::validate`]): takeoff altitude, speed, acceleration limit,
+//!   acceptance radius, hold time, optional fixed yaw, land-at-end flag and
+//!   waypoints in local metres relative to home (`north_m`, `east_m`,
+//!   `alt_m` up positive).
+//! * Each cycle (≥ 20 Hz), [`WaypointFollower::update`] gets time `t_s` (s),
+//!   the position estimate `pos_ned_m` (NED, m) and the velocity estimate
+//!   `vel_ned_mps` (NED, m/s). Home is the first valid position; mission
+//!   targets are `home + [north_m, east_m, -alt_m]` in the caller's NED frame.
+//!
+//! # Outputs
+//! A [`Guidance`] per update: the velocity command `vel_ned_mps` (NED, m/s)
+//! for the MCU, an optional heading `yaw_rad` (rad from north, clockwise;
+//! `None` = keep current), the [`Phase`], the current straight segment
+//! [`LegInfo`] (caller's NED frame, m) and a mode [`Request`] (arm during
+//! takeoff, land at the end).
+//!
+//! The command is along the current leg only, with a trapezoidal speed
+//! profile: `v = min(speed_mps, sqrt(2·0.7·a·along_track_to_go), v_prev + a·dt)`
+//! (never below `v_prev − a·dt`), so it arrives at each waypoint with ~zero
+//! speed; its rate of change never exceeds `a = accel_limit_mps2`. The 0.7
+//! ([`follower::BRAKE_PLAN_FRACTION`]) leaves margin for the vehicle's
+//! velocity-tracking lag. Cross-track compensation is left to the MCU.
+//!
+//! # Example
+//! ```
+//! use fcc_mission::{from_yaml_str, Phase, Request, WaypointFollower};
+//! let mission = from_yaml_str(
+//!     "takeoff_alt_m: 5\nspeed_mps: 3\naccept_radius_m: 0.5\n\
+//!      waypoints: [{north_m: 20, east_m: 0, alt_m: 5}]\n",
+//! )?;
+//! let mut follower = WaypointFollower::new(mission);
+//! let g = follower.update(0.0, [0.0, 0.0, 0.0], [0.0; 3]);
+//! assert_eq!(g.phase, Phase::Takeoff);
+//! assert_eq!(g.request, Some(Request::Arm));
+//! // send g.vel_ned_mps (and g.yaw_rad) to the MCU, call again in 50 ms ...
+//! # Ok::<(), fcc_mission::MissionError>(())
+//! ```
+//!
+//! Not yet supported: lat/lon waypoints (rejected as unknown fields).
+
+pub mod follower;
+pub mod mission;
+
+pub use follower::{Guidance, LegInfo, Phase, Request, WaypointFollower};
+pub use mission::{from_yaml_str, Mission, MissionError, Waypoint};

@@ -1,0 +1,391 @@
+//! Attitude estimation (paper A, eqs. 2–4) and body→NED rotations.
+//!
+//! Roll and pitch: accelerometer tilt through `F_L`, integrated Euler-angle rates (from the
+//! gyro via the ZYX kinematics) through `F_H`. Yaw: tilt-compensated magnetometer heading plus
+//! declination through `F_L`, integrated `ψ̇` through `F_H`. Each angle is an [`AngleCf`], so a
+//! constant gyro bias (in Euler-rate space) is estimated and rejected.
+//!
+//! Frames: body FRD, navigation NED, ZYX Euler angles, `R = Rz(ψ)·Ry(θ)·Rx(φ)` maps body
+//! vectors into NED. Specific-force convention: level at rest the accelerometer reads
+//! `[0, 0, −g]`; at rest with roll φ and pitch θ it reads `g·(sin θ, −sin φ cos θ, −cos φ cos θ)`.
+
+use crate::complementary::{wrap_pi, AngleCf, CfGains};
+use crate::GRAVITY_MPS2;
+use libm::{asinf, atan2f, cosf, sinf, sqrtf};
+
+/// ZYX Euler angles \[rad].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Euler {
+    /// Roll φ, positive right wing down.
+    pub roll_rad: f32,
+    /// Pitch θ, positive nose up.
+    pub pitch_rad: f32,
+    /// Yaw ψ (true heading), positive clockwise from north, in (−π, π].
+    pub yaw_rad: f32,
+}
+
+/// Roll and pitch `(φ, θ)` \[rad] from a specific-force sample in FRD, assuming no linear
+/// acceleration: `θ = asin(f_x/|f|)`, `φ = atan2(−f_y, −f_z)`. Returns `(0, 0)` for `f = 0`.
+pub fn accel_tilt_rad(f_frd_mps2: [f32; 3]) -> (f32, f32) {
+    let [fx, fy, fz] = f_frd_mps2;
+    let norm = sqrtf(fx * fx + fy * fy + fz * fz);
+    if norm < 1e-6 {
+        return (0.0, 0.0);
+    }
+    let pitch = asinf((fx / norm).clamp(-1.0, 1.0));
+    let roll = atan2f(-fy, -fz);
+    (roll, pitch)
+}
+
+/// Tilt-compensated magnetic heading plus declination → true heading \[rad] in (−π, π].
+///
+/// `m_frd` in any unit (µT typical). `declination_rad` is east-positive
+/// (true = magnetic + declination).
+pub fn mag_heading_rad(
+    m_frd: [f32; 3],
+    roll_rad: f32,
+    pitch_rad: f32,
+    declination_rad: f32,
+) -> f32 {
+    let [mx, my, mz] = m_frd;
+    let (sp, cp) = (sinf(roll_rad), cosf(roll_rad));
+    let (st, ct) = (sinf(pitch_rad), cosf(pitch_rad));
+    let mx_h = mx * ct + my * sp * st + mz * cp * st;
+    let my_h = my * cp - mz * sp;
+    wrap_pi(atan2f(-my_h, mx_h) + declination_rad)
+}
+
+/// Euler-angle rates `[φ̇, θ̇, ψ̇]` \[rad/s] from body rates `[p, q, r]` \[rad/s] (FRD).
+/// `cos θ` is limited to ±1e−3 near ±90° pitch (gimbal lock).
+pub fn euler_rates(gyro_frd_radps: [f32; 3], roll_rad: f32, pitch_rad: f32) -> [f32; 3] {
+    let [p, q, r] = gyro_frd_radps;
+    let (sp, cp) = (sinf(roll_rad), cosf(roll_rad));
+    let st = sinf(pitch_rad);
+    let mut ct = cosf(pitch_rad);
+    const MIN_COS: f32 = 1e-3;
+    if ct.abs() < MIN_COS {
+        ct = if ct < 0.0 { -MIN_COS } else { MIN_COS };
+    }
+    let qr = q * sp + r * cp;
+    [p + qr * st / ct, q * cp - r * sp, qr / ct]
+}
+
+/// Rotation matrix body (FRD) → NED, `R = Rz(ψ)·Ry(θ)·Rx(φ)`, row-major.
+pub fn rot_body_to_ned(e: &Euler) -> [[f32; 3]; 3] {
+    let (sp, cp) = (sinf(e.roll_rad), cosf(e.roll_rad));
+    let (st, ct) = (sinf(e.pitch_rad), cosf(e.pitch_rad));
+    let (ss, cs) = (sinf(e.yaw_rad), cosf(e.yaw_rad));
+    [
+        [ct * cs, sp * st * cs - cp * ss, cp * st * cs + sp * ss],
+        [ct * ss, sp * st * ss + cp * cs, cp * st * ss - sp * cs],
+        [-st, sp * ct, cp * ct],
+    ]
+}
+
+/// Rotate a body (FRD) vector into NED.
+pub fn body_to_ned(e: &Euler, v_frd: [f32; 3]) -> [f32; 3] {
+    let r = rot_body_to_ned(e);
+    let mut out = [0.0; 3];
+    for (o, row) in out.iter_mut().zip(r.iter()) {
+        *o = row[0] * v_frd[0] + row[1] * v_frd[1] + row[2] * v_frd[2];
+    }
+    out
+}
+
+/// Gravity-compensated linear acceleration in NED \[m/s²]: `R·f + [0, 0, g]` (zero at rest).
+pub fn linear_accel_ned_mps2(e: &Euler, f_frd: [f32; 3]) -> [f32; 3] {
+    let mut a = body_to_ned(e, f_frd);
+    a[2] += GRAVITY_MPS2;
+    a
+}
+
+/// Complementary-filter attitude estimator (roll, pitch, yaw).
+#[derive(Clone, Copy, Debug)]
+pub struct AttitudeEstimator {
+    roll: AngleCf,
+    pitch: AngleCf,
+    yaw: AngleCf,
+    /// Magnetic declination \[rad], east positive.
+    pub declination_rad: f32,
+    /// Accelerometer correction is skipped when `| |f| − g | >` this \[m/s²] (default 2.0).
+    pub accel_gate_mps2: f32,
+}
+
+impl AttitudeEstimator {
+    /// New estimator: `tilt` gains for roll/pitch, `yaw` gains for heading.
+    pub fn new(tilt: CfGains, yaw: CfGains, declination_rad: f32) -> Self {
+        Self {
+            roll: AngleCf::new(tilt, true),
+            pitch: AngleCf::new(tilt, false),
+            yaw: AngleCf::new(yaw, true),
+            declination_rad,
+            accel_gate_mps2: 2.0,
+        }
+    }
+
+    /// Set the attitude (rate-bias estimates zeroed).
+    pub fn reset(&mut self, e: Euler) {
+        self.roll.reset(e.roll_rad);
+        self.pitch.reset(e.pitch_rad);
+        self.yaw.reset(e.yaw_rad);
+    }
+
+    /// One step: propagate with the gyro, correct roll/pitch with the accelerometer (if given
+    /// and within the gate) and yaw with the magnetometer (if given).
+    pub fn update(
+        &mut self,
+        gyro_frd_radps: [f32; 3],
+        accel_frd_mps2: Option<[f32; 3]>,
+        mag_frd_ut: Option<[f32; 3]>,
+        dt_s: f32,
+    ) -> Euler {
+        let rates = euler_rates(
+            gyro_frd_radps,
+            self.roll.angle_rad(),
+            self.pitch.angle_rad(),
+        );
+        let tilt = accel_frd_mps2.and_then(|f| {
+            let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+            if (n - GRAVITY_MPS2).abs() <= self.accel_gate_mps2 {
+                Some(accel_tilt_rad(f))
+            } else {
+                None
+            }
+        });
+        let roll = self.roll.update(rates[0], tilt.map(|t| t.0), dt_s);
+        let pitch = self.pitch.update(rates[1], tilt.map(|t| t.1), dt_s);
+        let heading = mag_frd_ut.map(|m| mag_heading_rad(m, roll, pitch, self.declination_rad));
+        self.yaw.update(rates[2], heading, dt_s);
+        self.euler()
+    }
+
+    /// Current estimate.
+    pub fn euler(&self) -> Euler {
+        Euler {
+            roll_rad: self.roll.angle_rad(),
+            pitch_rad: self.pitch.angle_rad(),
+            yaw_rad: self.yaw.angle_rad(),
+        }
+    }
+
+    /// Euler-rate bias estimates `[φ̇, θ̇, ψ̇]` \[rad/s] (converge to minus the rate bias).
+    pub fn rate_bias_radps(&self) -> [f32; 3] {
+        [
+            self.roll.bias_radps(),
+            self.pitch.bias_radps(),
+            self.yaw.bias_radps(),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_util::Rng;
+    use core::f32::consts::{FRAC_PI_2, PI};
+
+    const G: f32 = GRAVITY_MPS2;
+    const DT: f32 = 0.002;
+    /// Earth field in NED (Korea-like, µT): north, east, down.
+    const M_NED: [f32; 3] = [30.0, 0.0, 40.0];
+
+    fn ned_to_body(e: &Euler, v: [f32; 3]) -> [f32; 3] {
+        let r = rot_body_to_ned(e);
+        [0, 1, 2].map(|j| r[0][j] * v[0] + r[1][j] * v[1] + r[2][j] * v[2])
+    }
+
+    fn accel_at_rest(e: &Euler) -> [f32; 3] {
+        ned_to_body(e, [0.0, 0.0, -G])
+    }
+
+    fn e(r: f32, p: f32, y: f32) -> Euler {
+        Euler {
+            roll_rad: r,
+            pitch_rad: p,
+            yaw_rad: y,
+        }
+    }
+
+    #[test]
+    fn accel_at_rest_matches_documented_formula() {
+        let (r, p) = (0.3f32, -0.2f32);
+        let f = accel_at_rest(&e(r, p, 1.0));
+        let want = [G * p.sin(), -G * r.sin() * p.cos(), -G * r.cos() * p.cos()];
+        for i in 0..3 {
+            assert!((f[i] - want[i]).abs() < 1e-5);
+        }
+        let lvl = accel_at_rest(&Euler::default());
+        assert!((lvl[2] + G).abs() < 1e-6);
+    }
+
+    #[test]
+    fn tilt_signs() {
+        // nose up ⇒ +pitch: forward axis points up, accel x reads +g sinθ
+        let (r, p) = accel_tilt_rad(accel_at_rest(&e(0.0, 0.3, 0.0)));
+        assert!((p - 0.3).abs() < 1e-5 && r.abs() < 1e-5);
+        // right wing down ⇒ +roll
+        let (r, p) = accel_tilt_rad(accel_at_rest(&e(0.4, 0.0, 0.0)));
+        assert!((r - 0.4).abs() < 1e-5 && p.abs() < 1e-5);
+        // combined; |f| normalisation makes it scale free
+        let f = accel_at_rest(&e(-0.5, 0.6, 2.0)).map(|x| 1.3 * x);
+        let (r, p) = accel_tilt_rad(f);
+        assert!((r + 0.5).abs() < 1e-5 && (p - 0.6).abs() < 1e-5);
+        // clamp: no NaN
+        let (r, p) = accel_tilt_rad([20.0, 0.0, 0.0]);
+        assert!((p - FRAC_PI_2).abs() < 1e-3 && !r.is_nan());
+        assert_eq!(accel_tilt_rad([0.0; 3]), (0.0, 0.0));
+    }
+
+    #[test]
+    fn heading_north_east_and_declination() {
+        let h = mag_heading_rad(ned_to_body(&e(0.0, 0.0, 0.0), M_NED), 0.0, 0.0, 0.0);
+        assert!(h.abs() < 1e-5);
+        let h = mag_heading_rad(ned_to_body(&e(0.0, 0.0, FRAC_PI_2), M_NED), 0.0, 0.0, 0.0);
+        assert!((h - FRAC_PI_2).abs() < 1e-5, "east {h}");
+        let h = mag_heading_rad(ned_to_body(&e(0.0, 0.0, -2.5), M_NED), 0.0, 0.0, 0.0);
+        assert!((h + 2.5).abs() < 1e-5, "{h}");
+        // east declination: magnetic north points 8° east of true north
+        let d = 8f32.to_radians();
+        // vehicle pointing at true heading 30°, so magnetic heading is 22°
+        let m_ned_decl = [M_NED[0] * d.cos(), M_NED[0] * d.sin(), M_NED[2]];
+        let yaw = 30f32.to_radians();
+        let h = mag_heading_rad(ned_to_body(&e(0.0, 0.0, yaw), m_ned_decl), 0.0, 0.0, d);
+        assert!((h - yaw).abs() < 1e-5, "{h}");
+        // wraps
+        let h = mag_heading_rad(ned_to_body(&e(0.0, 0.0, 3.1), M_NED), 0.0, 0.0, 0.1);
+        assert!(h > -PI && h <= PI && (h - (3.2 - 2.0 * PI)).abs() < 1e-4);
+    }
+
+    #[test]
+    fn heading_with_tilt() {
+        for &(r, p, y) in &[(0.3, 0.2, 1.0), (-0.5, 0.4, -2.0), (0.2, -0.6, 3.0)] {
+            let m = ned_to_body(&e(r, p, y), M_NED);
+            let h = mag_heading_rad(m, r, p, 0.0);
+            assert!((h - y).abs() < 1e-4, "{r} {p} {y} -> {h}");
+            // without compensation the heading would be wrong
+            assert!((mag_heading_rad(m, 0.0, 0.0, 0.0) - y).abs() > 1e-2);
+        }
+    }
+
+    #[test]
+    fn euler_rates_kinematics() {
+        // level: Euler rates = body rates
+        let r = euler_rates([0.1, 0.2, 0.3], 0.0, 0.0);
+        assert!(
+            (r[0] - 0.1).abs() < 1e-6 && (r[1] - 0.2).abs() < 1e-6 && (r[2] - 0.3).abs() < 1e-6
+        );
+        // rolled 90°: body q maps to yaw rate, r to −pitch rate
+        let r = euler_rates([0.0, 0.2, 0.3], FRAC_PI_2, 0.0);
+        assert!((r[1] + 0.3).abs() < 1e-5 && (r[2] - 0.2).abs() < 1e-5);
+        // gimbal lock guard: finite
+        let r = euler_rates([0.0, 0.1, 0.1], 0.1, FRAC_PI_2);
+        assert!(r.iter().all(|x| x.is_finite()));
+    }
+
+    #[test]
+    fn rotation_and_linear_accel() {
+        let att = e(0.3, -0.4, 1.2);
+        let m = rot_body_to_ned(&att);
+        // orthonormal
+        for i in 0..3 {
+            for j in 0..3 {
+                let d: f32 = (0..3).map(|k| m[i][k] * m[j][k]).sum();
+                assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-5);
+            }
+        }
+        // yaw 90°: body forward = east
+        let v = body_to_ned(&e(0.0, 0.0, FRAC_PI_2), [1.0, 0.0, 0.0]);
+        assert!(v[0].abs() < 1e-6 && (v[1] - 1.0).abs() < 1e-6);
+        // pitch up: forward has negative down component
+        let v = body_to_ned(&e(0.0, 0.3, 0.0), [1.0, 0.0, 0.0]);
+        assert!(v[2] < 0.0);
+        // at rest → zero
+        let a = linear_accel_ned_mps2(&att, accel_at_rest(&att));
+        assert!(a.iter().all(|x| x.abs() < 1e-5), "{a:?}");
+        // accelerating north at 1 m/s² while level: f = a − g = [1, 0, −g]
+        let a = linear_accel_ned_mps2(&Euler::default(), [1.0, 0.0, -G]);
+        assert!((a[0] - 1.0).abs() < 1e-6 && a[2].abs() < 1e-6);
+    }
+
+    fn sim(est: &mut AttitudeEstimator, truth: Euler, gyro: [f32; 3], secs: f32, rng: &mut Rng) {
+        for _ in 0..(secs / DT) as usize {
+            let f = accel_at_rest(&truth).map(|x| x + rng.normal(0.3));
+            let m = ned_to_body(&truth, M_NED).map(|x| x + rng.normal(0.5));
+            est.update(gyro, Some(f), Some(m), DT);
+        }
+    }
+
+    #[test]
+    fn estimator_converges_after_rotation() {
+        let mut rng = Rng::new(3);
+        let mut est = AttitudeEstimator::new(CfGains::new(1.0, 0.7), CfGains::new(0.5, 0.7), 0.0);
+        // the vehicle was rotated to `target` while the estimator still believes it is level
+        // and north (e.g. rotated before the gyro integration started): it must converge
+        let target = e(0.2, -0.15, 1.0);
+        est.reset(e(0.0, 0.0, 0.0));
+        sim(&mut est, target, [0.0; 3], 15.0, &mut rng);
+        let got = est.euler();
+        assert!((got.roll_rad - 0.2).abs() < 0.01, "{got:?}");
+        assert!((got.pitch_rad + 0.15).abs() < 0.01, "{got:?}");
+        assert!((got.yaw_rad - 1.0).abs() < 0.02, "{got:?}");
+    }
+
+    #[test]
+    fn estimator_tracks_yaw_rotation_with_gyro() {
+        let mut est = AttitudeEstimator::new(CfGains::new(1.0, 0.7), CfGains::new(0.5, 0.7), 0.0);
+        est.reset(Euler::default());
+        // 90° yaw in 1 s at 90°/s, level: Euler yaw rate = r
+        let r = FRAC_PI_2;
+        let mut yaw = 0.0f32;
+        for _ in 0..500 {
+            yaw += r * DT;
+            let t = e(0.0, 0.0, yaw);
+            est.update(
+                [0.0, 0.0, r],
+                Some(accel_at_rest(&t)),
+                Some(ned_to_body(&t, M_NED)),
+                DT,
+            );
+        }
+        assert!(
+            (est.euler().yaw_rad - FRAC_PI_2).abs() < 1e-3,
+            "{:?}",
+            est.euler()
+        );
+    }
+
+    #[test]
+    fn estimator_rejects_gyro_bias() {
+        let mut rng = Rng::new(11);
+        let mut est = AttitudeEstimator::new(CfGains::new(1.0, 0.7), CfGains::new(0.5, 0.7), 0.0);
+        let truth = e(0.1, 0.05, -0.7);
+        est.reset(truth);
+        let bias = [0.02, -0.03, 0.01];
+        sim(&mut est, truth, bias, 40.0, &mut rng);
+        let got = est.euler();
+        assert!((got.roll_rad - truth.roll_rad).abs() < 0.01, "{got:?}");
+        assert!((got.pitch_rad - truth.pitch_rad).abs() < 0.01, "{got:?}");
+        assert!((got.yaw_rad - truth.yaw_rad).abs() < 0.02, "{got:?}");
+        let b = est.rate_bias_radps();
+        let want = euler_rates(bias, truth.roll_rad, truth.pitch_rad);
+        for i in 0..3 {
+            assert!((b[i] + want[i]).abs() < 3e-3, "{b:?} vs {want:?}");
+        }
+    }
+
+    #[test]
+    fn accel_gate_skips_large_specific_force() {
+        let mut est = AttitudeEstimator::new(CfGains::new(1.0, 0.7), CfGains::new(0.5, 0.7), 0.0);
+        est.reset(Euler::default());
+        // 3 g forward: would read as a large pitch; gated out
+        for _ in 0..1000 {
+            est.update([0.0; 3], Some([3.0 * G, 0.0, -G]), None, DT);
+        }
+        assert_eq!(est.euler().pitch_rad, 0.0);
+        est.accel_gate_mps2 = 100.0;
+        for _ in 0..1000 {
+            est.update([0.0; 3], Some([3.0 * G, 0.0, -G]), None, DT);
+        }
+        assert!(est.euler().pitch_rad > 0.5);
+    }
+}

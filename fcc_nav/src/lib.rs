@@ -1,0 +1,55 @@
+//! `fcc_nav` — `no_std`, heap-free navigation math for the multirotor flight computer
+//! (paper A, "navigation: complementary filters at 500 Hz").
+//!
+//! # Modules
+//!
+//! | module | concern | inputs | outputs |
+//! |---|---|---|---|
+//! | [`complementary`] | 2nd-order complementary filters (eq. 1): [`AngleCf`], [`PosVelCf`] | rate / accel, angle / position measurement | angle + rate bias, position + velocity |
+//! | [`attitude`] | roll/pitch/yaw estimation (eqs. 2–4), frame rotations | gyro \[rad/s] FRD, accel \[m/s²] FRD, mag \[µT] FRD | [`Euler`] \[rad], NED linear acceleration \[m/s²] |
+//! | [`horizontal`] | NE position/velocity from GPS + NED accel | accel NE \[m/s²], GPS NE \[m] + delay steps | pos NE \[m], vel NE \[m/s] |
+//! | [`vertical`] | altitude/vertical speed from baro + accel (eqs. 5–6) | accel down \[m/s²], baro altitude \[m] or pressure \[Pa] | altitude up \[m], vel down \[m/s] |
+//! | [`observer`] | Luenberger linear-acceleration observer (eqs. 10–14) | tilt, tilt command \[rad], measured accel \[m/s²] | filtered accel \[m/s²] |
+//! | [`geodesy`] | WGS-84 LLA ↔ ECEF ↔ local NED (`f64`) | lat/lon \[deg], alt \[m] | ECEF \[m], NED \[m] |
+//! | [`sysid`] | streaming least-squares fit of `a = k1·θ − k2·v` ("3D curve fitting") | tilt \[rad], vel \[m/s], accel \[m/s²] | k1 \[m/s²/rad], k2 \[1/s] |
+//!
+//! # Conventions
+//!
+//! * Navigation frame **NED** (north, east, down); body frame **FRD** (forward, right, down).
+//! * Euler angles ZYX: `R_body→ned = Rz(ψ)·Ry(θ)·Rx(φ)`; roll positive right wing down, pitch
+//!   positive nose up, yaw positive clockwise from north seen from above.
+//! * Accelerometers measure **specific force** `f = a − g`: level at rest they read
+//!   `[0, 0, −9.81]` m/s² in FRD. Gravity-compensated NED acceleration is `R·f + [0, 0, g]`.
+//! * Altitude is reported **up positive** (`alt_m`); NED velocities are down positive.
+//! * Units are in names (`_m`, `_mps`, `_mps2`, `_rad`, `_radps`, `_s`, `_pa`, `_ut`, `_deg`).
+//!   Everything is `f32` except geodesy (`f64`).
+//! * Every filter `update` takes its own `dt_s`; the design rate is 500 Hz (`dt_s = 0.002`).
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod attitude;
+pub mod complementary;
+pub mod geodesy;
+pub mod horizontal;
+pub mod lowpass;
+pub mod observer;
+pub mod sysid;
+pub mod vertical;
+
+#[cfg(test)]
+mod test_util;
+
+pub use attitude::{AttitudeEstimator, Euler};
+pub use complementary::{AngleCf, CfGains, PosVelCf};
+pub use geodesy::{Lla, LocalNed};
+pub use horizontal::HorizontalEstimator;
+pub use observer::{AccelObserver, AccelObserverParams};
+pub use sysid::{PlaneFit, PlaneFitResult};
+pub use vertical::VerticalEstimator;
+
+/// Standard gravity \[m/s²].
+pub const GRAVITY_MPS2: f32 = 9.80665;
