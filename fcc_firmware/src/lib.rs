@@ -26,6 +26,7 @@ pub mod commands;
 pub mod control;
 pub mod flight;
 pub mod geometry;
+pub mod link;
 pub mod nav;
 pub mod params;
 pub mod scheduler;

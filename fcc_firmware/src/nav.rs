@@ -7,7 +7,7 @@
 
 use crate::params::NavParams;
 use crate::sensors::SensorInputs;
-use fcc_nav::attitude::{accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, AttitudeEstimator, Euler};
+use fcc_nav::attitude::{accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, rot_body_to_ned, AttitudeEstimator, Euler};
 use fcc_nav::geodesy::{Lla, LocalNed};
 use fcc_nav::horizontal::HorizontalEstimator;
 use fcc_nav::lowpass::LowPass2;
@@ -64,6 +64,11 @@ pub struct Navigator {
     last_mag_frd: Option<[f32; 3]>,
     /// Accelerometer low-pass for the tilt correction only (vibration before asin/atan2).
     tilt_accel_lpf: [LowPass2; 3],
+    /// Vehicle acceleration from successive GPS velocities (NED), smoothed, and when it was
+    /// last updated: subtracted from the accelerometer before the tilt correction so that
+    /// manoeuvres are not mistaken for tilt (as ArduPilot's DCM does).
+    gps_accel_ned_mps2: [f32; 3],
+    last_gps_vel: Option<(u64, [f32; 3])>,
     state: NavState,
 }
 
@@ -93,6 +98,8 @@ impl Navigator {
             last_gps_us: None,
             last_mag_frd: None,
             tilt_accel_lpf: [LowPass2::new(params.tilt_accel_lpf_hz, 500.0); 3],
+            gps_accel_ned_mps2: [0.0; 3],
+            last_gps_vel: None,
             state: NavState::default(),
         }
     }
@@ -151,8 +158,16 @@ impl Navigator {
                 self.tilt_accel_lpf[1].update(f[1]),
                 self.tilt_accel_lpf[2].update(f[2]),
             ];
+            // Remove the manoeuvre acceleration (GPS-derived, NED → body) from the specific
+            // force before it is read as a gravity direction.
+            let r = rot_body_to_ned(&self.att.euler());
+            let a = if self.state.gps_ok { self.gps_accel_ned_mps2 } else { [0.0; 3] };
+            let mut f_tilt = f_lp;
+            for (i, ft) in f_tilt.iter_mut().enumerate() {
+                *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
+            }
             let euler = if self.calibrated {
-                self.att.update(gyro, Some(f_lp), mag, dt_s)
+                self.att.update(gyro, Some(f_tilt), mag, dt_s)
             } else {
                 self.att.euler()
             };
@@ -181,6 +196,18 @@ impl Navigator {
                     self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
                     self.state.pos_ned_m = [0.0, 0.0, p[2]];
                 }
+                if let Some((t0, v0)) = self.last_gps_vel {
+                    let dt = now_us.saturating_sub(t0) as f32 * 1e-6;
+                    if dt > 0.05 && dt < 1.0 {
+                        // First-order smoothing (~0.5 s) of the differenced GPS velocity.
+                        let k = (dt / 0.5).min(1.0);
+                        for i in 0..3 {
+                            let a = (g.vel_ned_mps[i] - v0[i]) / dt;
+                            self.gps_accel_ned_mps2[i] += k * (a - self.gps_accel_ned_mps2[i]);
+                        }
+                    }
+                }
+                self.last_gps_vel = Some((now_us, g.vel_ned_mps));
                 if let Some(home) = &self.home {
                     let ned = home.lla_to_ned(&lla);
                     let delay_steps = (self.params.gps_latency_s / 0.002 + 0.5) as usize;
@@ -236,6 +263,10 @@ impl Navigator {
             };
             self.att.reset(Euler { roll_rad: roll, pitch_rad: pitch, yaw_rad: yaw });
             self.vert.reset(0.0, 0.0);
+            // At rest the specific force must have magnitude g: the excess is the accelerometer
+            // bias along gravity, i.e. the vertical channel's bias (NED down positive).
+            let f_norm = libm::sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+            self.vert.down.set_bias(fcc_nav::GRAVITY_MPS2 - f_norm);
             self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
             self.calibrated = true;
         }

@@ -93,6 +93,26 @@ pub struct Guidance {
 
 const UP: [f32; 3] = [0.0, 0.0, -1.0];
 
+/// Station-keeping while holding at a waypoint: velocity per metre of error, 1/s.
+pub const STATION_KEEP_GAIN_PER_S: f32 = 0.8;
+/// Station-keeping velocity bound, m/s.
+pub const STATION_KEEP_MAX_MPS: f32 = 0.5;
+/// The hold timer starts once the vehicle is this close to the waypoint, m ...
+pub const HOLD_SETTLE_M: f32 = 0.2;
+/// ... or once it has tried for this long beyond the hold time, s.
+pub const HOLD_SETTLE_TIMEOUT_S: f64 = 10.0;
+
+/// Bounded proportional pull towards a point (`err` = target − position).
+fn station_keep(err: [f32; 3]) -> [f32; 3] {
+    let v = scale(err, STATION_KEEP_GAIN_PER_S);
+    let n = norm(v);
+    if n > STATION_KEEP_MAX_MPS {
+        scale(v, STATION_KEEP_MAX_MPS / n)
+    } else {
+        v
+    }
+}
+
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
@@ -145,6 +165,8 @@ pub struct WaypointFollower {
     axis: [f32; 3],
     takeoff_braking: bool,
     hold_since: Option<f64>,
+    hold_entered: Option<f64>,
+    correction: [f32; 3],
     landed_since: Option<f64>,
     landed: bool,
 }
@@ -164,6 +186,8 @@ impl WaypointFollower {
             axis: [0.0; 3],
             takeoff_braking: false,
             hold_since: None,
+            hold_entered: None,
+            correction: [0.0; 3],
             landed_since: None,
             landed: false,
         }
@@ -270,11 +294,17 @@ impl WaypointFollower {
             _ => [0.0; 3],
         };
         self.hold_since = None;
+        self.hold_entered = None;
         self.landed_since = None;
         self.takeoff_braking = false;
     }
 
     /// One guidance step.
+    ///
+    /// Velocity commands are along the current leg; while holding at a waypoint (and
+    /// horizontally while climbing) a small bounded station-keeping term
+    /// (`STATION_KEEP_GAIN_PER_S`, at most `STATION_KEEP_MAX_MPS`) pulls the vehicle onto the
+    /// point, so each straight leg starts where it should.
     ///
     /// * `t_s`: time, s (any epoch, monotonic; backward jumps count as zero
     ///   elapsed time, gaps over [`MAX_DT_S`] count as `MAX_DT_S`).
@@ -295,6 +325,9 @@ impl WaypointFollower {
         self.clock += dt;
         let dt = dt as f32;
 
+        let prev_speed = self.speed;
+        let prev_axis = self.axis;
+        let mut want_corr = [0.0f32; 3];
         let inputs_ok = t_s.is_finite() && finite3(pos_ned_m) && finite3(vel_ned_mps);
         if self.home.is_none() {
             if !inputs_ok {
@@ -319,9 +352,15 @@ impl WaypointFollower {
                 if h_rem <= accept {
                     self.takeoff_braking = true;
                 }
+                let horiz_err = {
+                    let e = sub(self.takeoff_point(), rel);
+                    norm([e[0], e[1], 0.0])
+                };
+                let waited = *self.hold_entered.get_or_insert(self.clock);
                 if self.takeoff_braking {
                     self.speed = self.brake(h_rem, dt);
-                    if self.speed == 0.0 {
+                    let settled = horiz_err <= HOLD_SETTLE_M || self.clock - waited >= HOLD_SETTLE_TIMEOUT_S + 30.0;
+                    if self.speed == 0.0 && settled {
                         let next = self.after(None);
                         self.enter(next);
                     }
@@ -329,6 +368,9 @@ impl WaypointFollower {
                     let target = vmax.min(self.stop_curve(h_rem));
                     self.speed = self.accelerate(target, dt);
                 }
+                // Keep above the take-off point horizontally while climbing.
+                let c = station_keep(sub(self.takeoff_point(), rel));
+                want_corr = [c[0], c[1], 0.0];
             }
             Phase::Leg(i) => {
                 let (_, to) = self.leg_rel(i);
@@ -351,6 +393,9 @@ impl WaypointFollower {
                 let (_, to) = self.leg_rel(i);
                 let along = dot(sub(to, rel), self.axis);
                 self.speed = self.brake(along, dt);
+                if self.speed == 0.0 {
+                    want_corr = station_keep(sub(to, rel));
+                }
             }
             Phase::Landing => {
                 self.speed = 0.0;
@@ -365,12 +410,47 @@ impl WaypointFollower {
                     self.landed_since = None;
                 }
             }
-            Phase::Done => self.speed = 0.0,
+            Phase::Done => {
+                self.speed = 0.0;
+                // Ended without landing: keep station on the last waypoint.
+                if !self.landed {
+                    if let Some(w) = self.mission.waypoints.last() {
+                        want_corr = station_keep(sub(w.ned_m(), rel));
+                    }
+                }
+            }
         }
 
-        // Hold timer runs once the command has reached zero.
+        // The station-keeping term slews first (so a leg starts without a sideways leftover);
+        // the along-leg speed gets what the acceleration limit leaves, so the total command
+        // never changes faster than `accel_limit_mps2`.
+        let budget = self.a() * dt;
+        let d = sub(want_corr, self.correction);
+        let dn = norm(d);
+        let step = dn.min(budget);
+        if dn > 0.0 {
+            self.correction = add(self.correction, scale(d, step / dn));
+        }
+        let leg_budget = budget - step;
+        if self.axis == prev_axis {
+            self.speed = self.speed.clamp(prev_speed - leg_budget, prev_speed + leg_budget).max(0.0);
+        } else {
+            self.speed = self.speed.min(leg_budget);
+        }
+        let _ = dt;
+
+        // Hold timer runs once the command has reached zero and the vehicle has settled on the
+        // waypoint (or has tried for HOLD_SETTLE_TIMEOUT_S), so the next leg starts on it.
         if let Phase::Hold(i) = self.phase {
-            if self.speed == 0.0 {
+            let (_, to) = self.leg_rel(i);
+            let settled = norm(sub(to, rel)) <= HOLD_SETTLE_M;
+            let entered = *self.hold_entered.get_or_insert(self.clock);
+            let timed_out = self.clock - entered >= f64::from(self.mission.hold_s) + HOLD_SETTLE_TIMEOUT_S;
+            if self.speed == 0.0 && !settled && !timed_out {
+                // Drifted off the point: the hold restarts once back on it.
+                self.hold_since = None;
+            }
+            if self.speed == 0.0 && (settled || timed_out) {
                 let since = *self.hold_since.get_or_insert(self.clock);
                 if self.clock - since >= f64::from(self.mission.hold_s) {
                     let next = self.after(Some(i));
@@ -382,7 +462,7 @@ impl WaypointFollower {
     }
 
     fn output(&mut self) -> Guidance {
-        let mut vel = scale(self.axis, self.speed);
+        let mut vel = add(scale(self.axis, self.speed), self.correction);
         if !finite3(vel) {
             // Only reachable with an invalid (non-finite) mission.
             self.speed = 0.0;
@@ -587,8 +667,8 @@ mod tests {
             match g.phase {
                 Phase::Takeoff => {
                     assert_eq!(g.request, Some(Request::Arm));
-                    assert_eq!(g.vel_ned_mps[0], 0.0);
-                    assert_eq!(g.vel_ned_mps[1], 0.0);
+                    // Horizontal: only the bounded station-keeping over the take-off point.
+                    assert!(norm([g.vel_ned_mps[0], g.vel_ned_mps[1], 0.0]) <= STATION_KEEP_MAX_MPS + 1e-5);
                     assert!(g.vel_ned_mps[2] <= 0.0);
                 }
                 Phase::Leg(i) | Phase::Hold(i) => {
@@ -599,13 +679,11 @@ mod tests {
                     assert_eq!(leg.to_ned_m, add(home, w.ned_m()));
                     let d = sub(leg.to_ned_m, leg.from_ned_m);
                     let u = scale(d, 1.0 / norm(d));
-                    if v > 0.0 {
-                        // Exactly along the leg, forwards.
-                        let along = dot(g.vel_ned_mps, u);
-                        assert!(along > 0.0);
-                        let perp = norm(sub(g.vel_ned_mps, scale(u, along)));
-                        assert!(perp <= 1e-6 * v.max(1.0), "perp {perp} at t={}", r.t);
-                    }
+                    // Along the leg, plus at most the bounded station-keeping term.
+                    let along = dot(g.vel_ned_mps, u);
+                    assert!(along >= -STATION_KEEP_MAX_MPS - 1e-5);
+                    let perp = norm(sub(g.vel_ned_mps, scale(u, along)));
+                    assert!(perp <= STATION_KEEP_MAX_MPS + 1e-5, "perp {perp} at t={}", r.t);
                     // Cross-track error of the (lagged, uncompensated) vehicle.
                     let e = sub(r.pos, leg.from_ned_m);
                     let xt = norm(sub(e, scale(u, dot(e, u))));
@@ -613,25 +691,18 @@ mod tests {
                     if matches!(g.phase, Phase::Hold(_)) {
                         assert!(norm(sub(r.pos, leg.to_ned_m)) < m.accept_radius_m + 0.3);
                     }
-                    // Leaving a hold: stopped, and held for hold_s.
+                    // Leaving a hold: settled on the waypoint, held at least hold_s.
                     if g.phase == Phase::Hold(i)
                         && recs.get(k + 1).map(|n| n.g.phase) != Some(Phase::Hold(i))
                     {
-                        assert_eq!(g.vel_ned_mps, [0.0; 3]);
-                        let zero_since = recs[..=k]
-                            .iter()
-                            .rev()
-                            .take_while(|q| q.g.vel_ned_mps == [0.0; 3])
-                            .last()
-                            .unwrap()
-                            .t;
+                        assert!(norm(sub(r.pos, leg.to_ned_m)) <= HOLD_SETTLE_M + 0.05, "left hold at {:?}", r.pos);
+                        let entered = recs[..=k].iter().rev().take_while(|q| q.g.phase == Phase::Hold(i)).last().unwrap().t;
                         let left_at = recs[k + 1].t;
-                        assert!(left_at - zero_since >= f64::from(m.hold_s) - 1e-6);
-                        assert!(left_at - zero_since <= f64::from(m.hold_s) + 0.051);
+                        assert!(left_at - entered >= f64::from(m.hold_s) - 1e-6);
                     }
                 }
                 Phase::Landing => {
-                    assert_eq!(g.vel_ned_mps, [0.0; 3]);
+                    assert!(norm(g.vel_ned_mps) <= STATION_KEEP_MAX_MPS + 1e-5);
                     assert_eq!(g.request, Some(Request::Land));
                     assert_eq!(g.leg, None);
                 }
@@ -683,7 +754,8 @@ mod tests {
         let last = recs.last().unwrap();
         assert_eq!(last.g.phase, Phase::Done);
         assert_eq!(last.g.request, None);
-        assert_eq!(last.g.vel_ned_mps, [0.0; 3]);
+        // Only the bounded station-keeping term remains, and it is small on the waypoint.
+        assert!(norm(last.g.vel_ned_mps) <= STATION_KEEP_MAX_MPS, "{:?}", last.g.vel_ned_mps);
         assert!(
             norm(sub(last.pos, [10.0, 5.0, -8.0])) < 0.6,
             "{:?}",

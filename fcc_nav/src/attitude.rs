@@ -109,6 +109,15 @@ pub struct AttitudeEstimator {
     pub declination_rad: f32,
     /// Accelerometer correction is skipped when `| |f| − g | >` this \[m/s²] (default 2.0).
     pub accel_gate_mps2: f32,
+    /// Magnetometer innovation gate \[rad]: a heading that disagrees with the gyro-propagated
+    /// yaw by more than this is treated as a magnetic disturbance and not fused (default 10°),
+    /// for at most `mag_reject_timeout_s`, after which it is accepted again (a real heading
+    /// change the gyro missed must not lock the magnetometer out forever).
+    pub mag_gate_rad: f32,
+    /// Longest time magnetometer readings are rejected in a row \[s] (default 15).
+    pub mag_reject_timeout_s: f32,
+    mag_rejected_s: f32,
+    mag_rejects: u32,
 }
 
 impl AttitudeEstimator {
@@ -120,7 +129,21 @@ impl AttitudeEstimator {
             yaw: AngleCf::new(yaw, true),
             declination_rad,
             accel_gate_mps2: 2.0,
+            mag_gate_rad: 10.0 * core::f32::consts::PI / 180.0,
+            mag_reject_timeout_s: 15.0,
+            mag_rejected_s: 0.0,
+            mag_rejects: 0,
         }
+    }
+
+    /// Magnetometer readings rejected by the innovation gate so far.
+    pub fn mag_rejects(&self) -> u32 {
+        self.mag_rejects
+    }
+
+    /// Whether the magnetometer is currently being rejected (disturbance suspected).
+    pub fn mag_disturbed(&self) -> bool {
+        self.mag_rejected_s > 0.0
     }
 
     /// Set the attitude (rate-bias estimates zeroed).
@@ -154,7 +177,28 @@ impl AttitudeEstimator {
         });
         let roll = self.roll.update(rates[0], tilt.map(|t| t.0), dt_s);
         let pitch = self.pitch.update(rates[1], tilt.map(|t| t.1), dt_s);
-        let heading = mag_frd_ut.map(|m| mag_heading_rad(m, roll, pitch, self.declination_rad));
+        let mut heading = mag_frd_ut.map(|m| mag_heading_rad(m, roll, pitch, self.declination_rad));
+        if let Some(h) = heading {
+            let innov = crate::complementary::wrap_pi(h - self.yaw.angle_rad());
+            if innov.abs() > self.mag_gate_rad {
+                if self.mag_rejected_s < self.mag_reject_timeout_s {
+                    heading = None;
+                    self.mag_rejects = self.mag_rejects.wrapping_add(1);
+                } else {
+                    // Disagreement persisted: trust the magnetometer again and jump to it.
+                    self.yaw.reset(h);
+                }
+            }
+        }
+        if mag_frd_ut.is_some() {
+            if heading.is_none() {
+                self.mag_rejected_s += dt_s;
+            } else {
+                self.mag_rejected_s = 0.0;
+            }
+        } else if self.mag_rejected_s > 0.0 {
+            self.mag_rejected_s += dt_s;
+        }
         self.yaw.update(rates[2], heading, dt_s);
         self.euler()
     }
@@ -323,7 +367,9 @@ mod tests {
         // and north (e.g. rotated before the gyro integration started): it must converge
         let target = e(0.2, -0.15, 1.0);
         est.reset(e(0.0, 0.0, 0.0));
-        sim(&mut est, target, [0.0; 3], 15.0, &mut rng);
+        // (the 57° heading error is first taken for a disturbance and rejected for
+        // `mag_reject_timeout_s`, then the heading is re-acquired)
+        sim(&mut est, target, [0.0; 3], 25.0, &mut rng);
         let got = est.euler();
         assert!((got.roll_rad - 0.2).abs() < 0.01, "{got:?}");
         assert!((got.pitch_rad + 0.15).abs() < 0.01, "{got:?}");
@@ -387,5 +433,24 @@ mod tests {
             est.update([0.0; 3], Some([3.0 * G, 0.0, -G]), None, DT);
         }
         assert!(est.euler().pitch_rad > 0.5);
+    }
+
+    #[test]
+    fn short_magnetic_disturbance_is_gated_out() {
+        let mut rng = Rng::new(5);
+        let mut est = AttitudeEstimator::new(CfGains::new(0.5, 0.7), CfGains::new(0.1, 1.0), 0.0);
+        let truth = e(0.0, 0.0, 0.5);
+        est.reset(truth);
+        sim(&mut est, truth, [0.0; 3], 5.0, &mut rng);
+        // 8 s of an extra 15 µT towards east: the magnetometer heading is off by ~20°.
+        for _ in 0..(8.0 / DT) as usize {
+            let f = accel_at_rest(&truth);
+            let m_ned = [M_NED[0], M_NED[1] + 15.0, M_NED[2]];
+            est.update([0.0; 3], Some(f), Some(ned_to_body(&truth, m_ned)), DT);
+            assert!((est.euler().yaw_rad - 0.5).abs() < 2f32.to_radians(), "{:?}", est.euler());
+        }
+        assert!(est.mag_rejects() > 0 && est.mag_disturbed());
+        sim(&mut est, truth, [0.0; 3], 1.0, &mut rng);
+        assert!(!est.mag_disturbed());
     }
 }

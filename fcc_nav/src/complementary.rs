@@ -247,6 +247,8 @@ pub struct PosVelCf<const HIST: usize> {
     /// Input-bias estimate (subtracted from `accel`), see [`Self::set_bias_gain`].
     bias: f32,
     bias_k3: f32,
+    bias_extra_k1: f32,
+    bias_extra_k2: f32,
     bias_limit: f32,
 }
 
@@ -270,6 +272,8 @@ impl<const HIST: usize> PosVelCf<HIST> {
             timeout_s: 1.0,
             bias: 0.0,
             bias_k3: 0.0,
+            bias_extra_k1: 0.0,
+            bias_extra_k2: 0.0,
             bias_limit: 0.0,
         }
     }
@@ -282,9 +286,20 @@ impl<const HIST: usize> PosVelCf<HIST> {
     /// accelerometer bias (or vibration rectification) leaves. `p = 0` (default) is the
     /// paper's filter. The estimate is clamped to `±limit`.
     pub fn set_bias_gain(&mut self, pole_radps: f32, limit: f32) {
-        let w = self.cache.gains.omega_radps;
-        self.bias_k3 = pole_radps.max(0.0) * w * w;
+        let g = self.cache.gains;
+        let p = pole_radps.max(0.0);
+        let w = g.omega_radps;
+        // (s + p)(s² + 2ζωs + ω²) = s³ + (2ζω + p)s² + (ω² + 2ζωp)s + pω²: the first two
+        // gains grow by p and 2ζωp so the three poles land where intended.
+        self.bias_k3 = p * w * w;
+        self.bias_extra_k1 = p;
+        self.bias_extra_k2 = 2.0 * g.zeta * w * p;
         self.bias_limit = limit.abs();
+    }
+
+    /// Seed the input-bias estimate (e.g. from a static calibration on the ground).
+    pub fn set_bias(&mut self, bias: f32) {
+        self.bias = bias.clamp(-self.bias_limit, self.bias_limit);
     }
 
     /// Current input-bias estimate (same unit as `accel`).
@@ -346,6 +361,8 @@ impl<const HIST: usize> PosVelCf<HIST> {
             let idx = (self.head + HIST - self.delay_steps) % HIST;
             let e = y - self.hist[idx];
             let (g1, g2) = self.cache.get(dt_s);
+            let g1 = g1 + self.bias_extra_k1 * dt_s;
+            let g2 = g2 + self.bias_extra_k2 * dt_s;
             self.pos += g1 * e;
             self.vel += g2 * e;
             if self.bias_k3 > 0.0 {

@@ -34,6 +34,7 @@ extern crate std;
 pub mod attitude;
 pub mod complementary;
 pub mod geodesy;
+pub mod ground_altitude;
 pub mod horizontal;
 pub mod lowpass;
 pub mod observer;

@@ -5,6 +5,7 @@
 
 use core::f32::consts::PI;
 
+/// Second-order Butterworth low-pass biquad (state and coefficients).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LowPass2 {
     b: [f32; 3],
@@ -38,6 +39,7 @@ impl LowPass2 {
         self.primed = true;
     }
 
+    /// Filter one sample (the first sample primes the state to steady state).
     pub fn update(&mut self, x: f32) -> f32 {
         if !self.primed {
             self.reset(x);
@@ -48,6 +50,7 @@ impl LowPass2 {
         y
     }
 
+    /// Last output.
     pub fn output(&self) -> f32 {
         self.y[0]
     }

@@ -109,12 +109,12 @@ impl LinuxSide {
                 let vz_up = (0.8 * err).clamp(-1.0, 1.5);
                 let _ = core.setpoint(t_us, sp([0.0, 0.0, -vz_up], None));
                 self.phase = PlanPhase::Climbing;
-                if err.abs() < 0.15 && nav.vel_ned_mps[2].abs() < 0.15 {
+                if err.abs() < 0.3 && nav.vel_ned_mps[2].abs() < 0.3 {
                     *settle_s += 0.05;
                 } else {
                     *settle_s = 0.0;
                 }
-                if *settle_s >= 3.0 && core.command(t_us, Command::Hold).is_ok() {
+                if *settle_s >= 2.0 && core.command(t_us, Command::Hold).is_ok() {
                     *hold_start_s = Some(t_s);
                     let hold = [nav.pos_ned_m[0], nav.pos_ned_m[1], nav.pos_ned_m[2]];
                     self.phase = PlanPhase::Holding { hold_ned_m: hold };

@@ -201,6 +201,9 @@ pub fn attitude_error(log: &FlightLog, airborne_only: bool) -> AttitudeError {
     }
 }
 
+/// Carried scenarios: the filters start after the ground calibration; score from then on.
+pub const ELEVATOR_SETTLE_S: f64 = 5.0;
+
 /// Vertical estimate vs truth, with barometer-only beside it.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct VerticalError {
@@ -273,6 +276,15 @@ pub fn summary(log: &FlightLog) -> String {
             out,
             "all {} legs: cross-track est RMS {:.3} m max {:.3} m | true RMS {:.3} m max {:.3} m",
             t.legs, t.est_rms_m, t.est_max_m, t.true_rms_m, t.true_max_m
+        )
+        .ok();
+    }
+    if log.samples.iter().any(|s| s.plan == PlanPhase::Carried) {
+        let v = vertical_error(log, ELEVATOR_SETTLE_S);
+        writeln!(
+            out,
+            "vertical (carried, no GPS): estimate error RMS {:.3} m max {:.3} m | barometer alone RMS {:.3} m | noise (1 s high-pass σ) estimate {:.3} m vs barometer {:.3} m",
+            v.est_rms_m, v.est_max_m, v.baro_rms_m, v.est_noise_m, v.baro_noise_m
         )
         .ok();
     }

@@ -28,7 +28,7 @@
 //! right of u (seen from above), w down; rotated into NED. With no mean wind, u points along
 //! the configured direction anyway.
 
-use nalgebra::{Matrix2, Matrix4, Vector2, Vector3};
+use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -71,37 +71,13 @@ pub fn dryden_low_altitude(height_m: f64, w20_kt: f64) -> ([f64; 3], [f64; 3]) {
     ([sigma_uv, sigma_uv, sigma_w], [l_uv, l_uv, l_w])
 }
 
-/// Exact discretisation of `ẋ = A·x + B·n`, `E[n(t)n(s)] = q·δ(t−s)`: (Φ, lower Cholesky factor of Q_d).
-fn discretise_2nd_order(a: f64, q: f64, dt: f64) -> (Matrix2<f64>, Matrix2<f64>) {
-    // Controllable canonical form of 1/(s + a)²: x1' = x2, x2' = −a²x1 − 2a·x2 + n.
-    let am = Matrix2::new(0.0, 1.0, -a * a, -2.0 * a);
-    let qc = Matrix2::new(0.0, 0.0, 0.0, q);
-    // Van Loan: exp([[−A, Qc], [0, Aᵀ]]·dt) = [[·, Φ⁻¹Q_d], [0, Φᵀ]].
-    let mut m = Matrix4::zeros();
-    m.fixed_view_mut::<2, 2>(0, 0).copy_from(&(-am * dt));
-    m.fixed_view_mut::<2, 2>(0, 2).copy_from(&(qc * dt));
-    m.fixed_view_mut::<2, 2>(2, 2)
-        .copy_from(&(am.transpose() * dt));
-    let e = m.exp();
-    let phi: Matrix2<f64> = e.fixed_view::<2, 2>(2, 2).transpose();
-    let g12: Matrix2<f64> = e.fixed_view::<2, 2>(0, 2).into_owned();
-    let mut qd = phi * g12;
-    qd = (qd + qd.transpose()) * 0.5;
-    let l11 = qd[(0, 0)].max(0.0).sqrt();
-    let l21 = if l11 > 0.0 { qd[(1, 0)] / l11 } else { 0.0 };
-    let l22 = (qd[(1, 1)] - l21 * l21).max(0.0).sqrt();
-    (phi, Matrix2::new(l11, 0.0, l21, l22))
-}
 
 #[derive(Clone, Debug)]
 struct Coeffs {
     key: (f64, f64, f64), // (V, h, dt) they were computed for
     sigma: [f64; 3],
-    phi_u: f64,
-    // v and w: transition, noise factor, output row
-    phi2: [Matrix2<f64>; 2],
-    chol2: [Matrix2<f64>; 2],
-    c2: [Vector2<f64>; 2],
+    /// Per-step decay exp(−dt·V/L) for u, v, w.
+    phi: [f64; 3],
 }
 
 /// Mean wind plus Dryden turbulence, deterministic from a seed.
@@ -111,9 +87,11 @@ pub struct Wind {
     rng: ChaCha8Rng,
     /// Unit-gain-normalised u state (its value is the u turbulence, m/s).
     u: f64,
-    /// v and w filter states (controllable canonical form).
-    xv: Vector2<f64>,
-    xw: Vector2<f64>,
+    /// v and w: a unit-variance first-order Gauss–Markov state `g` (time constant T = L/V) and
+    /// its first-order low-pass `z`; the Dryden form (1 + √3·Ts)/(1 + Ts)² is then
+    /// `√3·g + (1 − √3)·z`, scaled to σ. Both states keep their physical scale when V or h
+    /// change (a canonical-form realisation does not, and blows up when T shrinks).
+    gz: [[f64; 2]; 2],
     coeffs: Option<Coeffs>,
     last_turbulence_uvw: Vector3<f64>,
 }
@@ -124,8 +102,7 @@ impl Wind {
             params: p,
             rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5749_4E44_0000_0001),
             u: 0.0,
-            xv: Vector2::zeros(),
-            xw: Vector2::zeros(),
+            gz: [[0.0; 2]; 2],
             coeffs: None,
             last_turbulence_uvw: Vector3::zeros(),
         }
@@ -150,29 +127,8 @@ impl Wind {
             }
         }
         let (sigma, l) = dryden_low_altitude(h, self.params.w20_kt);
-        let a = [v / l[0], v / l[1], v / l[2]];
-        let phi_u = (-a[0] * dt).exp();
-        let mut phi2 = [Matrix2::zeros(); 2];
-        let mut chol2 = [Matrix2::zeros(); 2];
-        let mut c2 = [Vector2::zeros(); 2];
-        for (k, axis) in [1usize, 2].iter().enumerate() {
-            let ak = a[*axis];
-            // H = K(1 + √3·s/a)/(1 + s/a)² = K·a²·(1 + √3·s/a)/(s + a)²,
-            // K = σ·√(L/(πV)) = σ/√(π·a); output y = K·a²·x1 + K·√3·a·x2.
-            let gain = sigma[*axis] / (core::f64::consts::PI * ak).sqrt();
-            let (phi, chol) = discretise_2nd_order(ak, core::f64::consts::PI, dt);
-            phi2[k] = phi;
-            chol2[k] = chol;
-            c2[k] = Vector2::new(gain * ak * ak, gain * 3f64.sqrt() * ak);
-        }
-        let c = Coeffs {
-            key: (v, h, dt),
-            sigma,
-            phi_u,
-            phi2,
-            chol2,
-            c2,
-        };
+        let phi = [(-v / l[0] * dt).exp(), (-v / l[1] * dt).exp(), (-v / l[2] * dt).exp()];
+        let c = Coeffs { key: (v, h, dt), sigma, phi };
         self.coeffs = Some(c.clone());
         c
     }
@@ -191,16 +147,21 @@ impl Wind {
 
         // u: first-order Gauss–Markov, exact: u' = φu + σ√(1−φ²)·n.
         let n: f64 = StandardNormal.sample(&mut self.rng);
-        self.u = c.phi_u * self.u + c.sigma[0] * (1.0 - c.phi_u * c.phi_u).max(0.0).sqrt() * n;
+        let pu = c.phi[0];
+        self.u = pu * self.u + c.sigma[0] * (1.0 - pu * pu).max(0.0).sqrt() * n;
 
+        // v, w: H = σ·√(L/(πV))·(1 + √3·Ts)/(1 + Ts)². With g a unit-variance Gauss–Markov
+        // process of time constant T, (1 + √3·Ts)/(1 + Ts)·g = √3·g + (1 − √3)·LP_T(g) has
+        // variance 2 (g is white of PSD 2T through 1/(1 + Ts): ∫(1+3x²)/(1+x²)² dx/π = 2),
+        // hence the σ/√2 scale.
         let mut out = [0.0; 2];
-        #[allow(clippy::needless_range_loop)]
         for k in 0..2 {
-            let n1: f64 = StandardNormal.sample(&mut self.rng);
-            let n2: f64 = StandardNormal.sample(&mut self.rng);
-            let x = if k == 0 { &mut self.xv } else { &mut self.xw };
-            *x = c.phi2[k] * *x + c.chol2[k] * Vector2::new(n1, n2);
-            out[k] = c.c2[k].dot(x);
+            let ph = c.phi[k + 1];
+            let n: f64 = StandardNormal.sample(&mut self.rng);
+            let [g, z] = &mut self.gz[k];
+            *g = ph * *g + (1.0 - ph * ph).max(0.0).sqrt() * n;
+            *z = ph * *z + (1.0 - ph) * *g;
+            out[k] = c.sigma[k + 1] / 2f64.sqrt() * (3f64.sqrt() * *g + (1.0 - 3f64.sqrt()) * *z);
         }
         let uvw = Vector3::new(self.u, out[0], out[1]);
         self.last_turbulence_uvw = uvw;

@@ -1,0 +1,454 @@
+extern crate std;
+
+use super::*;
+use crate::commands::Mode;
+use crate::params::Params;
+use crate::sensors::{
+    BaroSample, BatterySample, GpsFix, ImuSample, MagSample, RangeSample, SensorInputs,
+};
+use fcc_msgs::{
+    Command, Frame, HelloRequest, TimeSyncPing, VelocitySetpoint, MAX_FRAME_LEN, PROTOCOL_VERSION,
+    SCHEMA_HASH,
+};
+use std::collections::BTreeMap;
+use std::vec::Vec;
+
+const TICK_US: u64 = crate::scheduler::TICK_US;
+
+/// The Linux side: encodes with its own sequence numbers.
+struct Linux {
+    enc: Encoder,
+    dec: FrameDecoder,
+}
+
+impl Linux {
+    fn new() -> Self {
+        Self {
+            enc: Encoder::new(),
+            dec: FrameDecoder::new(),
+        }
+    }
+    fn frame(&mut self, m: Message) -> Vec<u8> {
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        let n = self.enc.encode(&m, 42, &mut buf).unwrap();
+        buf[..n].to_vec()
+    }
+    fn receive(&mut self, bytes: &[u8]) -> Vec<Frame> {
+        self.dec
+            .push_slice(bytes)
+            .map(|r| r.expect("MCU frames decode"))
+            .collect()
+    }
+}
+
+/// Synthetic sensors at board rates: IMU 500 Hz, mag 100, baro 50, GPS 5, laser 20, sonar 10,
+/// battery 10 — vehicle level and still at a fixed GPS position.
+fn sensors(tick: u64) -> SensorInputs {
+    let t_us = tick * TICK_US;
+    let every = |n: u64| tick % n == 0;
+    SensorInputs {
+        imu: Some(ImuSample {
+            t_us,
+            gyro_frd_radps: [0.0; 3],
+            accel_frd_mps2: [0.0, 0.0, -9.80665],
+        }),
+        mag: every(5).then_some(MagSample {
+            t_us,
+            mag_frd_ut: [21.0, 0.0, 43.0],
+        }),
+        baro: every(10).then_some(BaroSample {
+            t_us,
+            pressure_pa: 101_325.0,
+            temperature_c: 20.0,
+        }),
+        gps: every(100).then_some(GpsFix {
+            t_us,
+            lat_deg: 47.3977,
+            lon_deg: 8.5456,
+            alt_m: 488.0,
+            vel_ned_mps: [0.0; 3],
+            h_acc_m: 1.0,
+            num_sats: 12,
+            fix_ok: true,
+        }),
+        laser: every(25).then_some(RangeSample { t_us, range_m: 0.2 }),
+        sonar: every(50).then_some(RangeSample {
+            t_us,
+            range_m: 0.25,
+        }),
+        battery: every(50).then_some(BatterySample {
+            t_us,
+            voltage_v: 24.0,
+            current_a: 1.0,
+        }),
+    }
+}
+
+fn ack_results(frames: &[Frame]) -> Vec<CommandAck> {
+    frames
+        .iter()
+        .filter_map(|f| match f.message {
+            Message::CommandAck(a) => Some(a),
+            _ => None,
+        })
+        .collect()
+}
+
+fn tx(link: &mut LinkEndpoint, now_us: u64, core: &FlightCore, s: &SensorInputs) -> Vec<u8> {
+    let mut out = [0u8; 1024];
+    let n = link.poll_tx(now_us, core, s, &mut out);
+    out[..n].to_vec()
+}
+
+#[test]
+fn setpoint_while_disarmed_reaches_core_and_is_counted_as_rejected() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let mut linux = Linux::new();
+    let sp = VelocitySetpoint {
+        vel_ned_mps: [1.0, 0.0, 0.0],
+        has_yaw: false,
+        yaw_rad: 0.0,
+        ttl_ms: 500,
+    };
+    let bytes = linux.frame(Message::VelocitySetpoint(sp));
+    // Byte by byte, as a UART interrupt would deliver it.
+    for b in &bytes {
+        link.on_bytes(1_000, core::slice::from_ref(b), &mut core);
+    }
+    assert_eq!(link.stats().setpoint_rejects, 1);
+    assert_eq!(link.stats().last_reject, CommandResult::Disarmed);
+    assert_eq!(link.rx_counters().rx_frames, 1);
+    assert_eq!(core.mode(), Mode::Disarmed);
+    // Non-finite values are refused before the arming check.
+    let bad = VelocitySetpoint {
+        vel_ned_mps: [f32::NAN, 0.0, 0.0],
+        ..sp
+    };
+    link.on_bytes(
+        2_000,
+        &linux.frame(Message::VelocitySetpoint(bad)),
+        &mut core,
+    );
+    assert_eq!(link.stats().setpoint_rejects, 2);
+    assert_eq!(link.stats().last_reject, CommandResult::InvalidSetpoint);
+    // The rejects show up in Status.
+    let frames = linux.receive(&tx(&mut link, 3_000, &core, &SensorInputs::default()));
+    let status = frames.iter().find_map(|f| match f.message {
+        Message::Status(s) => Some(s),
+        _ => None,
+    });
+    let status = status.expect("status is due at start");
+    assert_eq!(
+        (status.setpoint_rejects, status.last_reject),
+        (2, CommandResult::InvalidSetpoint)
+    );
+    assert_eq!(status.link_rx.rx_frames, 2);
+    assert_eq!(status.mode, FlightMode::Disarmed);
+}
+
+#[test]
+fn arm_before_calibration_is_acked_with_the_reason() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let mut linux = Linux::new();
+    let bytes = linux.frame(Message::Command(Command {
+        command: CommandKind::Arm,
+    }));
+    link.on_bytes(0, &bytes, &mut core);
+    let hold = linux.frame(Message::Command(Command {
+        command: CommandKind::Hold,
+    }));
+    link.on_bytes(0, &hold, &mut core);
+    assert_eq!(link.stats().command_rejects, 2);
+    let acks = ack_results(&linux.receive(&tx(&mut link, 0, &core, &SensorInputs::default())));
+    assert_eq!(
+        acks,
+        [
+            CommandAck {
+                command: CommandKind::Arm,
+                result: CommandResult::NotCalibrated
+            },
+            CommandAck {
+                command: CommandKind::Hold,
+                result: CommandResult::Disarmed
+            },
+        ]
+    );
+}
+
+/// Calibrate on synthetic sensors, then arm and fly a setpoint entirely through link frames.
+#[test]
+fn arm_and_setpoint_through_the_link() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let mut linux = Linux::new();
+    let arm = linux.frame(Message::Command(Command {
+        command: CommandKind::Arm,
+    }));
+    let mut armed_at = None;
+    let mut results = Vec::new();
+    for tick in 0..3_000u64 {
+        let now = tick * TICK_US;
+        let s = sensors(tick);
+        core.step(now, &s);
+        if tick % 250 == 0 && armed_at.is_none() {
+            link.on_bytes(now, &arm, &mut core);
+        }
+        let frames = linux.receive(&tx(&mut link, now, &core, &s));
+        for a in ack_results(&frames) {
+            results.push(a.result);
+            if a.result == CommandResult::Accepted {
+                armed_at = Some(tick);
+            }
+        }
+        if armed_at.is_some() {
+            break;
+        }
+    }
+    assert!(armed_at.is_some(), "never armed: {results:?}");
+    assert!(
+        results.contains(&CommandResult::NotCalibrated),
+        "{results:?}"
+    );
+    assert!(core.armed());
+    let sp = VelocitySetpoint {
+        vel_ned_mps: [0.0, 0.0, -0.5],
+        has_yaw: true,
+        yaw_rad: 0.3,
+        ttl_ms: 300,
+    };
+    let t = armed_at.unwrap() * TICK_US + TICK_US;
+    link.on_bytes(t, &linux.frame(Message::VelocitySetpoint(sp)), &mut core);
+    assert_eq!(link.stats().setpoints_applied, 1);
+    assert_eq!(core.mode(), Mode::Velocity);
+    let nav = linux.receive(&tx(&mut link, t + 20_000, &core, &sensors(0)));
+    let nav = nav.iter().find_map(|f| match f.message {
+        Message::NavState(n) => Some(n),
+        _ => None,
+    });
+    let nav = nav.expect("nav state due within 20 ms");
+    assert!(nav.home_set && nav.calibrated);
+    assert!((nav.home_lat_deg - 47.3977).abs() < 1e-9);
+}
+
+#[test]
+fn ping_is_answered_with_pong() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::new(StreamRates::OFF);
+    let mut linux = Linux::new();
+    link.on_bytes(
+        5_000,
+        &linux.frame(Message::TimeSyncPing(TimeSyncPing {
+            linux_time_ns: 123_456_789,
+        })),
+        &mut core,
+    );
+    let frames = linux.receive(&tx(&mut link, 7_000, &core, &SensorInputs::default()));
+    let pong = frames.iter().find_map(|f| match f.message {
+        Message::TimeSyncPong(p) => Some((p, f.header.t_us)),
+        _ => None,
+    });
+    let (pong, t) = pong.expect("pong");
+    assert_eq!(
+        pong,
+        TimeSyncPong {
+            linux_time_ns: 123_456_789,
+            mcu_rx_time_us: 5_000,
+            mcu_tx_time_us: 7_000
+        }
+    );
+    assert_eq!(t, 7_000);
+    // Answered once.
+    assert!(tx(&mut link, 9_000, &core, &SensorInputs::default()).is_empty());
+}
+
+#[test]
+fn hello_at_start_and_on_request_and_incompatible_peer_is_refused() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::new(StreamRates::OFF);
+    let mut linux = Linux::new();
+    let hellos = |frames: Vec<Frame>| {
+        frames
+            .into_iter()
+            .filter_map(|f| match f.message {
+                Message::Hello(h) => Some(h),
+                _ => None,
+            })
+            .collect::<Vec<_>>()
+    };
+    let h = hellos(linux.receive(&tx(&mut link, 0, &core, &SensorInputs::default())));
+    assert_eq!(h.len(), 1);
+    assert_eq!(
+        (h[0].protocol_version, h[0].schema_hash),
+        (PROTOCOL_VERSION, SCHEMA_HASH)
+    );
+    assert_eq!(h[0].check(), Ok(()));
+    assert_eq!(h[0].firmware_version, FIRMWARE_VERSION);
+    link.on_bytes(
+        1,
+        &linux.frame(Message::HelloRequest(HelloRequest::ours())),
+        &mut core,
+    );
+    assert_eq!(link.peer(), PeerState::Compatible);
+    assert_eq!(
+        hellos(linux.receive(&tx(&mut link, 2, &core, &SensorInputs::default()))).len(),
+        1
+    );
+    // A peer built from another schema: its commands are refused, readably.
+    let other = HelloRequest {
+        protocol_version: PROTOCOL_VERSION,
+        schema_hash: SCHEMA_HASH ^ 0xFF,
+    };
+    link.on_bytes(3, &linux.frame(Message::HelloRequest(other)), &mut core);
+    assert!(matches!(
+        link.peer(),
+        PeerState::Incompatible(HandshakeError::SchemaMismatch { .. })
+    ));
+    link.on_bytes(
+        4,
+        &linux.frame(Message::Command(Command {
+            command: CommandKind::Disarm,
+        })),
+        &mut core,
+    );
+    let acks = ack_results(&linux.receive(&tx(&mut link, 5, &core, &SensorInputs::default())));
+    assert_eq!(
+        acks,
+        [CommandAck {
+            command: CommandKind::Disarm,
+            result: CommandResult::Incompatible
+        }]
+    );
+}
+
+#[test]
+fn garbage_and_mcu_messages_from_linux_are_counted() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let mut linux = Linux::new();
+    let mut bytes = std::vec![0x13u8, 0x37, 0xFF, 0x00];
+    let mut good = linux.frame(Message::Command(Command {
+        command: CommandKind::Land,
+    }));
+    let n = good.len();
+    good[n / 2] ^= 0x04;
+    bytes.extend_from_slice(&good);
+    bytes.extend(linux.frame(Message::ImuRaw(Default::default())));
+    link.on_bytes(0, &bytes, &mut core);
+    let c = link.rx_counters();
+    assert_eq!(c.resyncs, 2, "{c:?}");
+    assert_eq!(c.rx_frames, 1);
+    assert_eq!(link.stats().unexpected, 1);
+    assert_eq!(
+        link.stats().command_rejects,
+        0,
+        "the corrupted command never reached the core"
+    );
+}
+
+/// One second of 500 Hz ticks: each stream at its configured rate, frames well-formed.
+#[test]
+fn telemetry_rates_over_one_second() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let mut linux = Linux::new();
+    let mut count: BTreeMap<&'static str, u32> = BTreeMap::new();
+    let mut laser = 0;
+    let mut sonar = 0;
+    let mut total = 0usize;
+    let mut max_tick = 0usize;
+    let mut last_imu_t = None;
+    for tick in 0..500u64 {
+        let now = tick * TICK_US;
+        let s = sensors(tick);
+        core.step(now, &s);
+        link.record_loop_time_us(100 + (tick % 7) as u32);
+        let bytes = tx(&mut link, now, &core, &s);
+        total += bytes.len();
+        max_tick = max_tick.max(bytes.len());
+        for f in linux.receive(&bytes) {
+            *count.entry(f.message.name()).or_default() += 1;
+            match f.message {
+                Message::RangeRaw(r) if r.sensor == RangeSensor::Laser => laser += 1,
+                Message::RangeRaw(_) => sonar += 1,
+                Message::ImuRaw(_) => {
+                    assert!(
+                        last_imu_t.is_none_or(|t| f.header.t_us > t),
+                        "no IMU sample twice"
+                    );
+                    last_imu_t = Some(f.header.t_us);
+                }
+                Message::Status(st) if st.loop_time_max_us > 0 => {
+                    assert!(st.loop_time_max_us <= 106 && st.loop_time_avg_us >= 100);
+                }
+                _ => {}
+            }
+        }
+    }
+    std::println!("1 s of telemetry: {count:?}, laser {laser}, sonar {sonar}; {total} B/s, max {max_tick} B in one tick");
+    let r = StreamRates::DEFAULT;
+    let expect = [
+        ("ImuRaw", r.imu_raw_hz),
+        ("NavState", r.nav_state_hz),
+        ("AltitudeFusion", r.altitude_hz),
+        ("MagRaw", r.mag_raw_hz),
+        ("BaroRaw", r.baro_raw_hz),
+        ("GpsRaw", 5), // the GPS delivers 5 Hz: never more than the sensor
+        ("Battery", r.battery_hz.min(10)),
+        ("Status", r.status_hz),
+    ];
+    for (name, hz) in expect {
+        let got = count.get(name).copied().unwrap_or(0) as i64;
+        assert!(
+            (got - hz as i64).abs() <= 1,
+            "{name}: {got} frames in 1 s, expected {hz}"
+        );
+    }
+    assert!(
+        (laser as i64 - r.laser_raw_hz as i64).abs() <= 1,
+        "laser {laser}"
+    );
+    assert!(
+        (sonar as i64 - r.sonar_raw_hz as i64).abs() <= 1,
+        "sonar {sonar}"
+    );
+    assert_eq!(count.get("Hello"), Some(&1));
+    assert_eq!(link.stats().tx_dropped, 0);
+    assert!(
+        max_tick <= 184,
+        "one tick carries at most 184 B at 921600 baud: {max_tick}"
+    );
+    assert!(total as f64 <= 0.6 * fcc_msgs::BAUD_921600_BYTES_PER_S as f64);
+}
+
+#[test]
+fn small_buffer_is_never_overrun_and_drops_are_counted() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let mut linux = Linux::new();
+    let mut frames = 0;
+    for tick in 0..500u64 {
+        let s = sensors(tick);
+        core.step(tick * TICK_US, &s);
+        let mut out = [0u8; 64];
+        let n = link.poll_tx(tick * TICK_US, &core, &s, &mut out);
+        assert!(n <= 64);
+        frames += linux.receive(&out[..n]).len();
+    }
+    // NavState (105 B max) never fits 64 B: all of its frames are dropped and counted.
+    assert!(link.stats().tx_dropped >= 100, "{:?}", link.stats());
+    assert!(frames > 200);
+    assert_eq!(linux.dec.counters().rx_frames as usize, frames);
+}
+
+#[test]
+fn quaternion_from_euler() {
+    let q = quat_from_euler(0.0, 0.0, 0.0);
+    assert_eq!(q, [1.0, 0.0, 0.0, 0.0]);
+    let q = quat_from_euler(0.0, 0.0, core::f32::consts::FRAC_PI_2);
+    assert!((q[0] - q[3]).abs() < 1e-6 && (q[0] - core::f32::consts::FRAC_1_SQRT_2).abs() < 1e-6);
+    let q = quat_from_euler(0.3, -0.2, 2.0);
+    let n: f32 = q.iter().map(|x| x * x).sum();
+    assert!((n - 1.0).abs() < 1e-5);
+}

@@ -1,0 +1,71 @@
+//! # fcc_msgs — the MCU ↔ Linux link protocol
+//!
+//! `no_std`, no heap, sans-IO: the codec never touches a port or a clock. The MCU firmware
+//! (`fcc_firmware::link`) and the Linux bridge use the same code.
+//!
+//! ## Layers (bottom-up)
+//! 1. **Bytes**: a UART (921600 baud 8N1 = 92,160 B/s) or a pseudo-terminal.
+//! 2. **Framing** ([`frame`]): COBS (`cobs` crate) with a `0x00` delimiter after every frame. A
+//!    receiver that starts mid-stream or meets garbage resynchronises at the next `0x00`.
+//! 3. **Integrity**: CRC-32C (Castagnoli, `crc::CRC_32_ISCSI`) over header and payload.
+//! 4. **Header**: protocol version, message id, per-direction sequence number, timestamp.
+//! 5. **Payload** ([`messages`]): one struct per message, serialised with `postcard`
+//!    (serde); the message id in the header says which struct. Decoding must consume the
+//!    payload exactly; trailing bytes and unknown ids are counted errors.
+//! 6. **Session**: the [`Hello`]/[`HelloRequest`] handshake checks [`PROTOCOL_VERSION`] and
+//!    [`SCHEMA_HASH`] (FNV-1a of [`SCHEMA`]) and yields a readable [`HandshakeError`];
+//!    time sync by [`TimeSyncPing`]/[`TimeSyncPong`]; telemetry rates in [`StreamRates`].
+//!
+//! ## Frame layout
+//! ```text
+//! wire:  COBS( raw ) | 0x00
+//! raw:   version u8 | msg_id u8 | seq u16 LE | t_us u64 LE | payload (postcard) | crc32c u32 LE
+//!        \_____________________ header, 12 B _____________/                      CRC over all
+//!                                                                                 bytes before it
+//! ```
+//! - `seq` counts frames per direction and wraps; the decoder counts gaps as lost frames.
+//! - `t_us`: MCU µs since boot on MCU → Linux frames (the time the payload refers to: sample
+//!   arrival for raw sensors, the navigation step for `NavState`). u64 so it never wraps
+//!   (a u32 would wrap every 71.6 min, within one flight day); on Linux → MCU frames it is the
+//!   Linux side's monotonic µs, for logs only.
+//! - Overhead: 12 B header + 4 B CRC + 1–2 B COBS + 1 B delimiter ≈ 18 B per frame.
+//!   The longest frame is [`MAX_FRAME_LEN`] bytes.
+//!
+//! ## Units and frames
+//! NED (north, east, down) for navigation, FRD (forward, right, down) for the body, as in the
+//! firmware; SI units named in every field (`vel_ned_mps`, `gyro_frd_radps`, `pressure_pa`,
+//! `lat_deg`). `f32` everywhere except `f64` latitude/longitude.
+//!
+//! ## Use
+//! ```
+//! use fcc_msgs::{encode, FrameDecoder, Message, VelocitySetpoint, MAX_FRAME_LEN};
+//! let sp = Message::VelocitySetpoint(VelocitySetpoint {
+//!     vel_ned_mps: [1.0, 0.0, -0.5], has_yaw: false, yaw_rad: 0.0, ttl_ms: 500,
+//! });
+//! let mut buf = [0u8; MAX_FRAME_LEN];
+//! let n = encode(&sp, 7, 1_000, &mut buf).unwrap();
+//! let mut dec = FrameDecoder::new();
+//! let frames: Vec<_> = dec.push_slice(&buf[..n]).collect();
+//! assert_eq!(frames[0].unwrap().message, sp);
+//! ```
+#![cfg_attr(not(any(feature = "std", test)), no_std)]
+
+pub mod frame;
+pub mod handshake;
+pub mod messages;
+pub mod rates;
+
+#[cfg(test)]
+mod tests;
+
+pub use frame::{
+    encode, DecodeError, EncodeError, Encoder, Frame, FrameDecoder, Header, CRC_LEN, HEADER_LEN,
+    MAX_FRAME_LEN, MAX_RAW_FRAME_LEN,
+};
+pub use handshake::{check_peer, HandshakeError};
+pub use messages::*;
+pub use rates::{max_frame_len, period_us, StreamRates, BAUD_921600_BYTES_PER_S};
+
+/// Version of the frame layout and message set. Bump it for any incompatible change
+/// (the schema hash catches changes that were not bumped).
+pub const PROTOCOL_VERSION: u8 = 1;

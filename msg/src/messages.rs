@@ -1,0 +1,594 @@
+//! Message payloads, their ids and the schema description that the schema hash is computed from.
+//!
+//! Conventions (as in the firmware): navigation frame NED (x north, y east, z down), body frame
+//! FRD (x forward, y right, z down); SI units named in every field (`_m`, `_mps`, `_radps`,
+//! `_mps2`, `_pa`, `_c`, `_ut`, `_v`, `_a`, `_us`, `_ns`, `_deg`). Angles in radians unless the
+//! name says `_deg`. A payload's time is the frame header's `t_us` (MCU µs since boot): the
+//! sample's arrival time for raw sensors, the navigation step time for `NavState`.
+//!
+//! **Changing anything here** (a field, its type, its order, a variant, an id) changes the wire
+//! format: update [`SCHEMA`] in the same change (the test `schema_matches_types` fails if a
+//! type's maximum encoded size no longer matches the size written in [`SCHEMA`]) and, for an
+//! incompatible change, bump [`crate::PROTOCOL_VERSION`].
+
+use postcard::experimental::max_size::MaxSize;
+use serde::{Deserialize, Serialize};
+
+// ---------------------------------------------------------------------------------------------
+// Shared enums
+// ---------------------------------------------------------------------------------------------
+
+/// Which downward rangefinder a [`RangeRaw`] comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum RangeSensor {
+    /// ILM-150-R class laser altimeter.
+    Laser,
+    /// Ultrasonic rangefinder.
+    Sonar,
+}
+
+/// Which measurement the altitude-above-ground fusion is using.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum AltitudeSource {
+    /// No above-ground estimate.
+    #[default]
+    None,
+    Laser,
+    Sonar,
+    /// Laser and sonar both valid and blended.
+    Both,
+    /// No valid range: the estimate is predicted from baro/accel only.
+    Predicted,
+}
+
+/// Flight mode of the MCU core (mirror of `fcc_firmware::commands::Mode`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum FlightMode {
+    #[default]
+    Disarmed,
+    Hold,
+    Velocity,
+    Land,
+}
+
+/// Why the core left the operator's mode (mirror of `fcc_firmware::commands::FailsafeCause`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum FailsafeCause {
+    #[default]
+    None,
+    SetpointStale,
+    SetpointLost,
+    Geofence,
+    GpsLost,
+}
+
+/// Operator command (mirror of `fcc_firmware::commands::Command`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum CommandKind {
+    Arm,
+    Disarm,
+    /// Position hold at the current point.
+    Hold,
+    /// Land here; disarm on touchdown.
+    Land,
+    /// Follow velocity setpoints.
+    Velocity,
+}
+
+/// Outcome of a command or setpoint on the MCU (mirror of `fcc_firmware::commands::CommandError`
+/// plus `Accepted` and link-level refusals).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum CommandResult {
+    #[default]
+    Accepted,
+    NotCalibrated,
+    NoHome,
+    NotLanded,
+    Disarmed,
+    InvalidSetpoint,
+    /// The peer announced a protocol version or schema hash the MCU does not share.
+    Incompatible,
+}
+
+/// Receive-side link statistics of one endpoint (all counters wrap at `u32::MAX`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct LinkCounters {
+    /// Bytes fed to the decoder.
+    pub rx_bytes: u32,
+    /// Frames that passed every check and were returned as messages.
+    pub rx_frames: u32,
+    /// Frames whose CRC-32C did not match.
+    pub crc_errors: u32,
+    /// Frames that were not valid COBS or too short to hold a header and a CRC.
+    pub framing_errors: u32,
+    /// Frames longer than the decoder's buffer (discarded up to the next 0x00).
+    pub overruns: u32,
+    /// Times the decoder threw data away and waited for the next 0x00
+    /// (= crc_errors + framing_errors + overruns).
+    pub resyncs: u32,
+    /// Valid frames whose payload did not decode (bad value, short, or trailing bytes).
+    pub decode_errors: u32,
+    /// Valid frames with an unknown message id.
+    pub unknown_ids: u32,
+    /// Valid frames with another protocol version (only `Hello`/`HelloRequest` pass).
+    pub version_errors: u32,
+    /// Sequence discontinuities (forward gaps).
+    pub seq_gaps: u32,
+    /// Frames missing according to the sequence numbers (sum of the gaps).
+    pub frames_lost: u32,
+    /// Sequence numbers that went backwards or jumped by ≥ 32768 (peer restart, duplicates).
+    pub seq_resets: u32,
+}
+
+// ---------------------------------------------------------------------------------------------
+// MCU → Linux
+// ---------------------------------------------------------------------------------------------
+
+/// Handshake from the MCU (answer to [`HelloRequest`]; also sent once at start-up).
+/// Its layout is frozen across protocol versions so that a mismatch is always readable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct Hello {
+    pub protocol_version: u8,
+    pub schema_hash: u32,
+    /// Firmware version major, minor, patch.
+    pub firmware_version: [u8; 3],
+}
+
+/// One raw IMU sample, body FRD. Specific force: level and at rest `accel = [0, 0, -9.81]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct ImuRaw {
+    pub gyro_frd_radps: [f32; 3],
+    pub accel_frd_mps2: [f32; 3],
+}
+
+/// Raw magnetometer, body FRD, microtesla.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct MagRaw {
+    pub mag_frd_ut: [f32; 3],
+}
+
+/// Raw barometer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct BaroRaw {
+    pub pressure_pa: f32,
+    pub temperature_c: f32,
+}
+
+/// Raw GPS solution (header time = arrival at the MCU).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct GpsRaw {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    /// Height above the WGS-84 ellipsoid.
+    pub alt_m: f32,
+    pub vel_ned_mps: [f32; 3],
+    /// Receiver's horizontal accuracy (1σ).
+    pub h_acc_m: f32,
+    pub num_sats: u8,
+    /// 3-D fix valid.
+    pub fix_ok: bool,
+}
+
+/// One downward rangefinder reading along the sensor axis. The laser's no-return value
+/// (99 999 m) is passed through unchanged.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct RangeRaw {
+    pub sensor: RangeSensor,
+    pub range_m: f32,
+}
+
+/// Battery monitor.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct Battery {
+    pub voltage_v: f32,
+    pub current_a: f32,
+}
+
+/// Navigation solution: NED relative to home, body FRD.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct NavState {
+    /// Attitude quaternion rotating body FRD vectors into NED, `[w, x, y, z]`.
+    pub q_body_to_ned: [f32; 4],
+    /// Bias-corrected gyro rate, body FRD.
+    pub rate_frd_radps: [f32; 3],
+    pub pos_ned_m: [f32; 3],
+    pub vel_ned_mps: [f32; 3],
+    /// Gravity-compensated acceleration, NED.
+    pub accel_ned_mps2: [f32; 3],
+    /// Home = NED origin (valid when `home_set`).
+    pub home_lat_deg: f64,
+    pub home_lon_deg: f64,
+    /// Home height above the WGS-84 ellipsoid.
+    pub home_alt_m: f32,
+    /// GPS currently feeds the horizontal filter.
+    pub gps_ok: bool,
+    pub home_set: bool,
+    /// Gyro/baro calibration done.
+    pub calibrated: bool,
+}
+
+/// Altitude fusion: barometric/inertial altitude and the above-ground estimate from the
+/// rangefinders. `NaN` = not available.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct AltitudeFusion {
+    /// Barometric altitude above the calibration point (up).
+    pub baro_alt_m: f32,
+    /// Fused altitude above home (up) = −pos_ned_m[2].
+    pub alt_m: f32,
+    /// Vertical speed, NED down positive.
+    pub vel_down_mps: f32,
+    /// Fused height above ground (up).
+    pub ground_height_m: f32,
+    /// Variance of `ground_height_m`.
+    pub ground_var_m2: f32,
+    /// Latest raw laser range (NaN if none, 99 999 = no return).
+    pub laser_m: f32,
+    /// Latest raw sonar range (NaN if none).
+    pub sonar_m: f32,
+    pub source: AltitudeSource,
+}
+
+/// Vehicle and link status.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct Status {
+    pub mode: FlightMode,
+    pub armed: bool,
+    pub landed: bool,
+    pub failsafe: FailsafeCause,
+    /// Longest and mean control-loop execution time since the previous `Status`.
+    pub loop_time_max_us: u32,
+    pub loop_time_avg_us: u32,
+    /// Receive statistics as the MCU sees the Linux → MCU direction.
+    pub link_rx: LinkCounters,
+    /// Frames sent by the MCU.
+    pub tx_frames: u32,
+    /// Telemetry frames the MCU dropped because the transmit buffer was full.
+    pub tx_dropped: u32,
+    /// Setpoints the core refused.
+    pub setpoint_rejects: u32,
+    /// Commands the core refused.
+    pub command_rejects: u32,
+    /// Reason of the most recent refusal (`Accepted` = none yet).
+    pub last_reject: CommandResult,
+}
+
+/// Answer to [`TimeSyncPing`] (NTP-style: t1 = `linux_time_ns`, t2 = `mcu_rx_time_us`,
+/// t3 = `mcu_tx_time_us`, t4 = Linux receive time).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct TimeSyncPong {
+    /// The ping's `linux_time_ns`, echoed.
+    pub linux_time_ns: u64,
+    /// MCU time when the ping was received.
+    pub mcu_rx_time_us: u64,
+    /// MCU time when the pong was written.
+    pub mcu_tx_time_us: u64,
+}
+
+/// Result of one [`Command`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct CommandAck {
+    pub command: CommandKind,
+    pub result: CommandResult,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Linux → MCU
+// ---------------------------------------------------------------------------------------------
+
+/// Asks the MCU for its [`Hello`] and announces the Linux side's version and schema.
+/// Its layout is frozen across protocol versions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct HelloRequest {
+    pub protocol_version: u8,
+    pub schema_hash: u32,
+}
+
+/// Velocity setpoint, NED. Valid for `ttl_ms` after it arrives; then the core holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct VelocitySetpoint {
+    pub vel_ned_mps: [f32; 3],
+    /// `false`: keep the current heading and ignore `yaw_rad`.
+    pub has_yaw: bool,
+    /// Heading to hold, NED, from north towards east.
+    pub yaw_rad: f32,
+    pub ttl_ms: u16,
+}
+
+/// Operator command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct Command {
+    pub command: CommandKind,
+}
+
+/// Time-sync request; the MCU answers with [`TimeSyncPong`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct TimeSyncPing {
+    /// Linux clock when the ping was written.
+    pub linux_time_ns: u64,
+}
+
+// ---------------------------------------------------------------------------------------------
+// The message enum, ids and schema
+// ---------------------------------------------------------------------------------------------
+
+/// Message ids (the header's `msg_id`). MCU → Linux in 0x01..=0x3F, Linux → MCU in 0x40..=0x7F.
+pub mod id {
+    pub const HELLO: u8 = 0x01;
+    pub const IMU_RAW: u8 = 0x02;
+    pub const MAG_RAW: u8 = 0x03;
+    pub const BARO_RAW: u8 = 0x04;
+    pub const GPS_RAW: u8 = 0x05;
+    pub const RANGE_RAW: u8 = 0x06;
+    pub const BATTERY: u8 = 0x07;
+    pub const NAV_STATE: u8 = 0x08;
+    pub const ALTITUDE_FUSION: u8 = 0x09;
+    pub const STATUS: u8 = 0x0A;
+    pub const TIME_SYNC_PONG: u8 = 0x0B;
+    pub const COMMAND_ACK: u8 = 0x0C;
+    pub const HELLO_REQUEST: u8 = 0x40;
+    pub const VELOCITY_SETPOINT: u8 = 0x41;
+    pub const COMMAND: u8 = 0x42;
+    pub const TIME_SYNC_PING: u8 = 0x43;
+}
+
+/// Every message of the protocol, one variant per payload struct.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Message {
+    Hello(Hello),
+    ImuRaw(ImuRaw),
+    MagRaw(MagRaw),
+    BaroRaw(BaroRaw),
+    GpsRaw(GpsRaw),
+    RangeRaw(RangeRaw),
+    Battery(Battery),
+    NavState(NavState),
+    AltitudeFusion(AltitudeFusion),
+    Status(Status),
+    TimeSyncPong(TimeSyncPong),
+    CommandAck(CommandAck),
+    HelloRequest(HelloRequest),
+    VelocitySetpoint(VelocitySetpoint),
+    Command(Command),
+    TimeSyncPing(TimeSyncPing),
+}
+
+/// Which way a message travels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    McuToLinux,
+    LinuxToMcu,
+}
+
+/// Invokes `$m!(Variant, Type, ID)` for every message, in id order.
+macro_rules! for_each_message {
+    ($m:ident) => {
+        $m! {
+            Hello, Hello, HELLO;
+            ImuRaw, ImuRaw, IMU_RAW;
+            MagRaw, MagRaw, MAG_RAW;
+            BaroRaw, BaroRaw, BARO_RAW;
+            GpsRaw, GpsRaw, GPS_RAW;
+            RangeRaw, RangeRaw, RANGE_RAW;
+            Battery, Battery, BATTERY;
+            NavState, NavState, NAV_STATE;
+            AltitudeFusion, AltitudeFusion, ALTITUDE_FUSION;
+            Status, Status, STATUS;
+            TimeSyncPong, TimeSyncPong, TIME_SYNC_PONG;
+            CommandAck, CommandAck, COMMAND_ACK;
+            HelloRequest, HelloRequest, HELLO_REQUEST;
+            VelocitySetpoint, VelocitySetpoint, VELOCITY_SETPOINT;
+            Command, Command, COMMAND;
+            TimeSyncPing, TimeSyncPing, TIME_SYNC_PING;
+        }
+    };
+}
+
+macro_rules! impl_message {
+    ($($variant:ident, $ty:ty, $id:ident;)*) => {
+        impl Message {
+            /// The header's message id.
+            pub const fn id(&self) -> u8 {
+                match self {
+                    $(Message::$variant(_) => id::$id,)*
+                }
+            }
+
+            /// Human-readable name (the variant's).
+            pub const fn name(&self) -> &'static str {
+                match self {
+                    $(Message::$variant(_) => stringify!($variant),)*
+                }
+            }
+
+            /// Serialise the payload (postcard) into `out`; returns the length.
+            pub(crate) fn serialize_payload(&self, out: &mut [u8]) -> postcard::Result<usize> {
+                match self {
+                    $(Message::$variant(p) => postcard::to_slice(p, out).map(|s| s.len()),)*
+                }
+            }
+
+            /// Decode a payload for `msg_id`; the payload must be consumed exactly.
+            pub(crate) fn deserialize_payload(msg_id: u8, payload: &[u8]) -> Result<Message, PayloadError> {
+                match msg_id {
+                    $(id::$id => {
+                        let (p, rest) = postcard::take_from_bytes::<$ty>(payload)
+                            .map_err(|_| PayloadError::Invalid)?;
+                        if !rest.is_empty() {
+                            return Err(PayloadError::TrailingBytes(rest.len()));
+                        }
+                        Ok(Message::$variant(p))
+                    })*
+                    _ => Err(PayloadError::UnknownId),
+                }
+            }
+        }
+
+        /// Largest postcard payload of any message.
+        pub const MAX_PAYLOAD_LEN: usize = {
+            let mut m = 0;
+            $(if <$ty as MaxSize>::POSTCARD_MAX_SIZE > m { m = <$ty as MaxSize>::POSTCARD_MAX_SIZE; })*
+            m
+        };
+
+        /// Largest postcard payload for a message id (`None` for an unknown id).
+        pub const fn max_payload_len(msg_id: u8) -> Option<usize> {
+            match msg_id {
+                $(id::$id => Some(<$ty as MaxSize>::POSTCARD_MAX_SIZE),)*
+                _ => None,
+            }
+        }
+
+        /// All known message ids.
+        pub const ALL_IDS: &[u8] = &[$(id::$id),*];
+    };
+}
+
+for_each_message!(impl_message);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PayloadError {
+    UnknownId,
+    Invalid,
+    TrailingBytes(usize),
+}
+
+impl Message {
+    /// Which way this message travels.
+    pub const fn direction(&self) -> Direction {
+        if self.id() >= 0x40 {
+            Direction::LinuxToMcu
+        } else {
+            Direction::McuToLinux
+        }
+    }
+}
+
+/// Wire schema: every message with its id, payload fields in order with their postcard types,
+/// and the payload's maximum encoded size (`max=`, checked against the types by a test).
+/// Integers other than u8 are postcard varints; f32/f64 are little-endian IEEE 754; bool is one
+/// byte 0/1; enums are a varint variant index in the order listed. [`SCHEMA_HASH`] is FNV-1a 32
+/// over this text.
+pub const SCHEMA: &str = "\
+enum RangeSensor { Laser, Sonar }
+enum AltitudeSource { None, Laser, Sonar, Both, Predicted }
+enum FlightMode { Disarmed, Hold, Velocity, Land }
+enum FailsafeCause { None, SetpointStale, SetpointLost, Geofence, GpsLost }
+enum CommandKind { Arm, Disarm, Hold, Land, Velocity }
+enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible }
+struct LinkCounters max=60 { rx_bytes: u32, rx_frames: u32, crc_errors: u32, framing_errors: u32, overruns: u32, resyncs: u32, decode_errors: u32, unknown_ids: u32, version_errors: u32, seq_gaps: u32, frames_lost: u32, seq_resets: u32 }
+msg 0x01 Hello max=9 { protocol_version: u8, schema_hash: u32, firmware_version: [u8; 3] }
+msg 0x02 ImuRaw max=24 { gyro_frd_radps: [f32; 3], accel_frd_mps2: [f32; 3] }
+msg 0x03 MagRaw max=12 { mag_frd_ut: [f32; 3] }
+msg 0x04 BaroRaw max=8 { pressure_pa: f32, temperature_c: f32 }
+msg 0x05 GpsRaw max=38 { lat_deg: f64, lon_deg: f64, alt_m: f32, vel_ned_mps: [f32; 3], h_acc_m: f32, num_sats: u8, fix_ok: bool }
+msg 0x06 RangeRaw max=5 { sensor: RangeSensor, range_m: f32 }
+msg 0x07 Battery max=8 { voltage_v: f32, current_a: f32 }
+msg 0x08 NavState max=87 { q_body_to_ned: [f32; 4], rate_frd_radps: [f32; 3], pos_ned_m: [f32; 3], vel_ned_mps: [f32; 3], accel_ned_mps2: [f32; 3], home_lat_deg: f64, home_lon_deg: f64, home_alt_m: f32, gps_ok: bool, home_set: bool, calibrated: bool }
+msg 0x09 AltitudeFusion max=29 { baro_alt_m: f32, alt_m: f32, vel_down_mps: f32, ground_height_m: f32, ground_var_m2: f32, laser_m: f32, sonar_m: f32, source: AltitudeSource }
+msg 0x0A Status max=95 { mode: FlightMode, armed: bool, landed: bool, failsafe: FailsafeCause, loop_time_max_us: u32, loop_time_avg_us: u32, link_rx: LinkCounters, tx_frames: u32, tx_dropped: u32, setpoint_rejects: u32, command_rejects: u32, last_reject: CommandResult }
+msg 0x0B TimeSyncPong max=30 { linux_time_ns: u64, mcu_rx_time_us: u64, mcu_tx_time_us: u64 }
+msg 0x0C CommandAck max=2 { command: CommandKind, result: CommandResult }
+msg 0x40 HelloRequest max=6 { protocol_version: u8, schema_hash: u32 }
+msg 0x41 VelocitySetpoint max=20 { vel_ned_mps: [f32; 3], has_yaw: bool, yaw_rad: f32, ttl_ms: u16 }
+msg 0x42 Command max=1 { command: CommandKind }
+msg 0x43 TimeSyncPing max=10 { linux_time_ns: u64 }
+";
+
+/// FNV-1a, 32 bit, usable in `const` context.
+pub const fn fnv1a32(bytes: &[u8]) -> u32 {
+    let mut h: u32 = 0x811c_9dc5;
+    let mut i = 0;
+    while i < bytes.len() {
+        h ^= bytes[i] as u32;
+        h = h.wrapping_mul(0x0100_0193);
+        i += 1;
+    }
+    h
+}
+
+/// Hash of [`SCHEMA`], exchanged in the handshake.
+pub const SCHEMA_HASH: u32 = fnv1a32(SCHEMA.as_bytes());
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use std::string::String;
+    use std::vec::Vec;
+
+    fn max_size_of(name: &str) -> usize {
+        macro_rules! lookup {
+            ($($variant:ident, $ty:ty, $id:ident;)*) => {
+                match name {
+                    $(stringify!($variant) => <$ty as MaxSize>::POSTCARD_MAX_SIZE,)*
+                    "LinkCounters" => LinkCounters::POSTCARD_MAX_SIZE,
+                    _ => panic!("no type {name}"),
+                }
+            };
+        }
+        for_each_message!(lookup)
+    }
+
+    /// Fails when a payload type changes without [`SCHEMA`] being updated (sizes, ids, count).
+    #[test]
+    fn schema_matches_types() {
+        let mut ids: Vec<(u8, String)> = Vec::new();
+        for line in SCHEMA.lines() {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            let (name, max, id) = match words.first() {
+                Some(&"msg") => (
+                    words[2],
+                    words[3],
+                    Some(u8::from_str_radix(&words[1][2..], 16).unwrap()),
+                ),
+                Some(&"struct") => (words[1], words[2], None),
+                _ => continue,
+            };
+            let max: usize = max
+                .strip_prefix("max=")
+                .expect("max= after the name")
+                .parse()
+                .unwrap();
+            assert_eq!(
+                max_size_of(name),
+                max,
+                "SCHEMA says max={max} for {name}: update SCHEMA"
+            );
+            // The number of fields listed must be plausible for the size (each field ≥ 1 byte).
+            let fields = line.matches(':').count();
+            assert!(
+                fields >= 1 && fields <= max,
+                "{name}: {fields} fields for {max} bytes"
+            );
+            if let Some(id) = id {
+                assert_eq!(
+                    max_payload_len(id),
+                    Some(max),
+                    "{name}: SCHEMA id 0x{id:02x} does not match"
+                );
+                ids.push((id, String::from(name)));
+            }
+        }
+        assert_eq!(ids.len(), ALL_IDS.len(), "every message must be in SCHEMA");
+        for (i, (id, _)) in ids.iter().enumerate() {
+            assert_eq!(*id, ALL_IDS[i], "SCHEMA lists messages in id order");
+        }
+    }
+
+    #[test]
+    fn schema_hash_is_fnv1a_of_schema() {
+        assert_eq!(fnv1a32(b""), 0x811c_9dc5);
+        assert_eq!(fnv1a32(b"a"), 0xe40c_292c);
+        assert_eq!(SCHEMA_HASH, fnv1a32(SCHEMA.as_bytes()));
+        std::println!("schema hash 0x{SCHEMA_HASH:08x}, max payload {MAX_PAYLOAD_LEN} B");
+    }
+
+    #[test]
+    fn ids_are_unique_and_directional() {
+        let mut v = ALL_IDS.to_vec();
+        v.sort();
+        v.dedup();
+        assert_eq!(v.len(), ALL_IDS.len());
+        assert!(ALL_IDS.iter().all(|&i| i != 0 && i < 0x80));
+    }
+}
