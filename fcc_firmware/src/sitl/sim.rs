@@ -86,6 +86,8 @@ pub struct Sim {
     carried: Option<Carried>,
     ticks: u64,
     pub log: FlightLog,
+    /// Wall time spent inside the flight core's tick (sensors polled + step), for the benchmark.
+    pub core_wall_ns: u128,
 }
 
 impl Sim {
@@ -134,8 +136,14 @@ impl Sim {
             t_us: 0,
             ticks: 0,
             log: FlightLog::default(),
+            core_wall_ns: 0,
             scenario,
         })
+    }
+
+    /// 2 ms ticks run so far.
+    pub fn ticks(&self) -> u64 {
+        self.ticks
     }
 
     pub fn t_s(&self) -> f64 {
@@ -212,7 +220,9 @@ impl Sim {
         if self.ticks % 25 == 0 {
             self.linux.update(self.t_us, &mut self.core);
         }
+        let t0 = std::time::Instant::now();
         scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
+        self.core_wall_ns += t0.elapsed().as_nanos();
         if self.ticks % LOG_EVERY_TICKS == 0 {
             self.record();
         }
