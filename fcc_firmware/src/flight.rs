@@ -14,12 +14,18 @@ use crate::geometry::MOTOR_COUNT;
 use crate::nav::{NavNotReady, NavState, Navigator};
 use crate::params::Params;
 use crate::sensors::SensorInputs;
+use fcc_nav::ground_altitude::GroundSource;
 use fcc_nav::observer::AccelObserver;
 use fcc_nav::GRAVITY_MPS2;
 
 /// Above this height over the take-off point the horizontal loops are active (below, on the
 /// ground, tilting would only scrape the legs).
 const AIRBORNE_ALT_M: f32 = 0.3;
+/// A fused ground height with a larger variance than this is not trusted for landing (m²).
+const GROUND_MAX_VAR_M2: f32 = 0.25;
+/// Below this fused height (m) the sensors see the ground right under the vehicle: touchdown
+/// is then confirmed faster and does not need the thrust to have wound down as far.
+const CONTACT_HEIGHT_M: f32 = 0.25;
 /// Largest velocity component a setpoint may carry before it is refused as absurd.
 const SETPOINT_ABS_LIMIT_MPS: f32 = 50.0;
 
@@ -329,7 +335,7 @@ impl FlightCore {
         let alt = -nav.pos_ned_m[2];
         let hold_ne = |s: &Self| {
             let e = [s.hold_ne_m[0] - nav.pos_ned_m[0], s.hold_ne_m[1] - nav.pos_ned_m[1]];
-            clamp_norm([c.pos_p_per_s * e[0], c.pos_p_per_s * e[1]], l.max_horiz_speed_mps)
+            clamp_norm([c.pos_p_per_s * e[0], c.pos_p_per_s * e[1]], l.hold_max_speed_mps)
         };
         let (mut v_ne, mut vz_down, yaw) = match self.mode {
             Mode::Hold => {
@@ -346,8 +352,11 @@ impl FlightCore {
                 None => (hold_ne(self), 0.0, self.yaw_hold_rad),
             },
             Mode::Land => {
-                let above_takeoff = alt - self.takeoff_alt_m;
-                let v = if above_takeoff > l.land_slow_alt_m { l.land_speed_mps } else { l.land_final_speed_mps };
+                let v = if self.height_above_ground_m(nav) > l.land_slow_alt_m {
+                    l.land_speed_mps
+                } else {
+                    l.land_final_speed_mps
+                };
                 (hold_ne(self), v, self.yaw_hold_rad)
             }
             Mode::Disarmed => ([0.0; 2], 0.0, nav.euler.yaw_rad),
@@ -427,12 +436,22 @@ impl FlightCore {
 
         // Vertical: climb-rate PI → thrust.
         let tilt_cos = libm::cosf(e.roll_rad) * libm::cosf(e.pitch_rad);
+        // Final descent: the rangefinders see the ground, so the climb rate relative to it is
+        // what the touchdown speed is about (paper B's fused height, issue: use in flight).
+        let vz_up_meas = if self.mode == Mode::Land
+            && self.ground_usable(nav)
+            && nav.ground.height_m < self.params.limits.land_slow_alt_m
+        {
+            nav.ground_rate_up_mps
+        } else {
+            -nav.vel_ned_mps[2]
+        };
         let thrust_n = if self.landed {
             self.vert_ctrl.reset();
             0.0
         } else {
             let sat = self.telemetry.saturation.thrust_shift_sign;
-            self.vert_ctrl.update(dt_s, -vz_cmd_down, -nav.vel_ned_mps[2], tilt_cos, sat)
+            self.vert_ctrl.update(dt_s, -vz_cmd_down, vz_up_meas, tilt_cos, sat)
         };
 
         // Attitude and yaw → torques → mixer.
@@ -474,11 +493,32 @@ impl FlightCore {
         };
     }
 
+    /// Height above the ground for landing: the rangefinder fusion when it has a usable
+    /// estimate (paper B), else barometric height above the take-off point.
+    pub fn height_above_ground_m(&self, nav: &NavState) -> f32 {
+        let g = &nav.ground;
+        if self.ground_usable(nav) {
+            g.height_m
+        } else {
+            -nav.pos_ned_m[2] - self.takeoff_alt_m
+        }
+    }
+
+    /// The fused ground height is fresh and tight enough to land on.
+    fn ground_usable(&self, nav: &NavState) -> bool {
+        let g = &nav.ground;
+        !matches!(g.source, GroundSource::None | GroundSource::Predicted)
+            && g.variance_m2.is_finite()
+            && g.variance_m2 < GROUND_MAX_VAR_M2
+    }
+
     fn detect_touchdown(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) {
         let hover_n = self.params.airframe.mass_kg * GRAVITY_MPS2;
         let descending_cmd = vz_cmd_down > 0.0;
-        let not_moving = libm::fabsf(nav.vel_ned_mps[2]) < 0.25;
-        let low_thrust = self.telemetry.thrust_n < 0.8 * hover_n;
+        let near_ground = self.height_above_ground_m(nav) < CONTACT_HEIGHT_M;
+        let vz = if near_ground && self.ground_usable(nav) { nav.ground_rate_up_mps } else { nav.vel_ned_mps[2] };
+        let not_moving = libm::fabsf(vz) < 0.25;
+        let low_thrust = self.telemetry.thrust_n < if near_ground { 0.9 } else { 0.8 } * hover_n;
         if self.landed || (descending_cmd && not_moving && low_thrust) {
             self.touchdown_s += dt_s;
         } else {

@@ -9,6 +9,7 @@ use crate::params::NavParams;
 use crate::sensors::SensorInputs;
 use fcc_nav::attitude::{accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, rot_body_to_ned, AttitudeEstimator, Euler};
 use fcc_nav::geodesy::{Lla, LocalNed};
+use fcc_nav::ground_altitude::{GroundAltitude, GroundAltitudeFilter, GroundAltitudeParams};
 use fcc_nav::horizontal::HorizontalEstimator;
 use fcc_nav::lowpass::LowPass2;
 use fcc_nav::vertical::{pressure_to_alt_m, VerticalEstimator};
@@ -35,6 +36,14 @@ pub struct NavState {
     pub home_set: bool,
     /// Gyro/baro calibration done.
     pub calibrated: bool,
+    /// Height above the ground below from the laser + sonar Kalman fusion (paper B).
+    pub ground: GroundAltitude,
+    /// Rate of that height (m/s, up positive): `−v_down + r`, with `r` the filter's residual
+    /// rate learnt from the rangefinders (corrects a biased vertical velocity near the ground).
+    pub ground_rate_up_mps: f32,
+    /// Latest raw rangefinder readings (m along the sensor axis; laser 99999 = no return).
+    pub laser_m: Option<f32>,
+    pub sonar_m: Option<f32>,
 }
 
 /// Why the navigation task is not ready to fly.
@@ -69,6 +78,10 @@ pub struct Navigator {
     /// manoeuvres are not mistaken for tilt (as ArduPilot's DCM does).
     gps_accel_ned_mps2: [f32; 3],
     last_gps_vel: Option<(u64, [f32; 3])>,
+    ground: GroundAltitudeFilter,
+    /// Air temperature for the sonar's speed-of-sound correction: the barometer's sensor
+    /// temperature (the MS5611 sits in the airflow on the paper's board), °C.
+    air_temp_c: f32,
     state: NavState,
 }
 
@@ -100,6 +113,8 @@ impl Navigator {
             tilt_accel_lpf: [LowPass2::new(params.tilt_accel_lpf_hz, 500.0); 3],
             gps_accel_ned_mps2: [0.0; 3],
             last_gps_vel: None,
+            ground: GroundAltitudeFilter::new(GroundAltitudeParams::default()),
+            air_temp_c: 15.0,
             state: NavState::default(),
         }
     }
@@ -140,12 +155,14 @@ impl Navigator {
         if !self.calibrated {
             self.calibrate(now_us, s, on_ground_disarmed);
         }
+        let mut imu_dt_s = 0.0;
         if let Some(imu) = s.imu {
             let dt_s = match self.last_imu_us {
                 Some(t) if imu.t_us > t => ((imu.t_us - t) as f32 * 1e-6).min(0.02),
                 _ => 0.002,
             };
             self.last_imu_us = Some(imu.t_us);
+            imu_dt_s = dt_s;
             let gyro = [
                 imu.gyro_frd_radps[0] - self.gyro_bias_frd_radps[0],
                 imu.gyro_frd_radps[1] - self.gyro_bias_frd_radps[1],
@@ -181,6 +198,9 @@ impl Navigator {
             self.state.accel_ned_mps2 = a_ned;
         }
         if let Some(b) = s.baro {
+            if b.temperature_c.is_finite() {
+                self.air_temp_c = b.temperature_c;
+            }
             let alt = pressure_to_alt_m(b.pressure_pa, self.p0_pa);
             self.state.baro_alt_m = alt;
             if self.calibrated {
@@ -222,6 +242,21 @@ impl Navigator {
         };
         if !gps_ok && self.last_gps_us.is_some() {
             self.horiz.clear_gps();
+        }
+        // Ground altitude (paper B): predict with the vertical velocity, fuse the rangefinders.
+        if self.calibrated {
+            let e = self.state.euler;
+            self.ground.predict(imu_dt_s, self.vert.vel_down_mps());
+            if let Some(l) = s.laser {
+                self.state.laser_m = Some(l.range_m);
+                self.ground.update_laser(l.range_m, e.roll_rad, e.pitch_rad);
+            }
+            if let Some(r) = s.sonar {
+                self.state.sonar_m = Some(r.range_m);
+                self.ground.update_sonar(r.range_m, e.roll_rad, e.pitch_rad, self.air_temp_c);
+            }
+            self.state.ground = self.ground.output();
+            self.state.ground_rate_up_mps = -self.vert.vel_down_mps() + self.ground.rate_residual_mps();
         }
         let pn = self.horiz.pos_ne_m();
         let vn = self.horiz.vel_ne_mps();

@@ -210,6 +210,8 @@ impl ControlParams {
 #[serde(default, deny_unknown_fields)]
 pub struct LimitParams {
     pub max_horiz_speed_mps: f32,
+    /// Position hold returns to its point no faster than this.
+    pub hold_max_speed_mps: f32,
     pub max_climb_mps: f32,
     pub max_descent_mps: f32,
     pub max_tilt_deg: f32,
@@ -231,6 +233,7 @@ impl Default for LimitParams {
     fn default() -> Self {
         Self {
             max_horiz_speed_mps: 8.0,
+            hold_max_speed_mps: 1.5,
             max_climb_mps: 2.5,
             max_descent_mps: 1.5,
             max_tilt_deg: 25.0,
@@ -238,7 +241,7 @@ impl Default for LimitParams {
             fence_alt_m: 100.0,
             setpoint_lost_land_s: 3.0,
             land_speed_mps: 0.8,
-            land_final_speed_mps: 0.35,
+            land_final_speed_mps: 0.3,
             land_slow_alt_m: 2.0,
             touchdown_s: 1.0,
         }
@@ -310,6 +313,7 @@ impl Params {
         }
         let l = &self.limits;
         check("limits.max_horiz_speed_mps", l.max_horiz_speed_mps, 0.1, 30.0)?;
+        check("limits.hold_max_speed_mps", l.hold_max_speed_mps, 0.1, l.max_horiz_speed_mps)?;
         check("limits.max_climb_mps", l.max_climb_mps, 0.1, 10.0)?;
         check("limits.max_descent_mps", l.max_descent_mps, 0.1, 10.0)?;
         check("limits.max_tilt_deg", l.max_tilt_deg, 5.0, 60.0)?;

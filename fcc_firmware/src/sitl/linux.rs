@@ -38,7 +38,7 @@ impl LinuxSide {
                     fcc_mission::from_yaml_str(&text).map_err(|e| format!("{}: {e}", mission_file.display()))?;
                 Plan::Mission { follower: WaypointFollower::new(m), land_sent: false }
             }
-            FlightPlan::Elevator { .. } => Plan::Carried,
+            FlightPlan::Elevator { .. } | FlightPlan::Rig { .. } => Plan::Carried,
         };
         let phase = if matches!(plan, Plan::Carried) { PlanPhase::Carried } else { PlanPhase::Waiting };
         Ok(Self { plan, phase, armed_once: false, done: false, events: Vec::new() })

@@ -28,6 +28,11 @@ use serde::Deserialize;
 
 use crate::geometry::{motor_position_m, spin_cw, MOTOR_COUNT};
 
+/// Largest deceleration the landing gear applies while absorbing a touchdown (≈3 g), m/s².
+pub const GEAR_MAX_DECEL_MPS2: f64 = 30.0;
+/// Landing-gear stroke: penetration below the ground plane before a hard stop, m.
+pub const GEAR_STROKE_M: f64 = 0.05;
+
 /// Physical parameters of the vehicle. All defaults are for the paper's octorotor.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -287,12 +292,15 @@ impl Octorotor {
         let at_ground = self.state.pos_ned_m.z >= ground_down_m - 1e-9;
         let mut contact = false;
         if at_ground {
-            // Normal force (NED z, negative = pushing up) that brings the vertical velocity to 0.
-            let n_z = -m * vel.z / dt_s - f_air_ned.z - m * g;
+            // Normal force (NED z, negative = pushing up) that brings the vertical velocity to 0,
+            // but no harder than the landing gear's stroke allows (GEAR_MAX_DECEL_MPS2): a
+            // touchdown decelerates over tens of milliseconds, as the accelerometer then sees.
+            let a_stop = (-vel.z / dt_s).max(-GEAR_MAX_DECEL_MPS2);
+            let n_z = m * a_stop - f_air_ned.z - m * g;
             if n_z < 0.0 {
                 contact = true;
                 let n = -n_z;
-                accel.z = -vel.z / dt_s;
+                accel.z = a_stop;
                 // Friction: whatever stops the horizontal sliding, limited by μ·N.
                 let want = Vector3::new(
                     -m * vel.x / dt_s - f_air_ned.x,
@@ -326,12 +334,15 @@ impl Octorotor {
             new_omega.x = -roll / tc;
             new_omega.y = -pitch / tc;
         }
-        if new_pos.z > ground_down_m {
-            // Touch-down within this step (or numerical penetration): stop on the surface.
-            new_pos.z = ground_down_m;
+        if new_pos.z > ground_down_m + GEAR_STROKE_M {
+            // Bottomed out the gear (a crash-grade touchdown): hard stop.
+            new_pos.z = ground_down_m + GEAR_STROKE_M;
             if new_vel.z > 0.0 {
                 new_vel.z = 0.0;
             }
+            contact = true;
+        } else if new_pos.z > ground_down_m {
+            // Touching down within this step: the gear takes over from the next step.
             contact = true;
         }
         let rot = UnitQuaternion::from_scaled_axis(new_omega * dt_s);
@@ -566,7 +577,9 @@ mod tests {
             o.step(&[0.0; MOTOR_COUNT], Vector3::zeros(), 0.0, DT);
         }
         assert!(o.on_ground());
-        assert_eq!(o.state.pos_ned_m.z, 0.0);
+        // A 2 m free fall (6.3 m/s) bottoms out the gear's stroke: resting within it, stopped.
+        assert!(o.state.pos_ned_m.z >= 0.0 && o.state.pos_ned_m.z <= GEAR_STROKE_M, "{:?}", o.state.pos_ned_m);
+        assert_eq!(o.state.vel_ned_mps.z, 0.0);
         // Full throttle → climbs.
         for _ in 0..2000 {
             o.step(&[0.9; MOTOR_COUNT], Vector3::zeros(), 0.0, DT);
@@ -591,5 +604,22 @@ mod tests {
         let o = airborne(5.0);
         let p = o.electrical_power_w();
         assert!(p > 400.0 && p < 900.0, "{p}");
+    }
+
+    #[test]
+    fn gentle_touchdown_decelerates_within_the_gear_limit() {
+        let mut o = Octorotor::new(VehicleParams::default(), Vector3::new(0.0, 0.0, -0.2), 0.0);
+        o.state.vel_ned_mps = Vector3::new(0.0, 0.0, 0.5);
+        let h = o.hover_cmd() * 0.97;
+        o.state.rotor_speed_frac = [h as f64 * o.params.max_rotor_speed_frac; MOTOR_COUNT];
+        let mut peak: f64 = 0.0;
+        for _ in 0..4000 {
+            o.step(&[h; MOTOR_COUNT], Vector3::zeros(), 0.0, DT);
+            peak = peak.max(o.specific_force_frd_mps2().norm());
+        }
+        assert!(o.on_ground() && o.state.vel_ned_mps.z.abs() < 1e-9, "{:?} {:?}", o.state.pos_ned_m, o.state.vel_ned_mps);
+        // The accelerometer sees the touchdown, within its ±8 g range.
+        assert!(peak > 15.0 && peak <= 9.81 + GEAR_MAX_DECEL_MPS2 + 1.0, "peak {peak}");
+        assert!(o.state.pos_ned_m.z < GEAR_STROKE_M);
     }
 }

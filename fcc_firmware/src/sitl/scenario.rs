@@ -2,6 +2,8 @@
 //! which faults. A bad file gives one line naming the file, the field and the reason.
 
 use super::physics::VehicleParams;
+use super::rangefinders::{LaserParams, SonarParams};
+use super::terrain::Terrain;
 use super::sensor_models::{BaroParams, GpsParams, ImuParams, MagParams};
 use super::wind::WindParams;
 use crate::params::Params;
@@ -30,6 +32,16 @@ pub struct Scenario {
     pub vehicle: VehicleParams,
     #[serde(default)]
     pub sensors: SensorParams,
+    /// Ground under the flight: flat plus boxes/steps, and where it is dark to the laser.
+    #[serde(default)]
+    pub terrain: Terrain,
+    /// Air temperature (°C): the true speed of sound for the sonar follows it.
+    #[serde(default = "default_air_temp_c")]
+    pub air_temp_c: f64,
+}
+
+fn default_air_temp_c() -> f64 {
+    15.0
 }
 
 fn default_seed() -> u64 {
@@ -44,6 +56,8 @@ pub struct SensorParams {
     pub mag: MagParams,
     pub baro: BaroParams,
     pub gps: GpsParams,
+    pub laser: LaserParams,
+    pub sonar: SonarParams,
 }
 
 /// The pre-flight sensor calibrations every operator runs (accelerometer 6-orientation, compass
@@ -76,6 +90,9 @@ pub enum FlightPlan {
     Mission { mission_file: PathBuf },
     /// The vehicle is carried in an elevator (motors off, no GPS): floors visited in order,
     /// paper A Figs. 8–9.
+    /// A static test rig (paper B's ground and roll tests): the vehicle held at `height_m`
+    /// above the ground with the given attitude, motors off.
+    Rig { height_m: f32, roll_deg: f32, pitch_deg: f32 },
     Elevator {
         floors: Vec<i32>,
         floor_height_m: f32,
@@ -92,12 +109,17 @@ pub enum Fault {
     MagDisturbance { start_s: f64, end_s: f64, field_ned_ut: [f64; 3] },
     /// No GPS fixes between `start_s` and `end_s`.
     GpsOutage { start_s: f64, end_s: f64 },
+    /// The mission computer falls silent (killed, link cut): no setpoints or commands reach the
+    /// MCU between `start_s` and `end_s`.
+    LinuxSilent { start_s: f64, end_s: f64 },
 }
 
 impl Fault {
     pub fn window(&self) -> (f64, f64) {
         match *self {
-            Fault::MagDisturbance { start_s, end_s, .. } | Fault::GpsOutage { start_s, end_s } => (start_s, end_s),
+            Fault::MagDisturbance { start_s, end_s, .. }
+            | Fault::GpsOutage { start_s, end_s }
+            | Fault::LinuxSilent { start_s, end_s } => (start_s, end_s),
         }
     }
 }
@@ -172,6 +194,17 @@ impl Scenario {
                 }
             }
             FlightPlan::Mission { .. } => {}
+            FlightPlan::Rig { height_m, roll_deg, pitch_deg } => {
+                if !(height_m.is_finite() && (0.1..=100.0).contains(height_m)) {
+                    return bad("flight.height_m", "must be in [0.1, 100] m");
+                }
+                if !(roll_deg.is_finite() && roll_deg.abs() <= 80.0) {
+                    return bad("flight.roll_deg", "must be within ±80°");
+                }
+                if !(pitch_deg.is_finite() && pitch_deg.abs() <= 80.0) {
+                    return bad("flight.pitch_deg", "must be within ±80°");
+                }
+            }
             FlightPlan::Elevator { floors, floor_height_m, speed_mps, accel_mps2, dwell_s } => {
                 if floors.is_empty() {
                     return bad("flight.floors", "needs at least one floor");
@@ -189,6 +222,9 @@ impl Scenario {
                     return bad("flight.dwell_s", "must be ≥ 0 s");
                 }
             }
+        }
+        if !(self.air_temp_c.is_finite() && (-40.0..=60.0).contains(&self.air_temp_c)) {
+            return bad("air_temp_c", "must be in [-40, 60] °C");
         }
         for (i, f) in self.faults.iter().enumerate() {
             let (a, b) = f.window();

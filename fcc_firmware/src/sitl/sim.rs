@@ -8,6 +8,8 @@
 use super::linux::LinuxSide;
 use super::log::{FlightLog, LogSample};
 use super::physics::Octorotor;
+use super::rangefinders::{LaserModel, SonarModel};
+use super::terrain::Terrain;
 use super::scenario::{Fault, FlightPlan, Scenario};
 use super::sensor_models::{BaroModel, BatteryModel, GpsModel, ImuModel, MagModel};
 use super::wind::Wind;
@@ -28,6 +30,12 @@ pub struct SimBoard {
     pub baro: BaroModel,
     pub gps: GpsModel,
     pub battery: BatteryModel,
+    pub laser: LaserModel,
+    pub sonar: SonarModel,
+    pub terrain: Terrain,
+    pub air_temp_c: f64,
+    /// Rangefinder samples handed to the core since the last log pass: (laser?, sample).
+    polled_ranges: Vec<(bool, crate::sensors::RangeSample)>,
     truth: Truth,
 }
 
@@ -48,15 +56,22 @@ pub struct Truth {
 impl SensorBoard for SimBoard {
     fn poll(&mut self, now_us: u64) -> SensorInputs {
         let t = self.truth;
-        SensorInputs {
+        let out = SensorInputs {
             imu: Some(self.imu.sample(now_us, t.omega_frd_radps, t.specific_force_frd_mps2, t.rotor_speed_mean)),
             mag: self.mag.sample(now_us, &t.q_body_to_ned),
             baro: self.baro.sample(now_us, -t.pos_ned_m.z, t.in_flight),
             gps: self.gps.sample(now_us, t.pos_ned_m, t.vel_ned_mps),
-            laser: None,
-            sonar: None,
+            laser: self.laser.sample(now_us, t.pos_ned_m, &t.q_body_to_ned, &self.terrain, self.air_temp_c),
+            sonar: self.sonar.sample(now_us, t.pos_ned_m, &t.q_body_to_ned, &self.terrain, self.air_temp_c),
             battery: self.battery.sample(now_us, t.current_a, TICK_US as f64 * 1e-6),
+        };
+        if let Some(l) = out.laser {
+            self.polled_ranges.push((true, l));
         }
+        if let Some(r) = out.sonar {
+            self.polled_ranges.push((false, r));
+        }
+        out
     }
 }
 
@@ -71,6 +86,8 @@ impl MotorOutputs for MotorLatch {
 /// Kinematic truth for scenarios where the vehicle is carried (elevator).
 struct Carried {
     profile: Vec<[f64; 3]>,
+    /// Fixed attitude of the rig (body to NED); `None` keeps the vehicle level.
+    attitude: Option<UnitQuaternion<f64>>,
 }
 
 pub struct Sim {
@@ -101,6 +118,11 @@ impl Sim {
             baro: BaroModel::new(s.baro.clone(), seed),
             gps: GpsModel::new(s.gps.clone(), seed),
             battery: BatteryModel::new(Default::default(), seed),
+            laser: LaserModel::new(s.laser.clone(), seed),
+            sonar: SonarModel::new(s.sonar.clone(), seed),
+            terrain: scenario.terrain.clone(),
+            air_temp_c: scenario.air_temp_c,
+            polled_ranges: Vec::new(),
             truth: Truth {
                 pos_ned_m: Vector3::zeros(),
                 vel_ned_mps: Vector3::zeros(),
@@ -115,8 +137,17 @@ impl Sim {
         };
         let linux = LinuxSide::new(&scenario)?;
         let carried = match &scenario.flight {
+            FlightPlan::Rig { height_m, roll_deg, pitch_deg } => Some(Carried {
+                profile: vec![[*height_m as f64, 0.0, 0.0]],
+                attitude: Some(UnitQuaternion::from_euler_angles(
+                    (*roll_deg as f64).to_radians(),
+                    (*pitch_deg as f64).to_radians(),
+                    0.0,
+                )),
+            }),
             FlightPlan::Elevator { floors, floor_height_m, speed_mps, accel_mps2, dwell_s } => Some(Carried {
                 profile: super::linux::elevator_profile(floors, *floor_height_m, *speed_mps, *accel_mps2, *dwell_s),
+                attitude: None,
             }),
             _ => None,
         };
@@ -156,10 +187,11 @@ impl Sim {
         self.t_s() >= self.scenario.duration_s || self.linux.done()
     }
 
-    fn apply_faults(&mut self) {
+    fn apply_faults(&mut self) -> bool {
         let t = self.t_s();
         let mut mag_field = Vector3::zeros();
         let mut gps_on = true;
+        let mut linux_on = true;
         for f in &self.scenario.faults {
             let (a, b) = f.window();
             if t < a || t >= b {
@@ -170,22 +202,27 @@ impl Sim {
                     mag_field += Vector3::new(field_ned_ut[0], field_ned_ut[1], field_ned_ut[2]);
                 }
                 Fault::GpsOutage { .. } => gps_on = false,
+                Fault::LinuxSilent { .. } => linux_on = false,
             }
         }
         self.board.mag.set_disturbance(mag_field);
         self.board.gps.set_available(gps_on);
+        linux_on
     }
 
     /// Advance one 2 ms control tick.
     pub fn tick(&mut self) {
         let dt = TICK_US as f64 * 1e-6;
-        self.apply_faults();
+        let linux_on = self.apply_faults();
         let prev_vel = self.body.state.vel_ned_mps;
         if let Some(c) = &self.carried {
             let t = self.t_s() + dt;
             let (z, v, a) = sample_profile(&c.profile, t);
             self.body.state.pos_ned_m = Vector3::new(0.0, 0.0, -z);
             self.body.state.vel_ned_mps = Vector3::new(0.0, 0.0, -v);
+            if let Some(q) = c.attitude {
+                self.body.state.q_body_to_ned = q;
+            }
             let g = fcc_nav::GRAVITY_MPS2 as f64;
             let a_ned = Vector3::new(0.0, 0.0, -a);
             let f_ned = a_ned - Vector3::new(0.0, 0.0, g);
@@ -194,12 +231,15 @@ impl Sim {
             self.board.truth.accel_ned_mps2 = a_ned;
             self.board.truth.in_flight = false;
         } else {
-            let height = (-self.body.state.pos_ned_m.z).max(0.0);
+            let p = self.body.state.pos_ned_m;
+            let height = (self.board.terrain.ground_down_at(p.x, p.y) - p.z).max(0.0);
             let air = (self.body.state.vel_ned_mps - self.wind_ned).norm();
             self.wind_ned = self.wind.step(height, air, dt);
             let sub = dt / PHYSICS_SUBSTEPS as f64;
+            let p = self.body.state.pos_ned_m;
+            let ground_down = self.board.terrain.ground_down_at(p.x, p.y);
             for _ in 0..PHYSICS_SUBSTEPS {
-                self.body.step(&self.motors.0, self.wind_ned, 0.0, sub);
+                self.body.step(&self.motors.0, self.wind_ned, ground_down, sub);
             }
             self.board.truth.specific_force_frd_mps2 = self.body.specific_force_frd_mps2();
             self.board.truth.accel_ned_mps2 = (self.body.state.vel_ned_mps - prev_vel) / dt;
@@ -214,15 +254,21 @@ impl Sim {
         self.board.truth.omega_frd_radps = st.omega_frd_radps;
         let mean_speed = st.rotor_speed_frac.iter().sum::<f64>() / MOTOR_COUNT as f64;
         self.board.truth.rotor_speed_mean = mean_speed;
-        self.board.truth.current_a = 0.5 + 60.0 * mean_speed.powi(3);
+        self.board.truth.current_a = self.body.electrical_power_w() / 18.5;
+
 
         // The Linux computer runs at 20 Hz, before the MCU's tick at the same instant.
-        if self.ticks % 25 == 0 {
+        if self.ticks % 25 == 0 && linux_on {
             self.linux.update(self.t_us, &mut self.core);
         }
         let t0 = std::time::Instant::now();
         scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
         self.core_wall_ns += t0.elapsed().as_nanos();
+        let p = self.body.state.pos_ned_m;
+        let agl = self.board.terrain.ground_down_at(p.x, p.y) - p.z;
+        for (laser, r) in self.board.polled_ranges.drain(..) {
+            self.log.ranges.push(super::log::RangeRecord { t_s: r.t_us as f64 * 1e-6, laser, range_m: r.range_m, true_agl_m: agl });
+        }
         if self.ticks % LOG_EVERY_TICKS == 0 {
             self.record();
         }
@@ -251,6 +297,7 @@ impl Sim {
             nav,
             tel,
             accel_true_fr_mps2: accel_true_fr,
+            true_agl_m: self.board.terrain.ground_down_at(st.pos_ned_m.x, st.pos_ned_m.y) - st.pos_ned_m.z,
             motors: *self.core.motors(),
         });
     }

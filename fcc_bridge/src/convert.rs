@@ -1,0 +1,555 @@
+//! Pure conversions: decoded link messages → ROS messages, and ROS setpoints/commands → link
+//! messages (with validation). No IO, no clock: stamps and the latest state are arguments.
+//! Frame maths comes from [`crate::frames`].
+
+use crate::frames::{self, f64x3, frd_to_flu, ned_to_enu};
+use crate::ros_types::*;
+use fcc_msgs as link;
+
+/// Laser sentinel for "no return" (passed through by the MCU).
+pub const LASER_NO_RETURN_M: f32 = 99_999.0;
+
+/// Frame ids and sensor figures used in the published messages.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// World frame of the odometry pose and TF parent (REP-105).
+    pub map_frame: String,
+    /// Body frame (FLU).
+    pub base_frame: String,
+    pub imu_frame: String,
+    pub mag_frame: String,
+    pub baro_frame: String,
+    pub gps_frame: String,
+    /// Range frames: x axis along the beam (pointing down).
+    pub laser_frame: String,
+    pub sonar_frame: String,
+    pub laser: RangeSpec,
+    pub sonar: RangeSpec,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct RangeSpec {
+    pub radiation_type: u8,
+    pub field_of_view_rad: f32,
+    pub min_m: f32,
+    pub max_m: f32,
+    pub variance_m2: f32,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            map_frame: "map".into(),
+            base_frame: "base_link".into(),
+            imu_frame: "imu_link".into(),
+            mag_frame: "imu_link".into(),
+            baro_frame: "base_link".into(),
+            gps_frame: "gps_link".into(),
+            laser_frame: "laser_link".into(),
+            sonar_frame: "sonar_link".into(),
+            // ILM-150-R class laser (SITL: 0.5–150 m, 5 cm 1σ, narrow beam).
+            laser: RangeSpec {
+                radiation_type: Range::INFRARED,
+                field_of_view_rad: 0.005,
+                min_m: 0.5,
+                max_m: 150.0,
+                variance_m2: 0.05 * 0.05,
+            },
+            // Ultrasonic (SITL: 0.2–10.68 m, 2 cm 1σ level, 15° half-angle beam).
+            sonar: RangeSpec {
+                radiation_type: Range::ULTRASOUND,
+                field_of_view_rad: 30f32.to_radians(),
+                min_m: 0.2,
+                max_m: 10.68,
+                variance_m2: 0.02 * 0.02,
+            },
+        }
+    }
+}
+
+fn v3(v: [f64; 3]) -> Vector3 {
+    Vector3::new(v)
+}
+
+fn quat_msg(q: frames::Quat) -> Quaternion {
+    Quaternion::from_wxyz(q)
+}
+
+/// Raw IMU, body FRD → `sensor_msgs/Imu` in FLU without orientation (covariance[0] = −1).
+pub fn imu_raw(m: &link::ImuRaw, stamp: Time, cfg: &Config) -> Imu {
+    let mut orientation_covariance = [0.0; 9];
+    orientation_covariance[0] = -1.0;
+    Imu {
+        header: Header::new(stamp, &cfg.imu_frame),
+        orientation: Quaternion::default(),
+        orientation_covariance,
+        angular_velocity: v3(frd_to_flu(f64x3(m.gyro_frd_radps))),
+        // MPU-9250 gyro noise 0.01 °/s/√Hz at ~100 Hz bandwidth, rounded up: (0.002 rad/s)².
+        angular_velocity_covariance: frames::diag3(4e-6),
+        linear_acceleration: v3(frd_to_flu(f64x3(m.accel_frd_mps2))),
+        // 300 µg/√Hz over ~100 Hz ≈ 0.03 m/s² (vibration is not included).
+        linear_acceleration_covariance: frames::diag3(1e-3),
+    }
+}
+
+/// Magnetometer µT FRD → tesla FLU.
+pub fn mag(m: &link::MagRaw, stamp: Time, cfg: &Config) -> MagneticField {
+    let t = f64x3(m.mag_frd_ut).map(|x| x * 1e-6);
+    MagneticField {
+        header: Header::new(stamp, &cfg.mag_frame),
+        magnetic_field: v3(frd_to_flu(t)),
+        magnetic_field_covariance: [0.0; 9],
+    }
+}
+
+/// Barometer → `FluidPressure` (Pa).
+pub fn baro(m: &link::BaroRaw, stamp: Time, cfg: &Config) -> FluidPressure {
+    FluidPressure {
+        header: Header::new(stamp, &cfg.baro_frame),
+        fluid_pressure: m.pressure_pa as f64,
+        variance: 0.0,
+    }
+}
+
+/// GPS → `NavSatFix` (covariance ENU from the receiver's horizontal accuracy, vertical 2×).
+pub fn gps_fix(m: &link::GpsRaw, stamp: Time, cfg: &Config) -> NavSatFix {
+    let h = (m.h_acc_m as f64).max(0.0);
+    let (cov, cov_type) = if h.is_finite() && h > 0.0 {
+        let mut c = [0.0; 9];
+        c[0] = h * h;
+        c[4] = h * h;
+        c[8] = 4.0 * h * h;
+        (c, NavSatFix::COVARIANCE_TYPE_APPROXIMATED)
+    } else {
+        ([0.0; 9], NavSatFix::COVARIANCE_TYPE_UNKNOWN)
+    };
+    NavSatFix {
+        header: Header::new(stamp, &cfg.gps_frame),
+        status: NavSatStatus {
+            status: if m.fix_ok {
+                NavSatStatus::STATUS_FIX
+            } else {
+                NavSatStatus::STATUS_NO_FIX
+            },
+            service: NavSatStatus::SERVICE_GPS,
+        },
+        latitude: m.lat_deg,
+        longitude: m.lon_deg,
+        altitude: m.alt_m as f64,
+        position_covariance: cov,
+        position_covariance_type: cov_type,
+    }
+}
+
+/// REP-117 range value: the laser's no-return sentinel (and anything beyond max) → +inf;
+/// NaN stays NaN (no reading).
+pub fn rep117_range(range_m: f32, spec: &RangeSpec, laser: bool) -> f32 {
+    if laser && range_m >= LASER_NO_RETURN_M {
+        f32::INFINITY
+    } else if range_m > spec.max_m && laser {
+        f32::INFINITY
+    } else {
+        range_m
+    }
+}
+
+/// Rangefinder → `Range`, and whether it is the laser (topic choice).
+pub fn range(m: &link::RangeRaw, stamp: Time, cfg: &Config) -> (Range, bool) {
+    let laser = matches!(m.sensor, link::RangeSensor::Laser);
+    let (spec, frame) = if laser {
+        (&cfg.laser, &cfg.laser_frame)
+    } else {
+        (&cfg.sonar, &cfg.sonar_frame)
+    };
+    (
+        range_msg(rep117_range(m.range_m, spec, laser), spec, frame, stamp),
+        laser,
+    )
+}
+
+fn range_msg(range: f32, spec: &RangeSpec, frame: &str, stamp: Time) -> Range {
+    Range {
+        header: Header::new(stamp, frame),
+        radiation_type: spec.radiation_type,
+        field_of_view: spec.field_of_view_rad,
+        min_range: spec.min_m,
+        max_range: spec.max_m,
+        range,
+        variance: spec.variance_m2,
+    }
+}
+
+/// Battery → `BatteryState` (unknowns NaN as the message asks).
+pub fn battery(m: &link::Battery, stamp: Time, cfg: &Config) -> BatteryState {
+    BatteryState {
+        header: Header::new(stamp, &cfg.base_frame),
+        voltage: m.voltage_v,
+        temperature: f32::NAN,
+        // ROS: negative while discharging. The link's current is the draw (positive).
+        current: -m.current_a,
+        charge: f32::NAN,
+        capacity: f32::NAN,
+        design_capacity: f32::NAN,
+        percentage: f32::NAN,
+        power_supply_status: BatteryState::POWER_SUPPLY_STATUS_DISCHARGING,
+        power_supply_health: BatteryState::POWER_SUPPLY_HEALTH_UNKNOWN,
+        power_supply_technology: BatteryState::POWER_SUPPLY_TECHNOLOGY_LIPO,
+        present: true,
+        cell_voltage: Vec::new(),
+        cell_temperature: Vec::new(),
+        location: String::new(),
+        serial_number: String::new(),
+    }
+}
+
+/// Navigation state → (`Odometry`, `state/imu`, TF map → base_link).
+///
+/// Odometry: pose in `map` (ENU, home = origin), twist in `base_link` (FLU) per REP-105 /
+/// nav_msgs: linear = body-frame velocity, angular = bias-corrected body rates.
+pub fn nav_state(m: &link::NavState, stamp: Time, cfg: &Config) -> (Odometry, Imu, TFMessage) {
+    let q_ned = frames::quat_f64(m.q_body_to_ned);
+    let q_enu = frames::q_frd_ned_to_q_flu_enu(q_ned);
+    let pos = ned_to_enu(f64x3(m.pos_ned_m));
+    let vel_ned = f64x3(m.vel_ned_mps);
+    let vel_flu = frd_to_flu(frames::ned_to_body_frd(q_ned, vel_ned));
+    let rate_flu = frd_to_flu(f64x3(m.rate_frd_radps));
+    // Specific force in the body = R^T (a − g), g = (0, 0, 9.81) NED.
+    let a_ned = f64x3(m.accel_ned_mps2);
+    let f_ned = [a_ned[0], a_ned[1], a_ned[2] - 9.80665];
+    let f_flu = frd_to_flu(frames::ned_to_body_frd(q_ned, f_ned));
+
+    let mut pose_cov = [0.0; 36];
+    let mut twist_cov = [0.0; 36];
+    let (ph, pv) = if m.gps_ok { (0.5, 0.15) } else { (10.0, 0.3) };
+    for (i, v) in [ph, ph, pv, 0.02, 0.02, 0.05].iter().enumerate() {
+        pose_cov[i * 7] = v * v;
+    }
+    for (i, v) in [0.1, 0.1, 0.1, 0.01, 0.01, 0.01].iter().enumerate() {
+        twist_cov[i * 7] = v * v;
+    }
+    let odom = Odometry {
+        header: Header::new(stamp, &cfg.map_frame),
+        child_frame_id: cfg.base_frame.clone(),
+        pose: PoseWithCovariance {
+            pose: Pose {
+                position: Point {
+                    x: pos[0],
+                    y: pos[1],
+                    z: pos[2],
+                },
+                orientation: quat_msg(q_enu),
+            },
+            covariance: pose_cov,
+        },
+        twist: TwistWithCovariance {
+            twist: Twist {
+                linear: v3(vel_flu),
+                angular: v3(rate_flu),
+            },
+            covariance: twist_cov,
+        },
+    };
+    let imu = Imu {
+        header: Header::new(stamp, &cfg.base_frame),
+        orientation: quat_msg(q_enu),
+        orientation_covariance: frames::diag3(0.02 * 0.02),
+        angular_velocity: v3(rate_flu),
+        angular_velocity_covariance: frames::diag3(1e-4),
+        linear_acceleration: v3(f_flu),
+        linear_acceleration_covariance: frames::diag3(1e-2),
+    };
+    let tf = TFMessage {
+        transforms: vec![TransformStamped {
+            header: Header::new(stamp, &cfg.map_frame),
+            child_frame_id: cfg.base_frame.clone(),
+            transform: Transform {
+                translation: v3(pos),
+                rotation: quat_msg(q_enu),
+            },
+        }],
+    };
+    (odom, imu, tf)
+}
+
+/// Static transforms from `base_link` to the sensor frames (sensors aligned with the body; the
+/// rangefinder frames' x axis points down the beam, REP-117/`sensor_msgs/Range`).
+pub fn static_transforms(stamp: Time, cfg: &Config) -> TFMessage {
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    // +90° about y (FLU): x → −z.
+    let down = Quaternion {
+        x: 0.0,
+        y: s,
+        z: 0.0,
+        w: s,
+    };
+    let mut frames_seen: Vec<&str> = Vec::new();
+    let mut out = Vec::new();
+    for (frame, rot) in [
+        (&cfg.imu_frame, Quaternion::default()),
+        (&cfg.mag_frame, Quaternion::default()),
+        (&cfg.baro_frame, Quaternion::default()),
+        (&cfg.gps_frame, Quaternion::default()),
+        (&cfg.laser_frame, down),
+        (&cfg.sonar_frame, down),
+    ] {
+        if frame == &cfg.base_frame || frames_seen.contains(&frame.as_str()) {
+            continue;
+        }
+        frames_seen.push(frame);
+        out.push(TransformStamped {
+            header: Header::new(stamp, &cfg.base_frame),
+            child_frame_id: frame.clone(),
+            transform: Transform {
+                translation: Vector3::default(),
+                rotation: rot,
+            },
+        });
+    }
+    TFMessage { transforms: out }
+}
+
+pub fn altitude_source(s: link::AltitudeSource) -> u8 {
+    match s {
+        link::AltitudeSource::None => Altitude::SOURCE_NONE,
+        link::AltitudeSource::Laser => Altitude::SOURCE_LASER,
+        link::AltitudeSource::Sonar => Altitude::SOURCE_SONAR,
+        link::AltitudeSource::Both => Altitude::SOURCE_BOTH,
+        link::AltitudeSource::Predicted => Altitude::SOURCE_PREDICTED,
+    }
+}
+
+/// Altitude fusion → (`fcc_msgs/Altitude`, `altitude/ground` Range).
+pub fn altitude(m: &link::AltitudeFusion, stamp: Time, cfg: &Config) -> (Altitude, Range) {
+    let laser = if m.laser_m >= LASER_NO_RETURN_M {
+        f32::INFINITY
+    } else {
+        m.laser_m
+    };
+    let alt = Altitude {
+        header: Header::new(stamp, &cfg.map_frame),
+        baro_alt_m: m.baro_alt_m,
+        alt_m: m.alt_m,
+        vertical_speed_mps: -m.vel_down_mps,
+        ground_height_m: m.ground_height_m,
+        ground_variance_m2: m.ground_var_m2,
+        laser_range_m: laser,
+        sonar_range_m: m.sonar_m,
+        source: altitude_source(m.source),
+    };
+    let spec = match m.source {
+        link::AltitudeSource::Sonar => cfg.sonar,
+        _ => cfg.laser,
+    };
+    let ground = Range {
+        header: Header::new(stamp, &cfg.base_frame),
+        radiation_type: spec.radiation_type,
+        field_of_view: spec.field_of_view_rad,
+        min_range: 0.0,
+        max_range: spec.max_m,
+        range: m.ground_height_m,
+        variance: if m.ground_var_m2.is_finite() {
+            m.ground_var_m2
+        } else {
+            0.0
+        },
+    };
+    (alt, ground)
+}
+
+pub fn mode_code(m: link::FlightMode) -> (u8, &'static str) {
+    match m {
+        link::FlightMode::Disarmed => (Status::MODE_DISARMED, "disarmed"),
+        link::FlightMode::Hold => (Status::MODE_HOLD, "hold"),
+        link::FlightMode::Velocity => (Status::MODE_VELOCITY, "velocity"),
+        link::FlightMode::Land => (Status::MODE_LAND, "land"),
+    }
+}
+
+pub fn failsafe_code(f: link::FailsafeCause) -> (u8, &'static str) {
+    match f {
+        link::FailsafeCause::None => (Status::FAILSAFE_NONE, "none"),
+        link::FailsafeCause::SetpointStale => (Status::FAILSAFE_SETPOINT_STALE, "setpoint_stale"),
+        link::FailsafeCause::SetpointLost => (Status::FAILSAFE_SETPOINT_LOST, "setpoint_lost"),
+        link::FailsafeCause::Geofence => (Status::FAILSAFE_GEOFENCE, "geofence"),
+        link::FailsafeCause::GpsLost => (Status::FAILSAFE_GPS_LOST, "gps_lost"),
+    }
+}
+
+pub fn reject_name(r: link::CommandResult) -> &'static str {
+    match r {
+        link::CommandResult::Accepted => "accepted",
+        link::CommandResult::NotCalibrated => "not_calibrated",
+        link::CommandResult::NoHome => "no_home",
+        link::CommandResult::NotLanded => "not_landed",
+        link::CommandResult::Disarmed => "disarmed",
+        link::CommandResult::InvalidSetpoint => "invalid_setpoint",
+        link::CommandResult::Incompatible => "incompatible",
+    }
+}
+
+/// The MCU's part of `fcc_msgs/Status`; the bridge fills in its own counters.
+pub fn status(m: &link::Status, stamp: Time, cfg: &Config) -> Status {
+    let (mode, mode_name) = mode_code(m.mode);
+    let (failsafe, failsafe_name) = failsafe_code(m.failsafe);
+    Status {
+        header: Header::new(stamp, &cfg.base_frame),
+        mode,
+        mode_name: mode_name.into(),
+        armed: m.armed,
+        landed: m.landed,
+        failsafe,
+        failsafe_name: failsafe_name.into(),
+        loop_time_max_us: m.loop_time_max_us,
+        loop_time_avg_us: m.loop_time_avg_us,
+        last_reject: reject_name(m.last_reject).into(),
+        setpoint_rejects: m.setpoint_rejects,
+        command_rejects: m.command_rejects,
+        mcu_tx_frames: m.tx_frames,
+        mcu_tx_dropped: m.tx_dropped,
+        mcu_rx_frames: m.link_rx.rx_frames,
+        mcu_crc_errors: m.link_rx.crc_errors,
+        mcu_resyncs: m.link_rx.resyncs,
+        mcu_frames_lost: m.link_rx.frames_lost,
+        ..Status::default()
+    }
+}
+
+// --------------------------------------------------------------------------- ROS → link
+
+/// Limits for incoming setpoints.
+#[derive(Clone, Copy, Debug)]
+pub struct SetpointLimits {
+    /// Largest accepted speed per axis, m/s.
+    pub max_speed_mps: f64,
+    /// Largest age of a stamped setpoint, ns (stamp 0 = unstamped is accepted).
+    pub max_age_ns: i64,
+    /// Largest amount a stamp may lie in the future, ns.
+    pub max_future_ns: i64,
+    /// Time-to-live given to the MCU, ms.
+    pub ttl_ms: u16,
+}
+
+impl Default for SetpointLimits {
+    fn default() -> Self {
+        SetpointLimits {
+            max_speed_mps: 20.0,
+            max_age_ns: 500_000_000,
+            max_future_ns: 500_000_000,
+            ttl_ms: 300,
+        }
+    }
+}
+
+/// Why a setpoint was refused by the bridge.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SetpointReject {
+    NotFinite,
+    TooLarge(f64),
+    UnknownFrame(String),
+    /// `base_link` setpoint but no navigation state yet (heading unknown).
+    NoHeading,
+    Stale { age_ms: i64 },
+    Future { ahead_ms: i64 },
+}
+
+impl std::fmt::Display for SetpointReject {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SetpointReject::NotFinite => write!(f, "non-finite value"),
+            SetpointReject::TooLarge(v) => write!(f, "speed {v:.1} m/s over the limit"),
+            SetpointReject::UnknownFrame(s) => write!(
+                f,
+                "unknown frame_id '{s}' (use map, odom, empty = ENU, or base_link = FLU)"
+            ),
+            SetpointReject::NoHeading => {
+                write!(f, "base_link setpoint before any navigation state")
+            }
+            SetpointReject::Stale { age_ms } => write!(f, "stamp {age_ms} ms old"),
+            SetpointReject::Future { ahead_ms } => write!(f, "stamp {ahead_ms} ms in the future"),
+        }
+    }
+}
+
+/// `TwistStamped` → link `VelocitySetpoint` (NED).
+///
+/// - `header.frame_id` `map`, `odom` (or the configured map frame) or empty: `twist.linear` is
+///   ENU. `base_link` (the configured base frame): FLU body, levelled (rotated by the current
+///   heading only, see [`frames::flu_heading_to_ned`]).
+/// - `twist.angular` is ignored: the MCU protocol takes a heading, not a yaw rate; the vehicle
+///   keeps its heading (`has_yaw = false`). `yaw_rate_ignored` tells the caller to count it.
+/// - Stamp 0 (as `ros2 topic pub` sends without `--stamp`) is accepted as "now"; other stamps
+///   must be within the limits of `now_ns`.
+pub fn setpoint(
+    m: &TwistStamped,
+    now_ns: i64,
+    yaw_ned: Option<f64>,
+    cfg: &Config,
+    lim: &SetpointLimits,
+) -> Result<(link::VelocitySetpoint, bool), SetpointReject> {
+    let lin = m.twist.linear.to_array();
+    let ang = m.twist.angular.to_array();
+    if lin.iter().chain(ang.iter()).any(|v| !v.is_finite()) {
+        return Err(SetpointReject::NotFinite);
+    }
+    if let Some(v) = lin.iter().map(|v| v.abs()).find(|v| *v > lim.max_speed_mps) {
+        return Err(SetpointReject::TooLarge(v));
+    }
+    if !m.header.stamp.is_zero() {
+        let t = m.header.stamp.to_nanos();
+        if now_ns - t > lim.max_age_ns {
+            return Err(SetpointReject::Stale {
+                age_ms: (now_ns - t) / 1_000_000,
+            });
+        }
+        if t - now_ns > lim.max_future_ns {
+            return Err(SetpointReject::Future {
+                ahead_ms: (t - now_ns) / 1_000_000,
+            });
+        }
+    }
+    let f = m.header.frame_id.trim_start_matches('/');
+    let ned = if f.is_empty() || f == "map" || f == "odom" || f == cfg.map_frame {
+        frames::enu_to_ned(lin)
+    } else if f == cfg.base_frame || f == "base_link" {
+        let yaw = yaw_ned.ok_or(SetpointReject::NoHeading)?;
+        frames::flu_heading_to_ned(lin, yaw)
+    } else {
+        return Err(SetpointReject::UnknownFrame(m.header.frame_id.clone()));
+    };
+    Ok((
+        link::VelocitySetpoint {
+            vel_ned_mps: [ned[0] as f32, ned[1] as f32, ned[2] as f32],
+            has_yaw: false,
+            yaw_rad: 0.0,
+            ttl_ms: lim.ttl_ms,
+        },
+        ang[2] != 0.0,
+    ))
+}
+
+/// `cmd/arm`: true → Arm, false → Disarm.
+pub fn arm_command(m: &Bool) -> link::Command {
+    link::Command {
+        command: if m.data {
+            link::CommandKind::Arm
+        } else {
+            link::CommandKind::Disarm
+        },
+    }
+}
+
+/// `cmd/mode`: `hold`, `land`, `velocity` (also `arm`/`disarm`), case-insensitive.
+pub fn mode_command(m: &StringMsg) -> Option<link::Command> {
+    let c = match m.data.trim().to_ascii_lowercase().as_str() {
+        "hold" | "loiter" | "position" => link::CommandKind::Hold,
+        "land" => link::CommandKind::Land,
+        "velocity" | "offboard" => link::CommandKind::Velocity,
+        "arm" => link::CommandKind::Arm,
+        "disarm" => link::CommandKind::Disarm,
+        _ => return None,
+    };
+    Some(link::Command { command: c })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,90 @@
+//! The custom messages of the ROS 2 interface package `fcc_msgs` (`msg/msg/*.msg`).
+//! The `.msg` files are the source of truth; these structs follow their field order.
+
+use super::{ros_msg, Header};
+use serde::{Deserialize, Serialize};
+
+/// fcc_msgs/msg/Altitude (see `msg/msg/Altitude.msg` for units).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Altitude {
+    pub header: Header,
+    pub baro_alt_m: f32,
+    pub alt_m: f32,
+    pub vertical_speed_mps: f32,
+    pub ground_height_m: f32,
+    pub ground_variance_m2: f32,
+    pub laser_range_m: f32,
+    pub sonar_range_m: f32,
+    pub source: u8,
+}
+ros_msg!(
+    Altitude,
+    "fcc_msgs",
+    "Altitude",
+    include_str!("../../../msg/msg/Altitude.msg"),
+    [Header]
+);
+
+impl Altitude {
+    pub const SOURCE_NONE: u8 = 0;
+    pub const SOURCE_LASER: u8 = 1;
+    pub const SOURCE_SONAR: u8 = 2;
+    pub const SOURCE_BOTH: u8 = 3;
+    pub const SOURCE_PREDICTED: u8 = 4;
+}
+
+/// fcc_msgs/msg/Status (see `msg/msg/Status.msg`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Status {
+    pub header: Header,
+    pub mode: u8,
+    pub mode_name: String,
+    pub armed: bool,
+    pub landed: bool,
+    pub failsafe: u8,
+    pub failsafe_name: String,
+    pub loop_time_max_us: u32,
+    pub loop_time_avg_us: u32,
+    pub last_reject: String,
+    pub setpoint_rejects: u32,
+    pub command_rejects: u32,
+    pub mcu_tx_frames: u32,
+    pub mcu_tx_dropped: u32,
+    pub rx_bytes: u64,
+    pub rx_frames: u64,
+    pub crc_errors: u64,
+    pub framing_errors: u64,
+    pub resyncs: u64,
+    pub decode_errors: u64,
+    pub frames_lost: u64,
+    pub dropped: u64,
+    pub mcu_rx_frames: u32,
+    pub mcu_crc_errors: u32,
+    pub mcu_resyncs: u32,
+    pub mcu_frames_lost: u32,
+    pub setpoints_forwarded: u64,
+    pub setpoint_rejects_bridge: u64,
+    pub commands_forwarded: u64,
+    pub time_synced: bool,
+    pub time_sync_offset_ns: i64,
+    pub time_sync_rtt_us: u32,
+}
+ros_msg!(
+    Status,
+    "fcc_msgs",
+    "Status",
+    include_str!("../../../msg/msg/Status.msg"),
+    [Header]
+);
+
+impl Status {
+    pub const MODE_DISARMED: u8 = 0;
+    pub const MODE_HOLD: u8 = 1;
+    pub const MODE_VELOCITY: u8 = 2;
+    pub const MODE_LAND: u8 = 3;
+    pub const FAILSAFE_NONE: u8 = 0;
+    pub const FAILSAFE_SETPOINT_STALE: u8 = 1;
+    pub const FAILSAFE_SETPOINT_LOST: u8 = 2;
+    pub const FAILSAFE_GEOFENCE: u8 = 3;
+    pub const FAILSAFE_GPS_LOST: u8 = 4;
+}
