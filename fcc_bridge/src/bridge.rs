@@ -13,6 +13,7 @@ use std::net::Ipv4Addr;
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::sync::mpsc;
+use tokio_serial::SerialPortBuilderExt;
 
 /// Everything the bridge needs to run.
 #[derive(Clone, Debug)]
@@ -101,9 +102,9 @@ fn telemetry_qos(depth: usize) -> QosProfile {
         .history(History::KeepLast { depth })
 }
 
-fn publisher<T: RosMsg>(node: &mut Node, name: &str, qos: QosProfile) -> Result<Publisher<T>, BridgeError> {
+fn publisher<T: RosMsg>(node: &mut Node, name: &str, qos: &QosProfile) -> Result<Publisher<T>, BridgeError> {
     let topic = node
-        .create_topic(&Name::parse(name).map_err(ros_err)?, T::type_name(), &qos)
+        .create_topic(&Name::parse(name).map_err(ros_err)?, T::type_name(), qos)
         .map_err(ros_err)?;
     node.create_publisher::<T>(&topic, None).map_err(ros_err)
 }
@@ -112,30 +113,30 @@ impl Publishers {
     fn new(node: &mut Node, clock: ClockSource) -> Result<Self, BridgeError> {
         let q = telemetry_qos(10);
         Ok(Publishers {
-            imu_raw: publisher(node, "imu/data_raw", q)?,
-            mag: publisher(node, "mag", q)?,
-            baro: publisher(node, "baro", q)?,
-            gps_fix: publisher(node, "gps/fix", q)?,
-            laser: publisher(node, "range/laser", q)?,
-            sonar: publisher(node, "range/sonar", q)?,
-            battery: publisher(node, "battery", q)?,
-            odom: publisher(node, "state/odom", q)?,
-            state_imu: publisher(node, "state/imu", q)?,
-            tf: publisher(node, "/tf", telemetry_qos(100))?,
+            imu_raw: publisher(node, "imu/data_raw", &q)?,
+            mag: publisher(node, "mag", &q)?,
+            baro: publisher(node, "baro", &q)?,
+            gps_fix: publisher(node, "gps/fix", &q)?,
+            laser: publisher(node, "range/laser", &q)?,
+            sonar: publisher(node, "range/sonar", &q)?,
+            battery: publisher(node, "battery", &q)?,
+            odom: publisher(node, "state/odom", &q)?,
+            state_imu: publisher(node, "state/imu", &q)?,
+            tf: publisher(node, "/tf", &telemetry_qos(100))?,
             tf_static: publisher(
                 node,
                 "/tf_static",
-                QosProfile::publisher_default()
+                &QosProfile::publisher_default()
                     .reliability_reliable(WhenFull::Fail)
                     .durability(Durability::TransientLocal)
                     .history(History::KeepLast { depth: 1 }),
             )?,
-            altitude: publisher(node, "altitude", q)?,
-            ground: publisher(node, "altitude/ground", q)?,
-            status: publisher(node, "status", q)?,
-            diagnostics: publisher(node, "/diagnostics", q)?,
+            altitude: publisher(node, "altitude", &q)?,
+            ground: publisher(node, "altitude/ground", &q)?,
+            status: publisher(node, "status", &q)?,
+            diagnostics: publisher(node, "/diagnostics", &q)?,
             clock: if clock == ClockSource::Mcu {
-                Some(publisher(node, "/clock", telemetry_qos(1))?)
+                Some(publisher(node, "/clock", &telemetry_qos(1))?)
             } else {
                 None
             },
@@ -262,7 +263,7 @@ pub async fn run(opts: Options) -> Result<(), BridgeError> {
             }
         };
         logged_open_error = false;
-        let _ = tokio_serial::SerialPort::set_exclusive(&mut port, false);
+        let _ = port.set_exclusive(false);
         if !first {
             st.reconnect();
         }

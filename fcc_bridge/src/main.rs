@@ -33,10 +33,10 @@ struct Cli {
 fn options() -> Result<Options, String> {
     let argv: Vec<String> = std::env::args().collect();
     let (prog, ros) = params::split_ros_args(&argv)?;
-    let cli = Cli::try_parse_from(prog).map_err(|e| {
+    let cli = Cli::try_parse_from(prog).unwrap_or_else(|e| {
         let _ = e.print();
         std::process::exit(if e.use_stderr() { 1 } else { 0 });
-    })?;
+    });
     let mut o = Options {
         device: cli.device,
         baud: cli.baud,
@@ -126,7 +126,7 @@ fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "info,rustdds=warn,ros2_client=warn".into()),
+                .unwrap_or_else(|_| "info,rustdds=error,ros2_client=warn".into()),
         )
         .with_writer(std::io::stderr)
         .init();

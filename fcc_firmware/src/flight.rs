@@ -23,9 +23,9 @@ use fcc_nav::GRAVITY_MPS2;
 const AIRBORNE_ALT_M: f32 = 0.3;
 /// A fused ground height with a larger variance than this is not trusted for landing (m²).
 const GROUND_MAX_VAR_M2: f32 = 0.25;
-/// Below this fused height (m) the sensors see the ground right under the vehicle: touchdown
-/// is then confirmed faster and does not need the thrust to have wound down as far.
-const CONTACT_HEIGHT_M: f32 = 0.25;
+/// Above the rangefinders' height when standing on the gear, this margin (m) still counts as
+/// touching the ground: touchdown then does not need the thrust to have wound down as far.
+const CONTACT_MARGIN_M: f32 = 0.1;
 /// Largest velocity component a setpoint may carry before it is refused as absurd.
 const SETPOINT_ABS_LIMIT_MPS: f32 = 50.0;
 
@@ -493,14 +493,15 @@ impl FlightCore {
         };
     }
 
-    /// Height above the ground for landing: the rangefinder fusion when it has a usable
-    /// estimate (paper B), else barometric height above the take-off point.
+    /// Height of the rangefinders above the ground, for landing: the rangefinder fusion when
+    /// it has a usable estimate (paper B), else barometric height above the take-off point
+    /// plus the sensors' height when standing on the gear.
     pub fn height_above_ground_m(&self, nav: &NavState) -> f32 {
         let g = &nav.ground;
         if self.ground_usable(nav) {
             g.height_m
         } else {
-            -nav.pos_ned_m[2] - self.takeoff_alt_m
+            -nav.pos_ned_m[2] - self.takeoff_alt_m + self.params.airframe.sensor_height_on_ground_m
         }
     }
 
@@ -515,7 +516,7 @@ impl FlightCore {
     fn detect_touchdown(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) {
         let hover_n = self.params.airframe.mass_kg * GRAVITY_MPS2;
         let descending_cmd = vz_cmd_down > 0.0;
-        let near_ground = self.height_above_ground_m(nav) < CONTACT_HEIGHT_M;
+        let near_ground = self.height_above_ground_m(nav) < self.params.airframe.sensor_height_on_ground_m + CONTACT_MARGIN_M;
         let vz = if near_ground && self.ground_usable(nav) { nav.ground_rate_up_mps } else { nav.vel_ned_mps[2] };
         let not_moving = libm::fabsf(vz) < 0.25;
         let low_thrust = self.telemetry.thrust_n < if near_ground { 0.9 } else { 0.8 } * hover_n;

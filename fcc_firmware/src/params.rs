@@ -20,6 +20,8 @@ pub struct AirframeParams {
     pub max_thrust_per_motor_n: f32,
     /// Motor command while armed on the ground (spinning, no lift).
     pub idle_cmd: f32,
+    /// Height of the downward rangefinders above the ground when standing on the gear, m.
+    pub sensor_height_on_ground_m: f32,
 }
 
 impl Default for AirframeParams {
@@ -30,6 +32,7 @@ impl Default for AirframeParams {
             torque_to_thrust_m: 0.016,
             max_thrust_per_motor_n: 12.0,
             idle_cmd: 0.1,
+            sensor_height_on_ground_m: 0.25,
         }
     }
 }

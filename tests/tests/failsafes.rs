@@ -28,11 +28,12 @@ fn silent_mission_computer_hold_then_land() {
     let lost_s = fcc_firmware::params::LimitParams::default().setpoint_lost_land_s as f64;
     assert!((land.t_s - silent_from_s - lost_s).abs() <= 0.3, "land after {:.2} s", land.t_s - silent_from_s);
     // Touchdown: on the ground, slow, then disarmed.
-    assert!(disarm.true_pos_ned_m[2].abs() < 0.05, "on the ground: {:?}", disarm.true_pos_ned_m);
+    let gear = fcc_firmware::sitl::physics::VehicleParams::default().gear_height_m;
+    assert!((disarm.true_agl_m - gear).abs() < 0.06, "on the ground: {:.3} m", disarm.true_agl_m);
     let touchdown_speed = log
         .samples
         .iter()
-        .filter(|x| x.t_s > land.t_s && x.t_s < disarm.t_s && -x.true_pos_ned_m[2] < 0.3)
+        .filter(|x| x.t_s > land.t_s && x.t_s < disarm.t_s && x.true_agl_m - gear < 0.3)
         .map(|x| x.true_vel_ned_mps[2])
         .fold(0.0f64, f64::max);
     println!("vertical speed near touchdown ≤ {touchdown_speed:.2} m/s");

@@ -8,6 +8,7 @@ use clap::Parser;
 use fcc_firmware::sitl::{metrics, scenario::Scenario, sim::Sim};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::io::Write;
 use std::time::Instant;
 
 #[derive(Parser, Debug)]
@@ -54,14 +55,21 @@ fn main() -> ExitCode {
     let wall = Instant::now();
     sim.run();
     let wall_s = wall.elapsed().as_secs_f64();
-    println!("scenario {name}: {:.1} s simulated in {:.2} s wall ({:.0}× real time)", sim.t_s(), wall_s, sim.t_s() / wall_s);
-    print!("{}", metrics::summary(&sim.log));
+    let report = format!(
+        "scenario {name}: {:.1} s simulated in {:.2} s wall ({:.0}× real time)\n{}",
+        sim.t_s(),
+        wall_s,
+        sim.t_s() / wall_s,
+        metrics::summary(&sim.log)
+    );
+    // A closed stdout (e.g. piped into `head`) is not an error worth a panic.
+    let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), report.as_bytes());
     if let Some(path) = args.csv {
         if let Err(e) = fcc_firmware::sitl::log::write_csv(&sim.log, &path) {
             eprintln!("fcc-sitl: {}: {e}", path.display());
             return ExitCode::from(1);
         }
-        println!("log written to {}", path.display());
+        let _ = writeln!(std::io::stdout().lock(), "log written to {}", path.display());
     }
     ExitCode::SUCCESS
 }

@@ -19,6 +19,7 @@ use crate::flight::FlightCore;
 use crate::sensors::{
     BaroSample, BatterySample, GpsFix, ImuSample, MagSample, RangeSample, SensorInputs,
 };
+use fcc_nav::ground_altitude::GroundSource;
 use fcc_msgs::{
     period_us, AltitudeFusion, AltitudeSource, BaroRaw, Battery, CommandAck, CommandKind,
     CommandResult, EncodeError, Encoder, FailsafeCause, FlightMode, FrameDecoder, GpsRaw,
@@ -370,12 +371,17 @@ impl LinkEndpoint {
                     baro_alt_m: nav.baro_alt_m,
                     alt_m: -nav.pos_ned_m[2],
                     vel_down_mps: nav.vel_ned_mps[2],
-                    // The core has no rangefinder fusion yet: nothing to report.
-                    ground_height_m: f32::NAN,
-                    ground_var_m2: f32::NAN,
+                    ground_height_m: nav.ground.height_m,
+                    ground_var_m2: nav.ground.variance_m2,
                     laser_m: range(&l.laser),
                     sonar_m: range(&l.sonar),
-                    source: AltitudeSource::None,
+                    source: match nav.ground.source {
+                        GroundSource::None => AltitudeSource::None,
+                        GroundSource::Laser => AltitudeSource::Laser,
+                        GroundSource::Sonar => AltitudeSource::Sonar,
+                        GroundSource::Both => AltitudeSource::Both,
+                        GroundSource::Predicted => AltitudeSource::Predicted,
+                    },
                 };
                 (Message::AltitudeFusion(m), nav.t_us)
             }

@@ -64,6 +64,8 @@ pub struct FlightLog {
     pub events: Vec<(f64, String)>,
     /// Every rangefinder reading, at its own rate.
     pub ranges: Vec<RangeRecord>,
+    /// The scenario's flight plan kind: "hover", "mission", "elevator" or "rig".
+    pub plan_kind: &'static str,
 }
 
 /// Write the log as CSV (one row per 50 Hz sample) for plotting elsewhere.

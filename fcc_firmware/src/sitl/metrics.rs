@@ -279,7 +279,7 @@ pub fn summary(log: &FlightLog) -> String {
         )
         .ok();
     }
-    if log.samples.iter().any(|s| s.plan == PlanPhase::Carried) {
+    if log.plan_kind == "elevator" {
         let v = vertical_error(log, ELEVATOR_SETTLE_S);
         writeln!(
             out,
@@ -287,6 +287,13 @@ pub fn summary(log: &FlightLog) -> String {
             v.est_rms_m, v.est_max_m, v.baro_rms_m, v.est_noise_m, v.baro_noise_m
         )
         .ok();
+    }
+    if !log.ranges.is_empty() {
+        writeln!(out, "ground altitude (height above ground, vs truth):").ok();
+        writeln!(out, "  {:<28} {:>9} {:>9} {:>12}", "method", "RMS m", "max m", "diverged s").ok();
+        for (name, g) in ground_comparison(log) {
+            writeln!(out, "  {:<28} {:>9.3} {:>9.3} {:>12.1}", name, g.rms_m, g.max_m, g.diverged_s).ok();
+        }
     }
     let a = attitude_error(log, true);
     if a.samples > 0 {
@@ -312,4 +319,72 @@ pub fn summary(log: &FlightLog) -> String {
         writeln!(out, "  t={t:7.2} s  {e}").ok();
     }
     out
+}
+
+/// Error of a height-above-ground estimate against the truth.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GroundStats {
+    pub samples: usize,
+    pub rms_m: f64,
+    pub max_m: f64,
+    /// Time with |error| > [`DIVERGED_M`].
+    pub diverged_s: f64,
+}
+
+/// An estimate this far off counts as diverged.
+pub const DIVERGED_M: f64 = 0.5;
+
+fn ground_stats(errs: &[(f64, f64)]) -> GroundStats {
+    let e: Vec<f64> = errs.iter().map(|x| x.1).collect();
+    let mut diverged = 0.0;
+    for w in errs.windows(2) {
+        if w[1].1.abs() > DIVERGED_M {
+            diverged += w[1].0 - w[0].0;
+        }
+    }
+    GroundStats { samples: e.len(), rms_m: rms(&e), max_m: max_abs(&e), diverged_s: diverged }
+}
+
+/// Paper B's comparison on the same data (after the navigation has calibrated, `from_s`):
+/// the laser alone and the sonar alone (latest raw reading, as the paper plots them), the
+/// paper's own filter (fixed 2 m switch, `fcc_nav::ground_altitude::PaperSwitchFilter`), and
+/// the flight core's fusion (`NavState::ground`), each against the true height above ground.
+pub fn ground_comparison_from(log: &FlightLog, from_s: f64) -> Vec<(&'static str, GroundStats)> {
+    use fcc_nav::ground_altitude::{PaperSwitchFilter, PaperSwitchParams};
+    let (mut laser, mut sonar, mut paper) = (Vec::new(), Vec::new(), Vec::new());
+    let mut pf = PaperSwitchFilter::new(PaperSwitchParams::default());
+    let (mut last_l, mut last_s) = (None, None);
+    for r in log.ranges.iter().filter(|r| r.t_s >= from_s) {
+        if r.laser {
+            last_l = Some(r.range_m);
+        } else {
+            last_s = Some(r.range_m);
+        }
+        if let Some(l) = last_l {
+            laser.push((r.t_s, l as f64 - r.true_agl_m));
+        }
+        if let Some(s) = last_s {
+            sonar.push((r.t_s, s as f64 - r.true_agl_m));
+        }
+        if let (Some(l), Some(s)) = (last_l, last_s) {
+            paper.push((r.t_s, pf.step(l, s) as f64 - r.true_agl_m));
+        }
+    }
+    let ours: Vec<(f64, f64)> = log
+        .samples
+        .iter()
+        .filter(|s| s.t_s >= from_s && s.nav.calibrated)
+        .map(|s| (s.t_s, s.nav.ground.height_m as f64 - s.true_agl_m))
+        .collect();
+    vec![
+        ("laser alone", ground_stats(&laser)),
+        ("sonar alone", ground_stats(&sonar)),
+        ("paper B (fixed 2 m switch)", ground_stats(&paper)),
+        ("ours (gated Kalman fusion)", ground_stats(&ours)),
+    ]
+}
+
+/// [`ground_comparison_from`] after the ground calibration.
+pub fn ground_comparison(log: &FlightLog) -> Vec<(&'static str, GroundStats)> {
+    ground_comparison_from(log, ELEVATOR_SETTLE_S)
 }

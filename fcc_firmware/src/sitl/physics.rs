@@ -95,6 +95,10 @@ pub struct VehicleParams {
     pub propulsion_efficiency: f64,
     /// Avionics power (FCC, Linux CoM, GPS, radios), W.
     pub avionics_power_w: f64,
+    /// Height of the body reference point (centre of mass, where the rangefinders sit) above
+    /// the ground when standing on the landing gear, m. The simulation places the contact plane
+    /// this far above the terrain.
+    pub gear_height_m: f64,
 }
 
 impl Default for VehicleParams {
@@ -118,6 +122,7 @@ impl Default for VehicleParams {
             ground_level_time_constant_s: 0.05,
             propulsion_efficiency: 0.45,
             avionics_power_w: 8.0,
+            gear_height_m: 0.25,
         }
     }
 }

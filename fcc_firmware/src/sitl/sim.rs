@@ -110,7 +110,9 @@ pub struct Sim {
 impl Sim {
     pub fn new(scenario: Scenario) -> Result<Self, String> {
         let seed = scenario.seed;
-        let body = Octorotor::new(scenario.vehicle.clone(), Vector3::zeros(), 0.0);
+        let gear = scenario.vehicle.gear_height_m;
+        let start_down = scenario.terrain.ground_down_at(0.0, 0.0) - gear;
+        let body = Octorotor::new(scenario.vehicle.clone(), Vector3::new(0.0, 0.0, start_down), 0.0);
         let s = &scenario.sensors;
         let board = SimBoard {
             imu: ImuModel::new(s.imu.clone(), seed),
@@ -166,7 +168,15 @@ impl Sim {
             carried,
             t_us: 0,
             ticks: 0,
-            log: FlightLog::default(),
+            log: FlightLog {
+                plan_kind: match &scenario.flight {
+                    FlightPlan::Hover { .. } => "hover",
+                    FlightPlan::Mission { .. } => "mission",
+                    FlightPlan::Elevator { .. } => "elevator",
+                    FlightPlan::Rig { .. } => "rig",
+                },
+                ..Default::default()
+            },
             core_wall_ns: 0,
             scenario,
         })
@@ -237,7 +247,7 @@ impl Sim {
             self.wind_ned = self.wind.step(height, air, dt);
             let sub = dt / PHYSICS_SUBSTEPS as f64;
             let p = self.body.state.pos_ned_m;
-            let ground_down = self.board.terrain.ground_down_at(p.x, p.y);
+            let ground_down = self.board.terrain.ground_down_at(p.x, p.y) - self.body.params.gear_height_m;
             for _ in 0..PHYSICS_SUBSTEPS {
                 self.body.step(&self.motors.0, self.wind_ned, ground_down, sub);
             }
