@@ -1,0 +1,154 @@
+use super::*;
+use fcc_msgs as link;
+
+fn cfg() -> Config {
+    Config::default()
+}
+
+fn st() -> Time {
+    Time { sec: 100, nanosec: 5 }
+}
+
+#[test]
+fn imu_raw_is_flu_without_orientation() {
+    let m = imu_raw(
+        &link::ImuRaw { gyro_frd_radps: [0.1, 0.2, 0.3], accel_frd_mps2: [0.0, 0.0, -9.81] },
+        st(),
+        &cfg(),
+    );
+    assert_eq!(m.orientation_covariance[0], -1.0);
+    assert_eq!(m.header.stamp, st());
+    assert!((m.angular_velocity.y + 0.2).abs() < 1e-6 && (m.angular_velocity.z + 0.3).abs() < 1e-6);
+    assert!((m.linear_acceleration.z - 9.81).abs() < 1e-5);
+}
+
+#[test]
+fn mag_is_tesla() {
+    let m = mag(&link::MagRaw { mag_frd_ut: [50.0, 0.0, 0.0] }, st(), &cfg());
+    assert!((m.magnetic_field.x - 50e-6).abs() < 1e-12);
+}
+
+#[test]
+fn laser_sentinel_is_inf() {
+    let (r, laser) = range(&link::RangeRaw { sensor: link::RangeSensor::Laser, range_m: 99_999.0 }, st(), &cfg());
+    assert!(laser && r.range == f32::INFINITY);
+    let (r, laser) = range(&link::RangeRaw { sensor: link::RangeSensor::Sonar, range_m: 2.0 }, st(), &cfg());
+    assert!(!laser && r.range == 2.0 && r.radiation_type == Range::ULTRASOUND);
+}
+
+#[test]
+fn nav_state_enu() {
+    let m = link::NavState {
+        q_body_to_ned: [1.0, 0.0, 0.0, 0.0],
+        pos_ned_m: [1.0, 2.0, -3.0],
+        vel_ned_mps: [4.0, 0.0, 0.0],
+        ..Default::default()
+    };
+    let (odom, _imu, tf) = nav_state(&m, st(), &cfg());
+    let p = odom.pose.pose.position;
+    assert_eq!((p.x, p.y, p.z), (2.0, 1.0, 3.0));
+    // Facing north, flying north: body forward 4.
+    assert!((odom.twist.twist.linear.x - 4.0).abs() < 1e-6);
+    assert_eq!(odom.header.frame_id, "map");
+    assert_eq!(odom.child_frame_id, "base_link");
+    assert_eq!(tf.transforms[0].transform.translation.z, 3.0);
+}
+
+#[test]
+fn altitude_up_positive() {
+    let (a, g) = altitude(
+        &link::AltitudeFusion { vel_down_mps: -1.5, ground_height_m: 4.0, laser_m: 99_999.0, ..Default::default() },
+        st(),
+        &cfg(),
+    );
+    assert_eq!(a.vertical_speed_mps, 1.5);
+    assert_eq!(a.laser_range_m, f32::INFINITY);
+    assert_eq!(g.range, 4.0);
+}
+
+fn ts(frame: &str, v: [f64; 3], stamp: Time) -> TwistStamped {
+    TwistStamped {
+        header: Header::new(stamp, frame),
+        twist: Twist { linear: Vector3::new(v), angular: Vector3::default() },
+    }
+}
+
+#[test]
+fn setpoints() {
+    let lim = SetpointLimits::default();
+    let now = 1_000_000_000_000;
+    let (sp, _) = setpoint(&ts("map", [1.0, 2.0, 0.5], Time::default()), now, None, &cfg(), &lim).unwrap();
+    assert_eq!(sp.vel_ned_mps, [2.0, 1.0, -0.5]);
+    assert_eq!(sp.ttl_ms, 300);
+    assert!(!sp.has_yaw);
+    let (sp, _) = setpoint(&ts("", [0.0, 1.0, 0.0], Time::default()), now, None, &cfg(), &lim).unwrap();
+    assert_eq!(sp.vel_ned_mps, [1.0, 0.0, 0.0]);
+    // base_link needs a heading.
+    assert_eq!(
+        setpoint(&ts("base_link", [1.0, 0.0, 0.0], Time::default()), now, None, &cfg(), &lim),
+        Err(SetpointReject::NoHeading)
+    );
+    let (sp, _) = setpoint(
+        &ts("base_link", [1.0, 0.0, 0.0], Time::default()),
+        now,
+        Some(std::f64::consts::FRAC_PI_2),
+        &cfg(),
+        &lim,
+    )
+    .unwrap();
+    assert!((sp.vel_ned_mps[1] - 1.0).abs() < 1e-6 && sp.vel_ned_mps[0].abs() < 1e-6);
+    // Refusals.
+    assert_eq!(setpoint(&ts("map", [f64::NAN, 0.0, 0.0], Time::default()), now, None, &cfg(), &lim), Err(SetpointReject::NotFinite));
+    assert!(matches!(setpoint(&ts("map", [0.0, 0.0, 1e6], Time::default()), now, None, &cfg(), &lim), Err(SetpointReject::TooLarge(_))));
+    assert!(matches!(setpoint(&ts("camera", [0.0; 3], Time::default()), now, None, &cfg(), &lim), Err(SetpointReject::UnknownFrame(_))));
+    let old = Time::from_nanos(now - 2_000_000_000);
+    assert!(matches!(setpoint(&ts("map", [0.0; 3], old), now, None, &cfg(), &lim), Err(SetpointReject::Stale { .. })));
+    let future = Time::from_nanos(now + 2_000_000_000);
+    assert!(matches!(setpoint(&ts("map", [0.0; 3], future), now, None, &cfg(), &lim), Err(SetpointReject::Future { .. })));
+    let fresh = Time::from_nanos(now - 100_000_000);
+    assert!(setpoint(&ts("map", [0.0; 3], fresh), now, None, &cfg(), &lim).is_ok());
+}
+
+#[test]
+fn commands() {
+    assert_eq!(arm_command(&Bool { data: true }).command, link::CommandKind::Arm);
+    assert_eq!(arm_command(&Bool { data: false }).command, link::CommandKind::Disarm);
+    let m = |s: &str| mode_command(&StringMsg { data: s.into() }).map(|c| c.command);
+    assert_eq!(m("HOLD"), Some(link::CommandKind::Hold));
+    assert_eq!(m("land"), Some(link::CommandKind::Land));
+    assert_eq!(m(" velocity "), Some(link::CommandKind::Velocity));
+    assert_eq!(m("acro"), None);
+}
+
+/// The state machine: nothing is published before the Hello; a bad schema is fatal.
+#[test]
+fn state_handshake_and_publish() {
+    use crate::state::{ClockSource, Fatal, LinkState, Out};
+    let mut s = LinkState::new(cfg(), SetpointLimits::default(), ClockSource::Sync);
+    let mut enc = link::Encoder::new();
+    let mut buf = [0u8; link::MAX_FRAME_LEN];
+    let mut frame = |m: link::Message, t: u64| {
+        let n = enc.encode(&m, t, &mut buf).unwrap();
+        buf[..n].to_vec()
+    };
+    let imu = frame(link::Message::ImuRaw(link::ImuRaw::default()), 10);
+    assert!(s.on_bytes(&imu, 0).unwrap().is_empty());
+    assert_eq!(s.counters.dropped, 1);
+    let hello = frame(link::Message::Hello(link::Hello::ours([0, 1, 0])), 11);
+    s.on_bytes(&hello, 0).unwrap();
+    let imu = frame(link::Message::ImuRaw(link::ImuRaw::default()), 12);
+    let out = s.on_bytes(&imu, 5_000).unwrap();
+    // Not synced yet: stamped by arrival.
+    assert!(matches!(&out[..], [Out::ImuRaw(m)] if m.header.stamp.to_nanos() == 5_000));
+    // Synced: MCU 1000 µs ↔ Linux 1e9 ns.
+    let pong = link::TimeSyncPong { linux_time_ns: 999_000_000, mcu_rx_time_us: 1000, mcu_tx_time_us: 1000 };
+    s.on_bytes(&frame(link::Message::TimeSyncPong(pong), 1000), 1_001_000_000).unwrap();
+    let out = s.on_bytes(&frame(link::Message::ImuRaw(link::ImuRaw::default()), 2000), 0).unwrap();
+    assert!(matches!(&out[..], [Out::ImuRaw(m)] if m.header.stamp.to_nanos() == 1_001_000_000));
+    // Garbage is counted, not fatal.
+    s.on_bytes(&[1, 2, 3, 0], 0).unwrap();
+    assert_eq!(s.link_totals().resyncs, 1);
+    // Wrong schema → fatal.
+    let bad = frame(link::Message::Hello(link::Hello { protocol_version: link::PROTOCOL_VERSION, schema_hash: 1, firmware_version: [0; 3] }), 0);
+    assert!(matches!(s.on_bytes(&bad, 0), Err(Fatal::Handshake(_))));
+}

@@ -23,6 +23,17 @@ struct Args {
     /// Write the 50 Hz flight log as CSV here.
     #[arg(long)]
     csv: Option<PathBuf>,
+    /// Serve the MCU link on a pseudo-terminal (the bridge opens it like a UART) instead of
+    /// flying the scenario's plan with the in-process mission computer. Prints the device path.
+    #[arg(long)]
+    link_pty: bool,
+    /// With --link-pty: also make this symlink to the pty device (e.g. /tmp/fcc-sitl.tty).
+    #[arg(long, requires = "link_pty")]
+    pty_link: Option<PathBuf>,
+    /// Simulated seconds per wall-clock second; 0 = as fast as possible (lockstep).
+    /// Default: 1 with --link-pty (real time, as a board), 0 otherwise.
+    #[arg(long)]
+    speed: Option<f64>,
 }
 
 fn main() -> ExitCode {
@@ -52,8 +63,40 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let speed = args.speed.unwrap_or(if args.link_pty { 1.0 } else { 0.0 });
+    if !(speed.is_finite() && speed >= 0.0) {
+        eprintln!("fcc-sitl: --speed: must be a finite number ≥ 0 (0 = as fast as possible)");
+        return ExitCode::from(2);
+    }
+    if args.link_pty {
+        let pty = match fcc_firmware::sitl::pty::PtyLink::open(args.pty_link.as_deref()) {
+            Ok(p) => p,
+            Err(e) => {
+                eprintln!("fcc-sitl: cannot open a pseudo-terminal: {e}");
+                return ExitCode::from(1);
+            }
+        };
+        let _ = writeln!(std::io::stdout().lock(), "fcc-sitl: serving the link on {}", pty.slave_path().display());
+        if let Some(l) = pty.symlink() {
+            let _ = writeln!(std::io::stdout().lock(), "fcc-sitl: link symlink {}", l.display());
+        }
+        sim.serve_link(pty, fcc_msgs::StreamRates::DEFAULT);
+    }
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, stop.clone());
+    }
     let wall = Instant::now();
-    sim.run();
+    while !sim.finished() && !stop.load(std::sync::atomic::Ordering::Relaxed) {
+        sim.tick();
+        if speed > 0.0 {
+            let ahead = sim.t_s() / speed - wall.elapsed().as_secs_f64();
+            if ahead > 0.0005 {
+                std::thread::sleep(std::time::Duration::from_secs_f64(ahead));
+            }
+        }
+    }
+    sim.finish();
     let wall_s = wall.elapsed().as_secs_f64();
     let report = format!(
         "scenario {name}: {:.1} s simulated in {:.2} s wall ({:.0}× real time)\n{}",

@@ -5,12 +5,14 @@
 //! - [`wind`]: mean wind + Dryden turbulence (MIL-F-8785C).
 //! - [`sensor_models`]: MPU-9250, AK8963, MS5611, GPS, battery with datasheet noise.
 //! - [`scenario`]: YAML scenario files; [`linux`]: the in-process mission computer.
+//! - [`pty`]: the board's UART as a pseudo-terminal the bridge opens like a serial port.
 //! - [`sim`]: the lockstep loop; [`log`] and [`metrics`]: what a flight leaves and its figures.
 
 pub mod linux;
 pub mod log;
 pub mod metrics;
 pub mod physics;
+pub mod pty;
 pub mod rangefinders;
 pub mod scenario;
 pub mod sensor_models;

@@ -105,6 +105,9 @@ pub struct Sim {
     pub log: FlightLog,
     /// Wall time spent inside the flight core's tick (sensors polled + step), for the benchmark.
     pub core_wall_ns: u128,
+    /// The board's UART served on a pty (`--link-pty`): the Linux side is then a real process
+    /// (bridge + mission node) and the in-process stand-in is off.
+    link: Option<(crate::link::LinkEndpoint, super::pty::PtyLink)>,
 }
 
 impl Sim {
@@ -178,8 +181,19 @@ impl Sim {
                 ..Default::default()
             },
             core_wall_ns: 0,
+            link: None,
             scenario,
         })
+    }
+
+    /// Serve the flight core's link on a pseudo-terminal instead of the in-process Linux side.
+    pub fn serve_link(&mut self, pty: super::pty::PtyLink, rates: fcc_msgs::StreamRates) {
+        self.link = Some((crate::link::LinkEndpoint::new(rates), pty));
+    }
+
+    /// The served link, if any.
+    pub fn link(&self) -> Option<&(crate::link::LinkEndpoint, super::pty::PtyLink)> {
+        self.link.as_ref()
     }
 
     /// 2 ms ticks run so far.
@@ -194,7 +208,7 @@ impl Sim {
     /// Whether the run is over (duration reached, or the plan finished and the vehicle is
     /// disarmed on the ground).
     pub fn finished(&self) -> bool {
-        self.t_s() >= self.scenario.duration_s || self.linux.done()
+        self.t_s() >= self.scenario.duration_s || (self.link.is_none() && self.linux.done())
     }
 
     fn apply_faults(&mut self) -> bool {
@@ -267,12 +281,32 @@ impl Sim {
         self.board.truth.current_a = self.body.electrical_power_w() / 18.5;
 
 
-        // The Linux computer runs at 20 Hz, before the MCU's tick at the same instant.
-        if self.ticks % 25 == 0 && linux_on {
-            self.linux.update(self.t_us, &mut self.core);
-        }
         let t0 = std::time::Instant::now();
-        scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
+        if let Some((ep, pty)) = self.link.as_mut() {
+            // The UART: whatever the Linux side wrote since the last tick (unless the wire is cut).
+            let mut rx = [0u8; 1024];
+            loop {
+                let n = pty.read_available(&mut rx);
+                if n == 0 {
+                    break;
+                }
+                if linux_on {
+                    ep.on_bytes(self.t_us, &rx[..n], &mut self.core);
+                }
+            }
+            let inputs = scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
+            let mut tx = [0u8; 1024];
+            let n = ep.poll_tx(self.t_us, &self.core, &inputs, &mut tx);
+            if linux_on {
+                pty.write_or_drop(&tx[..n]);
+            }
+        } else {
+            // The in-process Linux computer runs at 20 Hz, before the MCU's tick at the same instant.
+            if self.ticks % 25 == 0 && linux_on {
+                self.linux.update(self.t_us, &mut self.core);
+            }
+            scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
+        }
         self.core_wall_ns += t0.elapsed().as_nanos();
         let p = self.body.state.pos_ned_m;
         let agl = self.board.terrain.ground_down_at(p.x, p.y) - p.z;
@@ -317,6 +351,11 @@ impl Sim {
         while !self.finished() {
             self.tick();
         }
+        self.finish()
+    }
+
+    /// Close the log (events of the in-process mission computer) after a run driven by hand.
+    pub fn finish(&mut self) -> &FlightLog {
         self.log.events = self.linux.events().to_vec();
         &self.log
     }
