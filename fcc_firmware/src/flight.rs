@@ -26,6 +26,10 @@ const GROUND_MAX_VAR_M2: f32 = 0.25;
 /// Above the rangefinders' height when standing on the gear, this margin (m) still counts as
 /// touching the ground: touchdown then does not need the thrust to have wound down as far.
 const CONTACT_MARGIN_M: f32 = 0.1;
+/// Deceleration planned for stopping at the geofence, m/s².
+const FENCE_BRAKE_MPS2: f32 = 1.0;
+/// Closer to the fence than this while being held back by it → reported as a geofence event.
+const FENCE_REPORT_M: f32 = 2.0;
 /// Largest velocity component a setpoint may carry before it is refused as absurd.
 const SETPOINT_ABS_LIMIT_MPS: f32 = 50.0;
 
@@ -361,15 +365,21 @@ impl FlightCore {
             }
             Mode::Disarmed => ([0.0; 2], 0.0, nav.euler.yaw_rad),
         };
-        // Geofence: no velocity component that takes the vehicle further outside.
+        // Geofence: the outward velocity is limited so the vehicle can brake to a stop at the
+        // fence (v ≤ √(2·a·d)); outside it, it is pulled back in.
         let r = libm::hypotf(nav.pos_ned_m[0], nav.pos_ned_m[1]);
-        if r > l.fence_radius_m {
+        if r > 1e-3 {
             let out = [nav.pos_ned_m[0] / r, nav.pos_ned_m[1] / r];
             let v_out = v_ne[0] * out[0] + v_ne[1] * out[1];
-            let pull = 0.5 * (r - l.fence_radius_m).min(2.0);
-            let remove = v_out.max(0.0) + pull;
-            v_ne = [v_ne[0] - remove * out[0], v_ne[1] - remove * out[1]];
-            self.failsafe = FailsafeCause::Geofence;
+            let to_fence = l.fence_radius_m - r;
+            let v_out_max = if to_fence > 0.0 { libm::sqrtf(2.0 * FENCE_BRAKE_MPS2 * to_fence) } else { -0.5 * (-to_fence).min(2.0) };
+            if v_out > v_out_max {
+                let remove = v_out - v_out_max;
+                v_ne = [v_ne[0] - remove * out[0], v_ne[1] - remove * out[1]];
+                if to_fence < FENCE_REPORT_M {
+                    self.failsafe = FailsafeCause::Geofence;
+                }
+            }
         }
         if alt - self.takeoff_alt_m > l.fence_alt_m && vz_down < 0.0 {
             vz_down = 0.3;
