@@ -5,8 +5,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# 1. Dependencies (needs the package registries): Rust crates.
+# 1. Dependencies (needs the package registries): Rust crates, and the independent DDS peer
+#    (PyPI cyclonedds, Cyclone DDS) that stands in for a ROS 2 node in the bridge tests.
 cargo fetch --locked
+if [ ! -x .venv-dds/bin/python ] || ! .venv-dds/bin/python -c 'import cyclonedds' 2>/dev/null; then
+  python3 -m venv .venv-dds
+  .venv-dds/bin/pip install -q --disable-pip-version-check cyclonedds
+fi
+export FCC_DDS_PYTHON="$PWD/.venv-dds/bin/python" FCC_REQUIRE_DDS_PEER=1
 
 # 2. Everything that runs, in a private network namespace with loopback only when available.
 netns=""

@@ -102,7 +102,11 @@ fn telemetry_qos(depth: usize) -> QosProfile {
         .history(History::KeepLast { depth })
 }
 
-fn publisher<T: RosMsg>(node: &mut Node, name: &str, qos: &QosProfile) -> Result<Publisher<T>, BridgeError> {
+fn publisher<T: RosMsg>(
+    node: &mut Node,
+    name: &str,
+    qos: &QosProfile,
+) -> Result<Publisher<T>, BridgeError> {
     let topic = node
         .create_topic(&Name::parse(name).map_err(ros_err)?, T::type_name(), qos)
         .map_err(ros_err)?;
@@ -186,7 +190,9 @@ fn subscribe<T: RosMsg + Sync>(
     let topic = node
         .create_topic(&Name::parse(name).map_err(ros_err)?, T::type_name(), &qos)
         .map_err(ros_err)?;
-    let sub = node.create_subscription::<T>(&topic, None).map_err(ros_err)?;
+    let sub = node
+        .create_subscription::<T>(&topic, None)
+        .map_err(ros_err)?;
     let name = name.to_string();
     tokio::spawn(async move {
         let stream = sub.async_stream();
@@ -227,7 +233,12 @@ pub async fn run(opts: Options) -> Result<(), BridgeError> {
     tokio::spawn(node.spinner().map_err(ros_err)?.spin());
     let pubs = Publishers::new(&mut node, opts.clock)?;
     let (tx, mut rx) = mpsc::channel::<Inbound>(64);
-    subscribe::<TwistStamped>(&mut node, "setpoint/velocity", tx.clone(), Inbound::Setpoint)?;
+    subscribe::<TwistStamped>(
+        &mut node,
+        "setpoint/velocity",
+        tx.clone(),
+        Inbound::Setpoint,
+    )?;
     subscribe::<Bool>(&mut node, "cmd/arm", tx.clone(), Inbound::Arm)?;
     subscribe::<StringMsg>(&mut node, "cmd/mode", tx, Inbound::Mode)?;
     tracing::info!(
@@ -235,15 +246,20 @@ pub async fn run(opts: Options) -> Result<(), BridgeError> {
         opts.namespace.trim_end_matches('/'),
         opts.node_name,
         opts.domain_id,
-        if opts.localhost_only { "loopback only" } else { "all interfaces" },
+        if opts.localhost_only {
+            "loopback only"
+        } else {
+            "all interfaces"
+        },
         opts.device,
         opts.baud
     );
 
     let mut st = LinkState::new(opts.cfg.clone(), opts.limits, opts.clock);
-    let _ = pubs
-        .tf_static
-        .publish(convert::static_transforms(Time::from_nanos(now_ns()), &st.cfg));
+    let _ = pubs.tf_static.publish(convert::static_transforms(
+        Time::from_nanos(now_ns()),
+        &st.cfg,
+    ));
     let mut rates = RateMeter::default();
     let mut first = true;
     let mut logged_open_error = false;
@@ -287,16 +303,27 @@ fn drain_inbound(rx: &mut mpsc::Receiver<Inbound>, st: &mut LinkState) {
 fn handle_inbound(m: Inbound, st: &mut LinkState) -> Option<link::Message> {
     match m {
         Inbound::Setpoint(t) => st.on_setpoint(&t, now_ns()),
-        Inbound::Arm(b) => st.on_command(Some(convert::arm_command(&b)), if b.data { "arm" } else { "disarm" }),
+        Inbound::Arm(b) => st.on_command(
+            Some(convert::arm_command(&b)),
+            if b.data { "arm" } else { "disarm" },
+        ),
         Inbound::Mode(s) => st.on_command(convert::mode_command(&s), &s.data),
     }
 }
 
-fn publish_diag(pubs: &Publishers, st: &LinkState, rates: &mut RateMeter, device: &str, connected: bool) {
+fn publish_diag(
+    pubs: &Publishers,
+    st: &LinkState,
+    rates: &mut RateMeter,
+    device: &str,
+    connected: bool,
+) {
     let now = now_ns();
     rates.update(st, now);
     let stamp = Time::from_nanos(st.ros_now_ns(now));
-    let _ = pubs.diagnostics.publish(diag::diagnostics(st, rates, device, connected, stamp));
+    let _ = pubs
+        .diagnostics
+        .publish(diag::diagnostics(st, rates, device, connected, stamp));
 }
 
 /// One connection: returns why it ended (IO), or a fatal handshake error.
@@ -311,7 +338,10 @@ async fn session(
     let (mut rd, mut wr) = tokio::io::split(port);
     // A 0x00 first flushes any half frame at the MCU, then ask for its Hello.
     let mut hello = vec![0u8];
-    hello.extend(st.encode(&link::Message::HelloRequest(link::HelloRequest::ours()), now_ns()));
+    hello.extend(st.encode(
+        &link::Message::HelloRequest(link::HelloRequest::ours()),
+        now_ns(),
+    ));
     if let Err(e) = wr.write_all(&hello).await {
         return Ok(format!("write: {e}"));
     }

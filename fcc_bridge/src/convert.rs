@@ -448,8 +448,12 @@ pub enum SetpointReject {
     UnknownFrame(String),
     /// `base_link` setpoint but no navigation state yet (heading unknown).
     NoHeading,
-    Stale { age_ms: i64 },
-    Future { ahead_ms: i64 },
+    Stale {
+        age_ms: i64,
+    },
+    Future {
+        ahead_ms: i64,
+    },
 }
 
 impl std::fmt::Display for SetpointReject {

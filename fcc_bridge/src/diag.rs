@@ -29,7 +29,12 @@ impl RateMeter {
                 .counters
                 .rx_by_type
                 .iter()
-                .map(|(k, v)| (*k, (v - self.last_types.get(k).copied().unwrap_or(0)) as f64 / dt))
+                .map(|(k, v)| {
+                    (
+                        *k,
+                        (v - self.last_types.get(k).copied().unwrap_or(0)) as f64 / dt,
+                    )
+                })
                 .collect();
             self.bytes_per_s = (t.rx_bytes - self.last_bytes) as f64 / dt;
             self.frames_per_s = (t.rx_frames - self.last_frames) as f64 / dt;
@@ -51,19 +56,37 @@ fn kv(key: &str, value: impl ToString) -> KeyValue {
 }
 
 /// Build the diagnostics array.
-pub fn diagnostics(st: &LinkState, rates: &RateMeter, device: &str, connected: bool, stamp: Time) -> DiagnosticArray {
+pub fn diagnostics(
+    st: &LinkState,
+    rates: &RateMeter,
+    device: &str,
+    connected: bool,
+    stamp: Time,
+) -> DiagnosticArray {
     let t = st.link_totals();
     let c = &st.counters;
     let hw = device.to_string();
 
     let (level, message) = if !connected {
-        (DiagnosticStatus::ERROR, "serial device not open".to_string())
+        (
+            DiagnosticStatus::ERROR,
+            "serial device not open".to_string(),
+        )
     } else if st.handshake == Handshake::Waiting {
-        (DiagnosticStatus::WARN, "waiting for the MCU's Hello".to_string())
+        (
+            DiagnosticStatus::WARN,
+            "waiting for the MCU's Hello".to_string(),
+        )
     } else if rates.frames_per_s < 1.0 {
-        (DiagnosticStatus::STALE, "no frames from the MCU".to_string())
+        (
+            DiagnosticStatus::STALE,
+            "no frames from the MCU".to_string(),
+        )
     } else if rates.crc_delta > 0 {
-        (DiagnosticStatus::WARN, format!("{} CRC errors in the last interval", rates.crc_delta))
+        (
+            DiagnosticStatus::WARN,
+            format!("{} CRC errors in the last interval", rates.crc_delta),
+        )
     } else {
         (DiagnosticStatus::OK, "ok".to_string())
     };
@@ -74,7 +97,10 @@ pub fn diagnostics(st: &LinkState, rates: &RateMeter, device: &str, connected: b
             "handshake",
             match st.handshake {
                 Handshake::Waiting => "waiting".to_string(),
-                Handshake::Ok { firmware } => format!("ok (firmware {}.{}.{})", firmware[0], firmware[1], firmware[2]),
+                Handshake::Ok { firmware } => format!(
+                    "ok (firmware {}.{}.{})",
+                    firmware[0], firmware[1], firmware[2]
+                ),
             },
         ),
         kv("protocol_version", fcc_msgs::PROTOCOL_VERSION),
@@ -110,17 +136,29 @@ pub fn diagnostics(st: &LinkState, rates: &RateMeter, device: &str, connected: b
 
     let ts = st.timesync.best();
     let sync = DiagnosticStatus {
-        level: if ts.is_some() || st.clock == crate::state::ClockSource::Mcu { DiagnosticStatus::OK } else { DiagnosticStatus::WARN },
+        level: if ts.is_some() || st.clock == crate::state::ClockSource::Mcu {
+            DiagnosticStatus::OK
+        } else {
+            DiagnosticStatus::WARN
+        },
         name: "fcc_bridge: time sync".into(),
         message: match (st.clock, ts) {
-            (crate::state::ClockSource::Mcu, _) => "MCU clock used as ROS time (/clock published)".into(),
+            (crate::state::ClockSource::Mcu, _) => {
+                "MCU clock used as ROS time (/clock published)".into()
+            }
             (_, Some(_)) => "synced".into(),
             (_, None) => "not synced: stamping by arrival".into(),
         },
         hardware_id: hw.clone(),
         values: vec![
-            kv("offset_ns", ts.map_or("".into(), |s| s.offset_ns.to_string())),
-            kv("rtt_us", ts.map_or("".into(), |s| (s.rtt_ns / 1000).to_string())),
+            kv(
+                "offset_ns",
+                ts.map_or("".into(), |s| s.offset_ns.to_string()),
+            ),
+            kv(
+                "rtt_us",
+                ts.map_or("".into(), |s| (s.rtt_ns / 1000).to_string()),
+            ),
             kv("pongs_accepted", st.timesync.accepted),
             kv("pongs_rejected", st.timesync.rejected),
             kv("stamped_by_arrival", c.stamped_by_arrival),
@@ -129,7 +167,10 @@ pub fn diagnostics(st: &LinkState, rates: &RateMeter, device: &str, connected: b
     let sp = DiagnosticStatus {
         level: DiagnosticStatus::OK,
         name: "fcc_bridge: setpoints".into(),
-        message: format!("{} forwarded, {} refused", c.setpoints_forwarded, c.setpoint_rejects),
+        message: format!(
+            "{} forwarded, {} refused",
+            c.setpoints_forwarded, c.setpoint_rejects
+        ),
         hardware_id: hw.clone(),
         values: vec![
             kv("setpoints_forwarded", c.setpoints_forwarded),
@@ -138,8 +179,14 @@ pub fn diagnostics(st: &LinkState, rates: &RateMeter, device: &str, connected: b
             kv("yaw_rate_ignored", c.yaw_rate_ignored),
             kv("commands_forwarded", c.commands_forwarded),
             kv("command_rejects", c.command_rejects),
-            kv("mcu_setpoint_rejects", st.mcu_status.map_or(0, |m| m.setpoint_rejects)),
-            kv("mcu_command_rejects", st.mcu_status.map_or(0, |m| m.command_rejects)),
+            kv(
+                "mcu_setpoint_rejects",
+                st.mcu_status.map_or(0, |m| m.setpoint_rejects),
+            ),
+            kv(
+                "mcu_command_rejects",
+                st.mcu_status.map_or(0, |m| m.command_rejects),
+            ),
         ],
     };
     let mut status = vec![
@@ -157,7 +204,11 @@ pub fn diagnostics(st: &LinkState, rates: &RateMeter, device: &str, connected: b
         let (_, mode) = crate::convert::mode_code(m.mode);
         let (fs, fsn) = crate::convert::failsafe_code(m.failsafe);
         status.push(DiagnosticStatus {
-            level: if fs == 0 { DiagnosticStatus::OK } else { DiagnosticStatus::WARN },
+            level: if fs == 0 {
+                DiagnosticStatus::OK
+            } else {
+                DiagnosticStatus::WARN
+            },
             name: "fcc: vehicle".into(),
             message: format!("{mode}, {}", if m.armed { "armed" } else { "disarmed" }),
             hardware_id: hw,

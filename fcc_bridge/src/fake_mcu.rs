@@ -206,7 +206,9 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                                     }
                                     link::CommandKind::Hold => mode = link::FlightMode::Hold,
                                     link::CommandKind::Land => mode = link::FlightMode::Land,
-                                    link::CommandKind::Velocity => mode = link::FlightMode::Velocity,
+                                    link::CommandKind::Velocity => {
+                                        mode = link::FlightMode::Velocity
+                                    }
                                 }
                                 push(
                                     &link::Message::CommandAck(link::CommandAck {
@@ -218,7 +220,11 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                                     &mut out,
                                 );
                                 if let Some(l) = log.as_mut() {
-                                    writeln!(l, "{{\"t_us\":{t},\"msg\":\"Command\",\"command\":\"{:?}\"}}", c.command)?;
+                                    writeln!(
+                                        l,
+                                        "{{\"t_us\":{t},\"msg\":\"Command\",\"command\":\"{:?}\"}}",
+                                        c.command
+                                    )?;
                                     l.flush()?;
                                 }
                             }
@@ -261,9 +267,19 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
             push(&link::Message::NavState(m(nav)), t, &mut enc, &mut out);
         }
         if every(20) {
-            push(&link::Message::MagRaw(link::MagRaw { mag_frd_ut: s.mag_frd_ut }), t, &mut enc, &mut out);
             push(
-                &link::Message::BaroRaw(link::BaroRaw { pressure_pa: s.pressure_pa, temperature_c: 21.0 }),
+                &link::Message::MagRaw(link::MagRaw {
+                    mag_frd_ut: s.mag_frd_ut,
+                }),
+                t,
+                &mut enc,
+                &mut out,
+            );
+            push(
+                &link::Message::BaroRaw(link::BaroRaw {
+                    pressure_pa: s.pressure_pa,
+                    temperature_c: 21.0,
+                }),
                 t,
                 &mut enc,
                 &mut out,
@@ -302,13 +318,19 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
             laser_toggle = !laser_toggle;
             let laser = if laser_toggle { s.laser_m } else { 99_999.0 };
             push(
-                &link::Message::RangeRaw(link::RangeRaw { sensor: link::RangeSensor::Laser, range_m: laser }),
+                &link::Message::RangeRaw(link::RangeRaw {
+                    sensor: link::RangeSensor::Laser,
+                    range_m: laser,
+                }),
                 t,
                 &mut enc,
                 &mut out,
             );
             push(
-                &link::Message::RangeRaw(link::RangeRaw { sensor: link::RangeSensor::Sonar, range_m: s.sonar_m }),
+                &link::Message::RangeRaw(link::RangeRaw {
+                    sensor: link::RangeSensor::Sonar,
+                    range_m: s.sonar_m,
+                }),
                 t,
                 &mut enc,
                 &mut out,
@@ -331,7 +353,10 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
         }
         if every(5) {
             push(
-                &link::Message::Battery(link::Battery { voltage_v: s.voltage_v, current_a: s.current_a }),
+                &link::Message::Battery(link::Battery {
+                    voltage_v: s.voltage_v,
+                    current_a: s.current_a,
+                }),
                 t,
                 &mut enc,
                 &mut out,

@@ -184,7 +184,12 @@ mod tests {
 
     #[test]
     fn constant_quaternions_match_the_vector_maps() {
-        for v in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.3, -2.0, 5.0]] {
+        for v in [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.3, -2.0, 5.0],
+        ] {
             assert!(close(&quat_rotate(Q_NED_TO_ENU, v), &ned_to_enu(v), EPS));
             assert!(close(&quat_rotate(Q_FLU_TO_FRD, v), &flu_to_frd(v), EPS));
         }
@@ -196,9 +201,21 @@ mod tests {
         let s = FRAC_1_SQRT_2;
         assert!(close(&q, &[s, 0.0, 0.0, s], EPS), "{q:?}");
         // Body forward (FLU x) points north = ENU +y; body left points west = ENU −x.
-        assert!(close(&quat_rotate(q, [1.0, 0.0, 0.0]), &[0.0, 1.0, 0.0], EPS));
-        assert!(close(&quat_rotate(q, [0.0, 1.0, 0.0]), &[-1.0, 0.0, 0.0], EPS));
-        assert!(close(&quat_rotate(q, [0.0, 0.0, 1.0]), &[0.0, 0.0, 1.0], EPS));
+        assert!(close(
+            &quat_rotate(q, [1.0, 0.0, 0.0]),
+            &[0.0, 1.0, 0.0],
+            EPS
+        ));
+        assert!(close(
+            &quat_rotate(q, [0.0, 1.0, 0.0]),
+            &[-1.0, 0.0, 0.0],
+            EPS
+        ));
+        assert!(close(
+            &quat_rotate(q, [0.0, 0.0, 1.0]),
+            &[0.0, 0.0, 1.0],
+            EPS
+        ));
     }
 
     #[test]
@@ -220,7 +237,12 @@ mod tests {
         ] {
             let q_ned = euler_ned(r, p, y);
             let q_enu = q_frd_ned_to_q_flu_enu(q_ned);
-            for v in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.2, -0.7, 1.5]] {
+            for v in [
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [0.2, -0.7, 1.5],
+            ] {
                 let a = quat_rotate(q_enu, v);
                 let b = ned_to_enu(quat_rotate(q_ned, flu_to_frd(v)));
                 assert!(close(&a, &b, 1e-9), "rpy {r} {p} {y}: {a:?} vs {b:?}");

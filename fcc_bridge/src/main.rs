@@ -43,7 +43,11 @@ fn options() -> Result<Options, String> {
         ..Options::default()
     };
     if let Some(ns) = ros.namespace {
-        o.namespace = if ns.starts_with('/') { ns } else { format!("/{ns}") };
+        o.namespace = if ns.starts_with('/') {
+            ns
+        } else {
+            format!("/{ns}")
+        };
     }
     if let Some(n) = ros.node_name {
         o.node_name = n;
@@ -61,7 +65,10 @@ fn options() -> Result<Options, String> {
     )?;
     let num = |k: &str| -> Result<Option<f64>, String> {
         p.get(k)
-            .map(|v| v.parse::<f64>().map_err(|_| format!("parameter {k}: '{v}' is not a number")))
+            .map(|v| {
+                v.parse::<f64>()
+                    .map_err(|_| format!("parameter {k}: '{v}' is not a number"))
+            })
             .transpose()
     };
     if let Some(v) = num("ttl_ms")? {
@@ -110,9 +117,22 @@ fn options() -> Result<Options, String> {
         }
     }
     let known = [
-        "localhost_only", "ttl_ms", "max_speed_mps", "max_stamp_age_ms", "max_stamp_future_ms",
-        "ping_period_ms", "clock_source", "use_sim_time", "map_frame", "base_frame", "imu_frame",
-        "mag_frame", "baro_frame", "gps_frame", "laser_frame", "sonar_frame",
+        "localhost_only",
+        "ttl_ms",
+        "max_speed_mps",
+        "max_stamp_age_ms",
+        "max_stamp_future_ms",
+        "ping_period_ms",
+        "clock_source",
+        "use_sim_time",
+        "map_frame",
+        "base_frame",
+        "imu_frame",
+        "mag_frame",
+        "baro_frame",
+        "gps_frame",
+        "laser_frame",
+        "sonar_frame",
     ];
     for k in p.keys() {
         if !known.contains(&k.as_str()) {
@@ -144,7 +164,6 @@ fn main() -> ExitCode {
             _ = tokio::signal::ctrl_c() => Ok(()),
         }
     });
-    // Do not wait for background DDS threads.
     let code = match r {
         Ok(()) => 0,
         Err(BridgeError::Handshake(e)) => {
@@ -156,6 +175,7 @@ fn main() -> ExitCode {
             1
         }
     };
-    rt.shutdown_timeout(Duration::from_millis(200));
-    ExitCode::from(code)
+    // Exit without tearing down DDS entity by entity: rustdds logs errors for every entity
+    // dropped after its participant; peers see the participant's lease expire instead.
+    std::process::exit(code as i32)
 }

@@ -59,7 +59,9 @@ pub fn split_ros_args(args: &[String]) -> Result<(Vec<String>, RosArgs), String>
             "--log-level" => {
                 i += 1;
             }
-            "--enable-rosout-logs" | "--disable-rosout-logs" | "--enable-stdout-logs"
+            "--enable-rosout-logs"
+            | "--disable-rosout-logs"
+            | "--enable-stdout-logs"
             | "--disable-stdout-logs" => {}
             other => return Err(format!("unsupported ROS argument '{other}'")),
         }
@@ -122,11 +124,25 @@ mod tests {
     #[test]
     fn ros_args() {
         let (p, r) = split_ros_args(&s(&[
-            "fcc-bridge", "--device", "/dev/pts/3", "--ros-args", "-r", "__ns:=/uav1", "-p",
-            "ttl_ms:=500", "-r", "__node:=b", "--", "--baud", "115200",
+            "fcc-bridge",
+            "--device",
+            "/dev/pts/3",
+            "--ros-args",
+            "-r",
+            "__ns:=/uav1",
+            "-p",
+            "ttl_ms:=500",
+            "-r",
+            "__node:=b",
+            "--",
+            "--baud",
+            "115200",
         ]))
         .unwrap();
-        assert_eq!(p, s(&["fcc-bridge", "--device", "/dev/pts/3", "--baud", "115200"]));
+        assert_eq!(
+            p,
+            s(&["fcc-bridge", "--device", "/dev/pts/3", "--baud", "115200"])
+        );
         assert_eq!(r.namespace.as_deref(), Some("/uav1"));
         assert_eq!(r.node_name.as_deref(), Some("b"));
         assert_eq!(r.params["ttl_ms"], "500");

@@ -174,9 +174,7 @@ impl LinkState {
     pub fn ros_now_ns(&self, now_ns: i64) -> i64 {
         match self.clock {
             ClockSource::Sync => now_ns,
-            ClockSource::Mcu => self
-                .last_mcu_us
-                .map_or(now_ns, |t| t as i64 * 1000),
+            ClockSource::Mcu => self.last_mcu_us.map_or(now_ns, |t| t as i64 * 1000),
         }
     }
 
@@ -196,8 +194,17 @@ impl LinkState {
         Ok(out)
     }
 
-    pub fn on_frame(&mut self, f: &link::Frame, now_ns: i64, out: &mut Vec<Out>) -> Result<(), Fatal> {
-        *self.counters.rx_by_type.entry(f.message.name()).or_default() += 1;
+    pub fn on_frame(
+        &mut self,
+        f: &link::Frame,
+        now_ns: i64,
+        out: &mut Vec<Out>,
+    ) -> Result<(), Fatal> {
+        *self
+            .counters
+            .rx_by_type
+            .entry(f.message.name())
+            .or_default() += 1;
         if let link::Message::Hello(h) = &f.message {
             h.check().map_err(Fatal::Handshake)?;
             if self.handshake == Handshake::Waiting {
@@ -215,7 +222,9 @@ impl LinkState {
             };
             return Ok(());
         }
-        if self.handshake == Handshake::Waiting || f.message.direction() != link::Direction::McuToLinux {
+        if self.handshake == Handshake::Waiting
+            || f.message.direction() != link::Direction::McuToLinux
+        {
             self.counters.dropped += 1;
             return Ok(());
         }
@@ -226,31 +235,47 @@ impl LinkState {
         match f.message {
             link::Message::TimeSyncPong(p) => {
                 if let Some(s) = self.timesync.add_pong(&p, now_ns) {
-                    tracing::debug!("time sync: offset {} ns, rtt {} µs", s.offset_ns, s.rtt_ns / 1000);
+                    tracing::debug!(
+                        "time sync: offset {} ns, rtt {} µs",
+                        s.offset_ns,
+                        s.rtt_ns / 1000
+                    );
                 }
             }
             link::Message::CommandAck(a) => {
                 let key = format!("{:?}:{}", a.command, convert::reject_name(a.result));
                 *self.counters.command_acks.entry(key).or_default() += 1;
                 if a.result != link::CommandResult::Accepted {
-                    tracing::warn!("MCU refused {:?}: {}", a.command, convert::reject_name(a.result));
+                    tracing::warn!(
+                        "MCU refused {:?}: {}",
+                        a.command,
+                        convert::reject_name(a.result)
+                    );
                 }
             }
             _ => {
                 let st = Time::from_nanos(self.stamp_ns(t_us, now_ns));
                 let cfg = &self.cfg;
                 match f.message {
-                    link::Message::ImuRaw(m) => out.push(Out::ImuRaw(convert::imu_raw(&m, st, cfg))),
+                    link::Message::ImuRaw(m) => {
+                        out.push(Out::ImuRaw(convert::imu_raw(&m, st, cfg)))
+                    }
                     link::Message::MagRaw(m) => out.push(Out::Mag(convert::mag(&m, st, cfg))),
                     link::Message::BaroRaw(m) => out.push(Out::Baro(convert::baro(&m, st, cfg))),
-                    link::Message::GpsRaw(m) => out.push(Out::GpsFix(convert::gps_fix(&m, st, cfg))),
+                    link::Message::GpsRaw(m) => {
+                        out.push(Out::GpsFix(convert::gps_fix(&m, st, cfg)))
+                    }
                     link::Message::RangeRaw(m) => {
                         let (r, laser) = convert::range(&m, st, cfg);
                         out.push(if laser { Out::Laser(r) } else { Out::Sonar(r) });
                     }
-                    link::Message::Battery(m) => out.push(Out::Battery(convert::battery(&m, st, cfg))),
+                    link::Message::Battery(m) => {
+                        out.push(Out::Battery(convert::battery(&m, st, cfg)))
+                    }
                     link::Message::NavState(m) => {
-                        self.yaw_ned = Some(crate::frames::yaw_ned(crate::frames::quat_f64(m.q_body_to_ned)));
+                        self.yaw_ned = Some(crate::frames::yaw_ned(crate::frames::quat_f64(
+                            m.q_body_to_ned,
+                        )));
                         let (odom, imu, tf) = convert::nav_state(&m, st, cfg);
                         out.push(Out::Odom(odom));
                         out.push(Out::StateImu(imu));

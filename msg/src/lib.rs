@@ -56,6 +56,8 @@ pub mod messages;
 pub mod rates;
 
 #[cfg(test)]
+mod fuzz;
+#[cfg(test)]
 mod tests;
 
 pub use frame::{

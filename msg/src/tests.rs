@@ -8,7 +8,7 @@ use std::vec;
 use std::vec::Vec;
 
 /// One representative value of every message, in id order.
-fn samples() -> Vec<Message> {
+pub(crate) fn samples() -> Vec<Message> {
     let counters = LinkCounters {
         rx_bytes: 123_456,
         rx_frames: 4_321,
@@ -115,7 +115,7 @@ fn samples() -> Vec<Message> {
     ]
 }
 
-fn enc(msg: &Message, seq: u16, t_us: u64) -> Vec<u8> {
+pub(crate) fn enc(msg: &Message, seq: u16, t_us: u64) -> Vec<u8> {
     let mut buf = [0u8; MAX_FRAME_LEN];
     let n = encode(msg, seq, t_us, &mut buf).unwrap();
     buf[..n].to_vec()

@@ -18,7 +18,7 @@ fi
 if ip -o link show | awk -F': ' '{print $2}' | grep -qv '^lo$'; then
   echo "run_e2e.sh: not in a loopback-only namespace; refusing" >&2; exit 3
 fi
-bin="$root/target/release"
+bin="${FCC_BIN_DIR:-$root/target/release}"
 tmp="$(mktemp -d)"
 trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$tmp"' EXIT
 "$bin/fcc-fake-mcu" --duration 40 --log "$tmp/mcu.jsonl" > "$tmp/fake.out" 2> "$tmp/fake.err" &

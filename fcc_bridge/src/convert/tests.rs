@@ -6,13 +6,19 @@ fn cfg() -> Config {
 }
 
 fn st() -> Time {
-    Time { sec: 100, nanosec: 5 }
+    Time {
+        sec: 100,
+        nanosec: 5,
+    }
 }
 
 #[test]
 fn imu_raw_is_flu_without_orientation() {
     let m = imu_raw(
-        &link::ImuRaw { gyro_frd_radps: [0.1, 0.2, 0.3], accel_frd_mps2: [0.0, 0.0, -9.81] },
+        &link::ImuRaw {
+            gyro_frd_radps: [0.1, 0.2, 0.3],
+            accel_frd_mps2: [0.0, 0.0, -9.81],
+        },
         st(),
         &cfg(),
     );
@@ -24,15 +30,35 @@ fn imu_raw_is_flu_without_orientation() {
 
 #[test]
 fn mag_is_tesla() {
-    let m = mag(&link::MagRaw { mag_frd_ut: [50.0, 0.0, 0.0] }, st(), &cfg());
+    let m = mag(
+        &link::MagRaw {
+            mag_frd_ut: [50.0, 0.0, 0.0],
+        },
+        st(),
+        &cfg(),
+    );
     assert!((m.magnetic_field.x - 50e-6).abs() < 1e-12);
 }
 
 #[test]
 fn laser_sentinel_is_inf() {
-    let (r, laser) = range(&link::RangeRaw { sensor: link::RangeSensor::Laser, range_m: 99_999.0 }, st(), &cfg());
+    let (r, laser) = range(
+        &link::RangeRaw {
+            sensor: link::RangeSensor::Laser,
+            range_m: 99_999.0,
+        },
+        st(),
+        &cfg(),
+    );
     assert!(laser && r.range == f32::INFINITY);
-    let (r, laser) = range(&link::RangeRaw { sensor: link::RangeSensor::Sonar, range_m: 2.0 }, st(), &cfg());
+    let (r, laser) = range(
+        &link::RangeRaw {
+            sensor: link::RangeSensor::Sonar,
+            range_m: 2.0,
+        },
+        st(),
+        &cfg(),
+    );
     assert!(!laser && r.range == 2.0 && r.radiation_type == Range::ULTRASOUND);
 }
 
@@ -57,7 +83,12 @@ fn nav_state_enu() {
 #[test]
 fn altitude_up_positive() {
     let (a, g) = altitude(
-        &link::AltitudeFusion { vel_down_mps: -1.5, ground_height_m: 4.0, laser_m: 99_999.0, ..Default::default() },
+        &link::AltitudeFusion {
+            vel_down_mps: -1.5,
+            ground_height_m: 4.0,
+            laser_m: 99_999.0,
+            ..Default::default()
+        },
         st(),
         &cfg(),
     );
@@ -69,7 +100,10 @@ fn altitude_up_positive() {
 fn ts(frame: &str, v: [f64; 3], stamp: Time) -> TwistStamped {
     TwistStamped {
         header: Header::new(stamp, frame),
-        twist: Twist { linear: Vector3::new(v), angular: Vector3::default() },
+        twist: Twist {
+            linear: Vector3::new(v),
+            angular: Vector3::default(),
+        },
     }
 }
 
@@ -77,15 +111,35 @@ fn ts(frame: &str, v: [f64; 3], stamp: Time) -> TwistStamped {
 fn setpoints() {
     let lim = SetpointLimits::default();
     let now = 1_000_000_000_000;
-    let (sp, _) = setpoint(&ts("map", [1.0, 2.0, 0.5], Time::default()), now, None, &cfg(), &lim).unwrap();
+    let (sp, _) = setpoint(
+        &ts("map", [1.0, 2.0, 0.5], Time::default()),
+        now,
+        None,
+        &cfg(),
+        &lim,
+    )
+    .unwrap();
     assert_eq!(sp.vel_ned_mps, [2.0, 1.0, -0.5]);
     assert_eq!(sp.ttl_ms, 300);
     assert!(!sp.has_yaw);
-    let (sp, _) = setpoint(&ts("", [0.0, 1.0, 0.0], Time::default()), now, None, &cfg(), &lim).unwrap();
+    let (sp, _) = setpoint(
+        &ts("", [0.0, 1.0, 0.0], Time::default()),
+        now,
+        None,
+        &cfg(),
+        &lim,
+    )
+    .unwrap();
     assert_eq!(sp.vel_ned_mps, [1.0, 0.0, 0.0]);
     // base_link needs a heading.
     assert_eq!(
-        setpoint(&ts("base_link", [1.0, 0.0, 0.0], Time::default()), now, None, &cfg(), &lim),
+        setpoint(
+            &ts("base_link", [1.0, 0.0, 0.0], Time::default()),
+            now,
+            None,
+            &cfg(),
+            &lim
+        ),
         Err(SetpointReject::NoHeading)
     );
     let (sp, _) = setpoint(
@@ -98,21 +152,60 @@ fn setpoints() {
     .unwrap();
     assert!((sp.vel_ned_mps[1] - 1.0).abs() < 1e-6 && sp.vel_ned_mps[0].abs() < 1e-6);
     // Refusals.
-    assert_eq!(setpoint(&ts("map", [f64::NAN, 0.0, 0.0], Time::default()), now, None, &cfg(), &lim), Err(SetpointReject::NotFinite));
-    assert!(matches!(setpoint(&ts("map", [0.0, 0.0, 1e6], Time::default()), now, None, &cfg(), &lim), Err(SetpointReject::TooLarge(_))));
-    assert!(matches!(setpoint(&ts("camera", [0.0; 3], Time::default()), now, None, &cfg(), &lim), Err(SetpointReject::UnknownFrame(_))));
+    assert_eq!(
+        setpoint(
+            &ts("map", [f64::NAN, 0.0, 0.0], Time::default()),
+            now,
+            None,
+            &cfg(),
+            &lim
+        ),
+        Err(SetpointReject::NotFinite)
+    );
+    assert!(matches!(
+        setpoint(
+            &ts("map", [0.0, 0.0, 1e6], Time::default()),
+            now,
+            None,
+            &cfg(),
+            &lim
+        ),
+        Err(SetpointReject::TooLarge(_))
+    ));
+    assert!(matches!(
+        setpoint(
+            &ts("camera", [0.0; 3], Time::default()),
+            now,
+            None,
+            &cfg(),
+            &lim
+        ),
+        Err(SetpointReject::UnknownFrame(_))
+    ));
     let old = Time::from_nanos(now - 2_000_000_000);
-    assert!(matches!(setpoint(&ts("map", [0.0; 3], old), now, None, &cfg(), &lim), Err(SetpointReject::Stale { .. })));
+    assert!(matches!(
+        setpoint(&ts("map", [0.0; 3], old), now, None, &cfg(), &lim),
+        Err(SetpointReject::Stale { .. })
+    ));
     let future = Time::from_nanos(now + 2_000_000_000);
-    assert!(matches!(setpoint(&ts("map", [0.0; 3], future), now, None, &cfg(), &lim), Err(SetpointReject::Future { .. })));
+    assert!(matches!(
+        setpoint(&ts("map", [0.0; 3], future), now, None, &cfg(), &lim),
+        Err(SetpointReject::Future { .. })
+    ));
     let fresh = Time::from_nanos(now - 100_000_000);
     assert!(setpoint(&ts("map", [0.0; 3], fresh), now, None, &cfg(), &lim).is_ok());
 }
 
 #[test]
 fn commands() {
-    assert_eq!(arm_command(&Bool { data: true }).command, link::CommandKind::Arm);
-    assert_eq!(arm_command(&Bool { data: false }).command, link::CommandKind::Disarm);
+    assert_eq!(
+        arm_command(&Bool { data: true }).command,
+        link::CommandKind::Arm
+    );
+    assert_eq!(
+        arm_command(&Bool { data: false }).command,
+        link::CommandKind::Disarm
+    );
     let m = |s: &str| mode_command(&StringMsg { data: s.into() }).map(|c| c.command);
     assert_eq!(m("HOLD"), Some(link::CommandKind::Hold));
     assert_eq!(m("land"), Some(link::CommandKind::Land));
@@ -141,14 +234,34 @@ fn state_handshake_and_publish() {
     // Not synced yet: stamped by arrival.
     assert!(matches!(&out[..], [Out::ImuRaw(m)] if m.header.stamp.to_nanos() == 5_000));
     // Synced: MCU 1000 µs ↔ Linux 1e9 ns.
-    let pong = link::TimeSyncPong { linux_time_ns: 999_000_000, mcu_rx_time_us: 1000, mcu_tx_time_us: 1000 };
-    s.on_bytes(&frame(link::Message::TimeSyncPong(pong), 1000), 1_001_000_000).unwrap();
-    let out = s.on_bytes(&frame(link::Message::ImuRaw(link::ImuRaw::default()), 2000), 0).unwrap();
+    let pong = link::TimeSyncPong {
+        linux_time_ns: 999_000_000,
+        mcu_rx_time_us: 1000,
+        mcu_tx_time_us: 1000,
+    };
+    s.on_bytes(
+        &frame(link::Message::TimeSyncPong(pong), 1000),
+        1_001_000_000,
+    )
+    .unwrap();
+    let out = s
+        .on_bytes(
+            &frame(link::Message::ImuRaw(link::ImuRaw::default()), 2000),
+            0,
+        )
+        .unwrap();
     assert!(matches!(&out[..], [Out::ImuRaw(m)] if m.header.stamp.to_nanos() == 1_001_000_000));
     // Garbage is counted, not fatal.
     s.on_bytes(&[1, 2, 3, 0], 0).unwrap();
     assert_eq!(s.link_totals().resyncs, 1);
     // Wrong schema → fatal.
-    let bad = frame(link::Message::Hello(link::Hello { protocol_version: link::PROTOCOL_VERSION, schema_hash: 1, firmware_version: [0; 3] }), 0);
+    let bad = frame(
+        link::Message::Hello(link::Hello {
+            protocol_version: link::PROTOCOL_VERSION,
+            schema_hash: 1,
+            firmware_version: [0; 3],
+        }),
+        0,
+    );
     assert!(matches!(s.on_bytes(&bad, 0), Err(Fatal::Handshake(_))));
 }

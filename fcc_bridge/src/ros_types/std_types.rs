@@ -14,7 +14,12 @@ pub struct Time {
     pub sec: i32,
     pub nanosec: u32,
 }
-ros_msg!(Time, "builtin_interfaces", "Time", "int32 sec\nuint32 nanosec\n");
+ros_msg!(
+    Time,
+    "builtin_interfaces",
+    "Time",
+    "int32 sec\nuint32 nanosec\n"
+);
 
 impl Time {
     /// From nanoseconds (negative values clamp to 0; beyond 2038 saturates).

@@ -2,9 +2,15 @@ use super::*;
 
 #[test]
 fn type_names() {
-    assert_eq!(Imu::type_name().dds_msg_type(), "sensor_msgs::msg::dds_::Imu_");
+    assert_eq!(
+        Imu::type_name().dds_msg_type(),
+        "sensor_msgs::msg::dds_::Imu_"
+    );
     assert_eq!(Altitude::schema_name(), "fcc_msgs/msg/Altitude");
-    assert_eq!(StringMsg::type_name().dds_msg_type(), "std_msgs::msg::dds_::String_");
+    assert_eq!(
+        StringMsg::type_name().dds_msg_type(),
+        "std_msgs::msg::dds_::String_"
+    );
 }
 
 #[test]
@@ -12,10 +18,19 @@ fn full_definition_nests_once_depth_first() {
     let d = full_definition::<Imu>();
     assert!(d.starts_with(Imu::DEFINITION));
     let sep = format!("\n{}\nMSG: ", "=".repeat(80));
-    let names: Vec<&str> = d.split(&sep).skip(1).map(|s| s.lines().next().unwrap()).collect();
+    let names: Vec<&str> = d
+        .split(&sep)
+        .skip(1)
+        .map(|s| s.lines().next().unwrap())
+        .collect();
     assert_eq!(
         names,
-        ["std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/Quaternion", "geometry_msgs/Vector3"]
+        [
+            "std_msgs/Header",
+            "builtin_interfaces/Time",
+            "geometry_msgs/Quaternion",
+            "geometry_msgs/Vector3"
+        ]
     );
     let o = full_definition::<Odometry>();
     assert_eq!(o.matches("MSG: geometry_msgs/Vector3\n").count(), 1);
@@ -34,7 +49,17 @@ fn custom_msgs_match_structs() {
     let alt = fields(Altitude::DEFINITION);
     assert_eq!(
         alt,
-        ["header", "baro_alt_m", "alt_m", "vertical_speed_mps", "ground_height_m", "ground_variance_m2", "laser_range_m", "sonar_range_m", "source"]
+        [
+            "header",
+            "baro_alt_m",
+            "alt_m",
+            "vertical_speed_mps",
+            "ground_height_m",
+            "ground_variance_m2",
+            "laser_range_m",
+            "sonar_range_m",
+            "source"
+        ]
     );
     // Status: serialise a default and compare the field count through serde's struct visitor.
     let st = fields(Status::DEFINITION);

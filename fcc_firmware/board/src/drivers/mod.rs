@@ -1,0 +1,1 @@
+//! Sensor drivers (embedded-hal 1.0).
