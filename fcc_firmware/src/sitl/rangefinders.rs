@@ -39,52 +39,7 @@ pub fn speed_of_sound_mps(t_c: f64) -> f64 {
     331.5 + 0.60714 * t_c
 }
 
-fn quantise(x: f64, lsb: f64) -> f64 {
-    if lsb > 0.0 {
-        (x / lsb).round() * lsb
-    } else {
-        x
-    }
-}
-
-/// Fixed-rate schedule on a grid: due at the first call, then every period (missed slots are
-/// skipped, not burst).
-#[derive(Clone, Debug)]
-struct Schedule {
-    period_us: u64,
-    next_us: Option<u64>,
-}
-
-impl Schedule {
-    fn new(rate_hz: f64) -> Self {
-        let period_us = if rate_hz > 0.0 {
-            (1e6 / rate_hz).round().max(1.0) as u64
-        } else {
-            u64::MAX
-        };
-        Self {
-            period_us,
-            next_us: None,
-        }
-    }
-    fn due(&mut self, t_us: u64) -> bool {
-        match self.next_us {
-            None => {
-                self.next_us = Some(t_us.saturating_add(self.period_us));
-                true
-            }
-            Some(n) if t_us >= n => {
-                let mut next = n.saturating_add(self.period_us);
-                while next <= t_us {
-                    next = next.saturating_add(self.period_us);
-                }
-                self.next_us = Some(next);
-                true
-            }
-            _ => false,
-        }
-    }
-}
+use super::sensor_models::{quantise, Schedule};
 
 // ---------------------------------------------------------------------------------------------
 // Laser altimeter

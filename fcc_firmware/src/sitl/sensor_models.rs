@@ -50,7 +50,7 @@ fn normal3(rng: &mut ChaCha8Rng, sigma: f64) -> Vector3<f64> {
 }
 
 /// Round to the nearest multiple of `lsb` (no-op if `lsb <= 0`).
-fn quantise(x: f64, lsb: f64) -> f64 {
+pub(crate) fn quantise(x: f64, lsb: f64) -> f64 {
     if lsb > 0.0 {
         (x / lsb).round() * lsb
     } else {
@@ -60,13 +60,13 @@ fn quantise(x: f64, lsb: f64) -> f64 {
 
 /// Fixed-rate scheduler: due at the first call, then every `period_us`.
 #[derive(Clone, Debug)]
-struct Schedule {
+pub(crate) struct Schedule {
     period_us: u64,
     next_us: Option<u64>,
 }
 
 impl Schedule {
-    fn new(rate_hz: f64) -> Self {
+    pub(crate) fn new(rate_hz: f64) -> Self {
         let period_us = if rate_hz > 0.0 {
             (1e6 / rate_hz).round().max(1.0) as u64
         } else {
@@ -77,7 +77,7 @@ impl Schedule {
             next_us: None,
         }
     }
-    fn due(&mut self, t_us: u64) -> bool {
+    pub(crate) fn due(&mut self, t_us: u64) -> bool {
         match self.next_us {
             None => {
                 self.next_us = Some(t_us.saturating_add(self.period_us));
