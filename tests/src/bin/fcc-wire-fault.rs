@@ -1,0 +1,193 @@
+//! `fcc-wire-fault`: a fault-injecting serial relay for robustness tests. It opens the MCU's
+//! device (e.g. the pty `fcc-sitl --link-pty` serves), creates a new pseudo-terminal for the
+//! Linux side (the bridge opens it like the UART), and forwards bytes both ways while flipping
+//! bits at a given bit-error rate and dropping / duplicating bytes.
+//!
+//! ```text
+//! fcc-wire-fault --mcu /tmp/fcc-sitl.tty --link /tmp/fcc-noisy.tty --ber 1e-4 --drop 1e-4 --dup 1e-4
+//! ```
+//! On SIGINT/SIGTERM it prints one line of counters (`wire-fault: …`) and exits 0.
+
+use clap::Parser;
+use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
+use nix::pty::openpty;
+use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
+use std::fs::{File, OpenOptions};
+use std::io::{Read, Write};
+
+use std::os::fd::{AsFd, AsRawFd};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+#[derive(Parser, Debug)]
+#[command(name = "fcc-wire-fault", about = "Fault-injecting serial relay (bit flips, drops, duplicates)")]
+struct Args {
+    /// The MCU side: a serial device or pty path.
+    #[arg(long)]
+    mcu: PathBuf,
+    /// Make this symlink to the new Linux-side pty.
+    #[arg(long)]
+    link: Option<PathBuf>,
+    /// Bit-error rate applied to every bit in both directions.
+    #[arg(long, default_value_t = 1e-4)]
+    ber: f64,
+    /// Probability that a byte is dropped.
+    #[arg(long, default_value_t = 0.0)]
+    drop: f64,
+    /// Probability that a byte is sent twice.
+    #[arg(long, default_value_t = 0.0)]
+    dup: f64,
+    /// Seed of the fault generator.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+/// splitmix64: a seeded uniform source for the faults.
+struct Rng(u64);
+impl Rng {
+    fn unit(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+#[derive(Default)]
+struct Counters {
+    bytes: u64,
+    bit_flips: u64,
+    dropped: u64,
+    duplicated: u64,
+    overflow: u64,
+}
+
+/// Write what fits without blocking; count the rest.
+fn send(to: &mut File, bytes: &[u8], c: &mut Counters) {
+    let n = to.write(bytes).unwrap_or(0);
+    c.overflow += (bytes.len() - n) as u64;
+}
+
+fn corrupt(rng: &mut Rng, a: &Args, input: &[u8], out: &mut Vec<u8>, c: &mut Counters) {
+    for &b in input {
+        c.bytes += 1;
+        if a.drop > 0.0 && rng.unit() < a.drop {
+            c.dropped += 1;
+            continue;
+        }
+        let mut b = b;
+        if a.ber > 0.0 {
+            for bit in 0..8 {
+                if rng.unit() < a.ber {
+                    b ^= 1 << bit;
+                    c.bit_flips += 1;
+                }
+            }
+        }
+        out.push(b);
+        if a.dup > 0.0 && rng.unit() < a.dup {
+            out.push(b);
+            c.duplicated += 1;
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let a = match Args::try_parse() {
+        Ok(a) => a,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    for (name, p) in [("--ber", a.ber), ("--drop", a.drop), ("--dup", a.dup)] {
+        if !(0.0..=1.0).contains(&p) {
+            eprintln!("fcc-wire-fault: {name}: must be a probability in [0, 1], got {p}");
+            return ExitCode::from(2);
+        }
+    }
+    let mut mcu: File = match OpenOptions::new().read(true).write(true).open(&a.mcu) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("fcc-wire-fault: {}: {e}", a.mcu.display());
+            return ExitCode::from(2);
+        }
+    };
+    let raw = |fd: std::os::fd::BorrowedFd| -> nix::Result<()> {
+        let mut t = tcgetattr(fd)?;
+        cfmakeraw(&mut t);
+        tcsetattr(fd, SetArg::TCSANOW, &t)
+    };
+    if let Err(e) = raw(mcu.as_fd()) {
+        eprintln!("fcc-wire-fault: {}: cannot set raw mode: {e}", a.mcu.display());
+        return ExitCode::from(2);
+    }
+    let pty = match openpty(None, None) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("fcc-wire-fault: cannot open a pseudo-terminal: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    let _ = raw(pty.slave.as_fd());
+    let slave = std::fs::read_link(format!("/proc/self/fd/{}", pty.slave.as_raw_fd())).unwrap_or_default();
+    if let Some(l) = &a.link {
+        let _ = std::fs::remove_file(l);
+        if let Err(e) = std::os::unix::fs::symlink(&slave, l) {
+            eprintln!("fcc-wire-fault: {}: {e}", l.display());
+            return ExitCode::from(1);
+        }
+    }
+    println!("fcc-wire-fault: linux side on {}", slave.display());
+    let _ = std::io::stdout().flush();
+    let mut linux = File::from(pty.master);
+    // Never block on a side nobody reads: what does not fit is dropped (counted as overflow).
+    for fd in [mcu.as_raw_fd(), linux.as_raw_fd()] {
+        use nix::fcntl::{fcntl, FcntlArg, OFlag};
+        if let Ok(fl) = fcntl(fd, FcntlArg::F_GETFL) {
+            let _ = fcntl(fd, FcntlArg::F_SETFL(OFlag::from_bits_truncate(fl) | OFlag::O_NONBLOCK));
+        }
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, stop.clone());
+    }
+    let mut rng = Rng(a.seed);
+    let (mut up, mut down) = (Counters::default(), Counters::default());
+    let mut buf = [0u8; 4096];
+    let mut out = Vec::with_capacity(8192);
+    while !stop.load(Ordering::Relaxed) {
+        let mut fds = [PollFd::new(mcu.as_fd(), PollFlags::POLLIN), PollFd::new(linux.as_fd(), PollFlags::POLLIN)];
+        if poll(&mut fds, PollTimeout::from(100u16)).is_err() {
+            continue;
+        }
+        let ready = |f: &PollFd| f.revents().is_some_and(|r| r.contains(PollFlags::POLLIN));
+        let (from_mcu, from_linux) = (ready(&fds[0]), ready(&fds[1]));
+        if from_mcu {
+            if let Ok(n) = mcu.read(&mut buf) {
+                out.clear();
+                corrupt(&mut rng, &a, &buf[..n], &mut out, &mut down);
+                send(&mut linux, &out, &mut down);
+            }
+        }
+        if from_linux {
+            if let Ok(n) = linux.read(&mut buf) {
+                out.clear();
+                corrupt(&mut rng, &a, &buf[..n], &mut out, &mut up);
+                send(&mut mcu, &out, &mut up);
+            }
+        }
+    }
+    if let Some(l) = &a.link {
+        let _ = std::fs::remove_file(l);
+    }
+    println!(
+        "wire-fault: mcu→linux {} bytes, {} bit flips, {} dropped, {} duplicated, {} overflow | linux→mcu {} bytes, {} bit flips, {} dropped, {} duplicated, {} overflow",
+        down.bytes, down.bit_flips, down.dropped, down.duplicated, down.overflow, up.bytes, up.bit_flips, up.dropped, up.duplicated, up.overflow
+    );
+    ExitCode::SUCCESS
+}
