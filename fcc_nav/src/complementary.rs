@@ -299,7 +299,7 @@ impl<const HIST: usize> PosVelCf<HIST> {
 
     /// Seed the input-bias estimate (e.g. from a static calibration on the ground).
     pub fn set_bias(&mut self, bias: f32) {
-        self.bias = bias.clamp(-self.bias_limit, self.bias_limit);
+        self.bias = bias.max(-self.bias_limit).min(self.bias_limit);
     }
 
     /// Current input-bias estimate (same unit as `accel`).
@@ -366,7 +366,7 @@ impl<const HIST: usize> PosVelCf<HIST> {
             self.pos += g1 * e;
             self.vel += g2 * e;
             if self.bias_k3 > 0.0 {
-                self.bias = (self.bias - self.bias_k3 * e * dt_s).clamp(-self.bias_limit, self.bias_limit);
+                self.bias = (self.bias - self.bias_k3 * e * dt_s).max(-self.bias_limit).min(self.bias_limit);
             }
             if dt_s > 0.0 {
                 self.innov_rate = g1 * e / dt_s;

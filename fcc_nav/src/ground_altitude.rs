@@ -604,7 +604,8 @@ impl GroundAltitudeFilter {
         let p00 = self.p[0][0].max(1e-8);
         let p11 = self.p[1][1].max(1e-10);
         let lim = sqrtf(p00 * p11) * 0.999;
-        let p01 = (0.5 * (self.p[0][1] + self.p[1][0])).clamp(-lim, lim);
+        // max/min rather than clamp: no panic path even for a non-finite covariance.
+        let p01 = (0.5 * (self.p[0][1] + self.p[1][0])).max(-lim).min(lim);
         self.p = [[p00, p01], [p01, p11]];
     }
 }
