@@ -2,8 +2,8 @@
 //!
 //! - [`replay`]: a compact recording of sensor inputs, commands and motor outputs, replayed by
 //!   the QEMU image (`qemu-replay`) and compared with the host build.
-//! - [`drivers`]: sensor drivers on `embedded-hal` 1.0 traits (MPU-9250, MS5611, GPS NMEA/UBX,
-//!   laser and sonar serial lines), host-tested on datasheet byte sequences.
+//! - [`drivers`]: placeholder for the sensor drivers on `embedded-hal` 1.0 traits (MPU-9250,
+//!   MS5611, GPS, laser and sonar serial lines) — NOT written yet.
 //!
 //! Binaries: `fcc-board` (TM4C129x, feature `tm4c`), `qemu-replay` (mps2-an386, feature `qemu`),
 //! `record` (host, feature `host`). Build with `scripts/build-mcu.sh`, test with

@@ -1,1 +1,2 @@
-//! Sensor drivers (embedded-hal 1.0).
+//! Sensor drivers on `embedded-hal` 1.0 traits — not written yet (MPU-9250 and MS5611 over SPI,
+//! GPS UBX/NMEA, laser and sonar serial lines, each host-tested on datasheet byte sequences).
