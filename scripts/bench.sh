@@ -4,14 +4,19 @@
 # their output. Nothing in the table is typed in: every figure comes from the `ROW|…` lines the
 # benches print (tests/benches/*.rs); rows nobody measures yet say so.
 #
-#   scripts/bench.sh            # ~1–2 min after the build
+# Row 4 (bridge latency/CPU/max rate: fake MCU on a pty → fcc-bridge → independent Cyclone DDS
+# peer, tests/dds/bench_latency.sh, in a loopback-only namespace; needs PyPI cyclonedds, found as
+# $FCC_DDS_PYTHON or .venv-dds/bin/python — scripts/test.sh makes it) and row 5 (recorder
+# throughput vs the bare mcap writer, fcc-record-bench) run after the cargo benches.
+#
+#   scripts/bench.sh            # ~3–4 min after the build (plus scripts/test-mcu.sh if present)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 BENCHES=(link_codec attitude_filter flight_core)
 out_md=BENCHMARKS.md
 raw=$(mktemp)
-trap 'rm -f "$raw" "$raw.mcu"' EXIT
+trap 'rm -f "$raw" "$raw.mcu" "$raw.rec"' EXIT
 
 echo "== building (release)" >&2
 cargo bench -p fcc_tests --no-run "${BENCHES[@]/#/--bench=}" >&2
@@ -47,6 +52,27 @@ if [ -x scripts/test-mcu.sh ]; then
         mcu_row="ROW|3b|Firmware step, MCU: instructions per 500 Hz step on the emulated Cortex-M4F|not measured (scripts/test-mcu.sh failed)|—|—|≤ 4,800 (2 % of 240,000 cycles)|not measured"
     fi
 fi
+# Row 4: the bridge against the independent DDS peer (~75 s).
+echo "== building fcc-bridge, fcc-fake-mcu, fcc-record-bench (release)" >&2
+cargo build --release --locked -p fcc_bridge --bin fcc-bridge --bin fcc-fake-mcu >&2
+cargo build --release --locked -p fcc_report --bin fcc-record-bench >&2
+py=${FCC_DDS_PYTHON:-.venv-dds/bin/python}
+if "$py" -c 'import cyclonedds' 2>/dev/null; then
+    echo "== tests/dds/bench_latency.sh (rows 4, 4b, 4c)" >&2
+    tests/dds/bench_latency.sh "$py" 2>&1 | tee -a "$raw" >&2 || echo "bench_latency.sh failed" >&2
+else
+    echo "== row 4 skipped: no Python with cyclonedds ($py); run scripts/test.sh once to make .venv-dds" >&2
+fi
+# Row 5: recorder throughput; fcc-record-bench prints `ROW|recorder throughput|ours|mcap|ratio|goal|verdict`.
+echo "== fcc-record-bench (row 5)" >&2
+./target/release/fcc-record-bench | tee "$raw.rec" >&2 || true
+rec=$(grep -m1 '^ROW|recorder throughput|' "$raw.rec" || true)
+if [ -n "$rec" ]; then
+    IFS='|' read -r _ _ r_ours r_peer r_ratio _ r_verdict <<<"$rec"
+    r_what=$(grep -m1 '^recorder throughput,' "$raw.rec" | sed -E 's/^recorder throughput, ([^:]*):.*/\1/')
+    case "$r_verdict" in met) ;; *) r_verdict='**missed**' ;; esac
+    echo "ROW|5|Recorder: messages/s of our recorder (fcc_bridge::record::Tap: CDR, queue, writer thread, chunking) vs the bare \`mcap\` writer, same messages (${r_what:-sensor_msgs/Imu, zstd})|$r_ours|mcap crate: $r_peer|$r_ratio as fast|≥ 0.8×|$r_verdict" >>"$raw"
+fi
 row4="ROW|4|Bridge: latency link frame → independent DDS peer p50/p99 at 500 Hz IMU + 100 Hz state; CPU; highest loss-free frame rate|not measured yet (needs the bridge latency/CPU bench against the DDS peer)|—|—|p99 ≤ 2 ms, CPU ≤ 5 % of one core|not measured yet"
 row5="ROW|5|Recorder: messages/s of our recorder vs the bare \`mcap\` writer, same messages|not measured yet (needs the recorder bench with the \`mcap\` crate as peer)|—|—|≥ 0.8×|not measured yet"
 
@@ -78,6 +104,7 @@ cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
         echo "- **$id**: $text"
     done
     echo "- **3b**: parsed from \`scripts/test-mcu.sh\` (the MCU-target work: the core cross-built for thumbv7em-none-eabihf replays a recorded flight in QEMU with -icount, 1 instruction = 1 tick) when that script exists; instructions, not cycles (flash wait states add roughly 1.2–2 cycles per instruction)."
-    echo "- **4, 5**: to be added by the bridge and recorder work; the script writes these rows as not measured until their benches print \`ROW|4|…\` / \`ROW|5|…\` lines."
+    echo "- **5**: \`fcc-record-bench\` (fcc_report/src/bin/record_bench.rs): the same messages through our recorder and through the \`mcap\` crate's writer with the same write options, best of 3."
+    grep -q '^ROW|4|' "$raw" || echo "- **4**: not measured in this run (needs the DDS peer's Python: \`scripts/test.sh\` makes .venv-dds)." 
 } >"$out_md"
 echo "== wrote $out_md" >&2

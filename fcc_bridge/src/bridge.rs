@@ -2,14 +2,25 @@
 
 use crate::convert::{self, Config, SetpointLimits};
 use crate::diag::{self, RateMeter};
+use crate::mcu_params::{self, MCU_PARAMS};
 use crate::now_ns;
+use crate::params;
+use crate::record::{QosInfo, Tap};
+use crate::ros_api::{self, LinkRequest, ParamShared};
 use crate::ros_types::*;
 use crate::state::{ClockSource, Fatal, Handshake, LinkState, Out};
 use fcc_msgs as link;
 use futures::StreamExt;
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile};
+use ros2_client::parameters::ParameterValue;
+use ros2_client::{
+    Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, ServiceMapping,
+    ServiceTypeName,
+};
+use std::collections::BTreeMap;
 use std::net::Ipv4Addr;
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::sync::mpsc;
@@ -31,6 +42,21 @@ pub struct Options {
     pub ping_period: Duration,
     /// Resend `HelloRequest` this often until the MCU answers.
     pub hello_period: Duration,
+    /// `-r from:=to` topic/service remaps.
+    pub remaps: Vec<(String, String)>,
+    /// MCU parameters given at start-up (`-p limits.max_tilt_deg:=30`), sent after the handshake.
+    pub mcu_params: BTreeMap<String, f64>,
+    /// `use_sim_time` (ROS time from `/clock`; with `clock_source:=mcu` the bridge is the clock).
+    pub use_sim_time: bool,
+    /// The `record` parameter as given (read-only ROS parameter).
+    pub record: String,
+}
+
+impl Options {
+    /// A topic or service name after the remaps.
+    pub fn name(&self, n: &str) -> String {
+        params::remap(&self.remaps, &self.namespace, n)
+    }
 }
 
 impl Default for Options {
@@ -47,6 +73,10 @@ impl Default for Options {
             clock: ClockSource::Sync,
             ping_period: Duration::from_secs(1),
             hello_period: Duration::from_millis(500),
+            remaps: Vec::new(),
+            mcu_params: BTreeMap::new(),
+            use_sim_time: false,
+            record: String::new(),
         }
     }
 }
@@ -114,60 +144,79 @@ fn publisher<T: RosMsg>(
 }
 
 impl Publishers {
-    fn new(node: &mut Node, clock: ClockSource) -> Result<Self, BridgeError> {
+    fn new(node: &mut Node, o: &Options) -> Result<Self, BridgeError> {
+        let clock = o.clock;
         let q = telemetry_qos(10);
         Ok(Publishers {
-            imu_raw: publisher(node, "imu/data_raw", &q)?,
-            mag: publisher(node, "mag", &q)?,
-            baro: publisher(node, "baro", &q)?,
-            gps_fix: publisher(node, "gps/fix", &q)?,
-            laser: publisher(node, "range/laser", &q)?,
-            sonar: publisher(node, "range/sonar", &q)?,
-            battery: publisher(node, "battery", &q)?,
-            odom: publisher(node, "state/odom", &q)?,
-            state_imu: publisher(node, "state/imu", &q)?,
-            tf: publisher(node, "/tf", &telemetry_qos(100))?,
-            tf_static: publisher(
-                node,
-                "/tf_static",
+            imu_raw: publisher(node, &o.name("imu/data_raw"), &q)?,
+            mag: publisher(node, &o.name("mag"), &q)?,
+            baro: publisher(node, &o.name("baro"), &q)?,
+            gps_fix: publisher(node, &o.name("gps/fix"), &q)?,
+            laser: publisher(node, &o.name("range/laser"), &q)?,
+            sonar: publisher(node, &o.name("range/sonar"), &q)?,
+            battery: publisher(node, &o.name("battery"), &q)?,
+            odom: publisher(node, &o.name("state/odom"), &q)?,
+            state_imu: publisher(node, &o.name("state/imu"), &q)?,
+            tf: publisher(node, &o.name("/tf"), &telemetry_qos(100))?,
+            tf_static: publisher(node, &o.name("/tf_static"),
                 &QosProfile::publisher_default()
                     .reliability_reliable(WhenFull::Fail)
                     .durability(Durability::TransientLocal)
                     .history(History::KeepLast { depth: 1 }),
             )?,
-            altitude: publisher(node, "altitude", &q)?,
-            ground: publisher(node, "altitude/ground", &q)?,
-            status: publisher(node, "status", &q)?,
-            diagnostics: publisher(node, "/diagnostics", &q)?,
+            altitude: publisher(node, &o.name("altitude"), &q)?,
+            ground: publisher(node, &o.name("altitude/ground"), &q)?,
+            status: publisher(node, &o.name("status"), &q)?,
+            diagnostics: publisher(node, &o.name("/diagnostics"), &q)?,
             clock: if clock == ClockSource::Mcu {
-                Some(publisher(node, "/clock", &telemetry_qos(1))?)
+                Some(publisher(node, &o.name("/clock"), &telemetry_qos(1))?)
             } else {
                 None
             },
         })
     }
 
-    /// Publish; returns false if the write failed.
-    fn publish(&self, o: Out) -> bool {
-        fn p<T: serde::Serialize>(p: &Publisher<T>, m: T) -> bool {
-            p.publish(m).is_ok()
+    /// Publish (and count/record at ROS time `t_ns`); returns false if the write failed.
+    fn publish(&self, o: Out, tap: &Tap, t_ns: i64) -> bool {
+        let q = QosInfo::TELEMETRY;
+        macro_rules! pb {
+            ($pb:expr, $name:expr, $qos:expr, $m:expr) => {{
+                tap.published($name, $qos, &$m, t_ns);
+                $pb.publish($m).is_ok()
+            }};
         }
         match o {
-            Out::ImuRaw(m) => p(&self.imu_raw, m),
-            Out::Mag(m) => p(&self.mag, m),
-            Out::Baro(m) => p(&self.baro, m),
-            Out::GpsFix(m) => p(&self.gps_fix, m),
-            Out::Laser(m) => p(&self.laser, m),
-            Out::Sonar(m) => p(&self.sonar, m),
-            Out::Battery(m) => p(&self.battery, m),
-            Out::Odom(m) => p(&self.odom, m),
-            Out::StateImu(m) => p(&self.state_imu, m),
-            Out::Tf(m) => p(&self.tf, m),
-            Out::Altitude(m) => p(&self.altitude, m),
-            Out::Ground(m) => p(&self.ground, m),
-            Out::Status(m) => p(&self.status, m),
-            Out::Clock(m) => self.clock.as_ref().is_none_or(|c| p(c, m)),
+            Out::ImuRaw(m) => pb!(self.imu_raw, "imu/data_raw", q, m),
+            Out::Mag(m) => pb!(self.mag, "mag", q, m),
+            Out::Baro(m) => pb!(self.baro, "baro", q, m),
+            Out::GpsFix(m) => pb!(self.gps_fix, "gps/fix", q, m),
+            Out::Laser(m) => pb!(self.laser, "range/laser", q, m),
+            Out::Sonar(m) => pb!(self.sonar, "range/sonar", q, m),
+            Out::Battery(m) => pb!(self.battery, "battery", q, m),
+            Out::Odom(m) => pb!(self.odom, "state/odom", q, m),
+            Out::StateImu(m) => pb!(self.state_imu, "state/imu", q, m),
+            Out::Tf(m) => pb!(self.tf, "/tf", QosInfo { depth: 100, ..q }, m),
+            Out::Altitude(m) => pb!(self.altitude, "altitude", q, m),
+            Out::Ground(m) => pb!(self.ground, "altitude/ground", q, m),
+            Out::Status(m) => {
+                tap.armed(m.armed);
+                pb!(self.status, "status", q, m)
+            }
+            Out::Clock(m) => match &self.clock {
+                Some(c) => pb!(c, "/clock", QosInfo { depth: 1, ..q }, m),
+                None => true,
+            },
         }
+    }
+}
+
+/// Log time of a recorded message: ROS time now (in `clock_source:=mcu`, 0 until the first
+/// MCU time, as sim time before the first `/clock`).
+fn rec_time(st: &LinkState) -> i64 {
+    if st.clock == ClockSource::Mcu && st.last_mcu_us.is_none() {
+        0
+    } else {
+        st.ros_now_ns(now_ns())
     }
 }
 
@@ -177,6 +226,7 @@ enum Inbound {
     Setpoint(TwistStamped),
     Arm(Bool),
     Mode(StringMsg),
+    Clock(Clock),
 }
 
 fn subscribe<T: RosMsg + Sync>(
@@ -221,26 +271,336 @@ fn context(opts: &Options) -> Result<Context, BridgeError> {
     Context::from_domain_participant(dp).map_err(ros_err)
 }
 
+/// The ROS-side requests waiting for the MCU (services, parameter sets) and what the link
+/// task needs to answer them.
+struct RosSide<'a> {
+    node: &'a Node,
+    rx: mpsc::Receiver<LinkRequest>,
+    shared: Arc<ParamShared>,
+    cmds: Vec<(link::CommandKind, tokio::sync::oneshot::Sender<(bool, String)>, tokio::time::Instant)>,
+    params: BTreeMap<u16, (std::sync::mpsc::Sender<Result<f32, String>>, tokio::time::Instant)>,
+    /// Start-up values of MCU parameters (sent after each handshake).
+    initial: BTreeMap<String, f64>,
+}
+
+impl RosSide<'_> {
+    /// A request from ROS: what to send to the MCU (if anything).
+    fn request(&mut self, r: LinkRequest, st: &mut LinkState) -> Option<link::Message> {
+        match r {
+            LinkRequest::Command(kind, reply) => {
+                match st.on_command(Some(link::Command { command: kind }), "service") {
+                    Some(m) => {
+                        self.cmds.push((kind, reply, tokio::time::Instant::now()));
+                        Some(m)
+                    }
+                    None => {
+                        let _ = reply.send((false, "link to the MCU not connected".into()));
+                        None
+                    }
+                }
+            }
+            LinkRequest::ParamSet(id, value, reply) => {
+                if st.handshake == Handshake::Waiting {
+                    let _ = reply.send(Err("link to the MCU not connected".into()));
+                    return None;
+                }
+                self.params.insert(id, (reply, tokio::time::Instant::now()));
+                Some(link::Message::ParamSet(link::ParamSet { id, value }))
+            }
+            LinkRequest::BridgeParam(name, v) => {
+                let x = ros_api::as_f64(&v).unwrap_or(f64::NAN);
+                match name.as_str() {
+                    "ttl_ms" => st.limits.ttl_ms = x as u16,
+                    "max_speed_mps" => st.limits.max_speed_mps = x,
+                    "max_stamp_age_ms" => st.limits.max_age_ns = (x * 1e6) as i64,
+                    "max_stamp_future_ms" => st.limits.max_future_ns = (x * 1e6) as i64,
+                    _ => return None,
+                }
+                tracing::info!("parameter {name} set to {x}");
+                None
+            }
+        }
+    }
+
+    /// Answer what the MCU acknowledged.
+    fn acks(&mut self, st: &mut LinkState) {
+        for m in std::mem::take(&mut st.acks) {
+            match m {
+                link::Message::CommandAck(a) => {
+                    if let Some(i) = self.cmds.iter().position(|(k, _, _)| *k == a.command) {
+                        let (_, reply, _) = self.cmds.remove(i);
+                        let ok = a.result == link::CommandResult::Accepted;
+                        let msg = if ok {
+                            format!("MCU accepted {:?}", a.command)
+                        } else {
+                            format!("MCU refused {:?}: {}", a.command, convert::reject_name(a.result))
+                        };
+                        let _ = reply.send((ok, msg));
+                    }
+                }
+                link::Message::ParamAck(a) => {
+                    let name = mcu_params::by_id(a.id).map_or("?", |p| p.name);
+                    if a.value.is_finite() {
+                        self.shared.mcu_values.lock().unwrap().insert(a.id, a.value);
+                    }
+                    let accepted = a.result == link::ParamResult::Accepted;
+                    if let Some((reply, _)) = self.params.remove(&a.id) {
+                        let _ = reply.send(if accepted {
+                            tracing::info!("MCU parameter {name} set to {}", a.value);
+                            Ok(a.value)
+                        } else {
+                            Err(format!(
+                                "{name}: MCU refused ({:?}); value in use {}",
+                                a.result, a.value
+                            ))
+                        });
+                    } else {
+                        // Start-up sync (a read, or a -p value): mirror the MCU's value.
+                        if a.value.is_finite() {
+                            if let Err(e) = self
+                                .node
+                                .set_parameter(name, ParameterValue::Double(a.value as f64))
+                            {
+                                tracing::warn!("parameter {name}: {e}");
+                            }
+                        }
+                        if !accepted && a.result != link::ParamResult::NotFinite {
+                            tracing::warn!(
+                                "MCU refused start-up value of {name} ({:?}); value in use {}",
+                                a.result,
+                                a.value
+                            );
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Time out requests the MCU did not answer.
+    fn expire(&mut self) {
+        let now = tokio::time::Instant::now();
+        let mut i = 0;
+        while i < self.cmds.len() {
+            if now - self.cmds[i].2 > ros_api::ACK_TIMEOUT {
+                let (k, reply, _) = self.cmds.remove(i);
+                tracing::warn!("MCU did not acknowledge {k:?}");
+                let _ = reply.send((
+                    false,
+                    format!(
+                        "MCU did not acknowledge {k:?} within {} ms",
+                        ros_api::ACK_TIMEOUT.as_millis()
+                    ),
+                ));
+            } else {
+                i += 1;
+            }
+        }
+        self.params.retain(|_, (_, t)| now - *t <= ros_api::ACK_TIMEOUT * 2);
+    }
+
+    /// After a handshake: read every MCU parameter (NaN set) or send its start-up value.
+    fn sync_params(&self, st: &mut LinkState) -> Vec<u8> {
+        let mut out = Vec::new();
+        for p in MCU_PARAMS {
+            let value = self.initial.get(p.name).map_or(f32::NAN, |v| *v as f32);
+            out.extend(st.encode(
+                &link::Message::ParamSet(link::ParamSet { id: p.id, value }),
+                now_ns(),
+            ));
+        }
+        out
+    }
+}
+
+/// A `std_srvs` service that sends a command to the MCU and answers with its acknowledgement.
+fn command_service<Req, Resp>(
+    node: &mut Node,
+    name: &str,
+    srv_type: &str,
+    tx: mpsc::Sender<LinkRequest>,
+    to_cmd: fn(&Req) -> link::CommandKind,
+    make: fn(bool, String) -> Resp,
+) -> Result<(), BridgeError>
+where
+    Req: ros2_client::Message + Clone + Send + Sync + 'static,
+    Resp: ros2_client::Message + Send + Sync + 'static,
+{
+    let qos = QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::Fail)
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: 10 });
+    let server = node
+        .create_server::<Req, Resp>(
+            ServiceMapping::Enhanced,
+            &Name::parse(name).map_err(ros_err)?,
+            &ServiceTypeName::new("std_srvs", srv_type),
+            qos.clone(),
+            qos,
+        )
+        .map_err(ros_err)?;
+    let name = name.to_string();
+    tokio::spawn(async move {
+        let stream = server.receive_request_stream();
+        tokio::pin!(stream);
+        while let Some(r) = stream.next().await {
+            match r {
+                Ok((id, req)) => {
+                    let kind = to_cmd(&req);
+                    let (otx, orx) = tokio::sync::oneshot::channel();
+                    let (ok, msg) = match tx.send(LinkRequest::Command(kind, otx)).await {
+                        Ok(()) => orx.await.unwrap_or((false, "bridge stopping".into())),
+                        Err(_) => (false, "bridge stopping".into()),
+                    };
+                    tracing::info!("service {name}: {kind:?} → {msg}");
+                    if let Err(e) = server.async_send_response(id, make(ok, msg)).await {
+                        tracing::warn!("service {name}: response failed: {e:?}");
+                    }
+                }
+                Err(e) => tracing::warn!("service {name}: bad request {e:?}"),
+            }
+        }
+    });
+    Ok(())
+}
+
 /// Run the bridge until a fatal error (the serial device is retried forever).
-pub async fn run(opts: Options) -> Result<(), BridgeError> {
+///
+/// `tap` counts every message published and received and records them when recording.
+pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
     let ctx = context(&opts)?;
+    let (ltx, lrx) = mpsc::channel::<LinkRequest>(64);
+    let shared = Arc::new(ParamShared {
+        live: Default::default(),
+        mcu_values: Default::default(),
+        link: ltx.clone(),
+    });
+    use ParameterValue as P;
+    let l = &opts.limits;
+    let c = &opts.cfg;
+    let mut nopts = NodeOptions::new()
+        .enable_rosout(true)
+        .start_parameter_services(true)
+        .declare_parameter("use_sim_time", P::Boolean(opts.use_sim_time))
+        .declare_parameter("ttl_ms", P::Integer(l.ttl_ms as i64))
+        .declare_parameter("max_speed_mps", P::Double(l.max_speed_mps))
+        .declare_parameter("max_stamp_age_ms", P::Double(l.max_age_ns as f64 / 1e6))
+        .declare_parameter("max_stamp_future_ms", P::Double(l.max_future_ns as f64 / 1e6))
+        .declare_parameter(
+            "clock_source",
+            P::String(if opts.clock == ClockSource::Mcu { "mcu" } else { "sync" }.into()),
+        )
+        .declare_parameter("localhost_only", P::Boolean(opts.localhost_only))
+        .declare_parameter("ping_period_ms", P::Integer(opts.ping_period.as_millis() as i64))
+        .declare_parameter("record", P::String(opts.record.clone()));
+    for (k, v) in [
+        ("map_frame", &c.map_frame),
+        ("base_frame", &c.base_frame),
+        ("imu_frame", &c.imu_frame),
+        ("mag_frame", &c.mag_frame),
+        ("baro_frame", &c.baro_frame),
+        ("gps_frame", &c.gps_frame),
+        ("laser_frame", &c.laser_frame),
+        ("sonar_frame", &c.sonar_frame),
+    ] {
+        nopts = nopts.declare_parameter(k, P::String(v.clone()));
+    }
+    for p in MCU_PARAMS {
+        let v = opts.mcu_params.get(p.name).copied().unwrap_or(p.default as f64);
+        nopts = nopts.declare_parameter(p.name, P::Double(v));
+    }
+    let sh = shared.clone();
+    let sh2 = shared.clone();
+    nopts = nopts
+        .parameter_validator(Box::new(move |n, v| ros_api::validate(&sh, n, v)))
+        .parameter_set_action(Box::new(move |n, v| {
+            if sh2.live.load(Ordering::SeqCst) && ros_api::DYNAMIC_BRIDGE_PARAMS.contains(&n) {
+                let _ = sh2.link.try_send(LinkRequest::BridgeParam(n.to_string(), v.clone()));
+            }
+            Ok(())
+        }));
     let mut node = ctx
         .new_node(
             NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?,
-            NodeOptions::new().enable_rosout(true),
+            nopts,
         )
         .map_err(ros_err)?;
-    tokio::spawn(node.spinner().map_err(ros_err)?.spin());
-    let pubs = Publishers::new(&mut node, opts.clock)?;
+    // The spinner serves discovery, /clock and the parameter services. It runs on its own
+    // thread because the parameter validator blocks while the MCU acknowledges a set.
+    let spinner = node.spinner().map_err(ros_err)?;
+    std::thread::Builder::new()
+        .name("ros-spinner".into())
+        .spawn(move || {
+            match tokio::runtime::Builder::new_current_thread().enable_all().build() {
+                Ok(rt) => {
+                    let _ = rt.block_on(spinner.spin());
+                }
+                Err(e) => tracing::error!("spinner runtime: {e}"),
+            }
+        })
+        .map_err(ros_err)?;
+    shared.live.store(true, Ordering::SeqCst);
+    // /rosout: the bridge's tracing events (INFO and above), with their level.
+    if let Some(logs) = ros_api::rosout_channel() {
+        use ros2_client::RosoutRaw;
+        let h = node.logging_handle();
+        let logger = ros_api::logger_name(&opts.namespace, &opts.node_name);
+        std::thread::Builder::new()
+            .name("rosout".into())
+            .spawn(move || {
+                while let Ok((level, msg, file, line)) = logs.recv() {
+                    h.rosout_raw(
+                        ros2_client::builtin_interfaces::Time::from_nanos(now_ns()),
+                        level,
+                        &logger,
+                        &msg,
+                        &file,
+                        "",
+                        line,
+                    );
+                }
+            })
+            .map_err(ros_err)?;
+    }
+    let pubs = Publishers::new(&mut node, &opts)?;
     let (tx, mut rx) = mpsc::channel::<Inbound>(64);
     subscribe::<TwistStamped>(
         &mut node,
-        "setpoint/velocity",
+        &opts.name("setpoint/velocity"),
         tx.clone(),
         Inbound::Setpoint,
     )?;
-    subscribe::<Bool>(&mut node, "cmd/arm", tx.clone(), Inbound::Arm)?;
-    subscribe::<StringMsg>(&mut node, "cmd/mode", tx, Inbound::Mode)?;
+    subscribe::<Bool>(&mut node, &opts.name("cmd/arm"), tx.clone(), Inbound::Arm)?;
+    subscribe::<StringMsg>(&mut node, &opts.name("cmd/mode"), tx.clone(), Inbound::Mode)?;
+    if opts.use_sim_time && opts.clock == ClockSource::Sync {
+        subscribe::<Clock>(&mut node, &opts.name("/clock"), tx, Inbound::Clock)?;
+    }
+    use link::CommandKind as K;
+    use ros_api::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
+    command_service::<SetBoolRequest, SetBoolResponse>(
+        &mut node,
+        &opts.name("arm"),
+        "SetBool",
+        ltx.clone(),
+        |r| if r.data { K::Arm } else { K::Disarm },
+        |success, message| SetBoolResponse { success, message },
+    )?;
+    for (srv, kind) in [("land", K::Land), ("hold", K::Hold)] {
+        let to_cmd: fn(&TriggerRequest) -> K = match kind {
+            K::Land => |_| K::Land,
+            _ => |_| K::Hold,
+        };
+        command_service::<TriggerRequest, TriggerResponse>(
+            &mut node,
+            &opts.name(srv),
+            "Trigger",
+            ltx.clone(),
+            to_cmd,
+            |success, message| TriggerResponse { success, message },
+        )?;
+    }
+    drop(ltx);
     tracing::info!(
         "node {}/{} on DDS domain {} ({}), device {} at {} baud",
         opts.namespace.trim_end_matches('/'),
@@ -254,12 +614,28 @@ pub async fn run(opts: Options) -> Result<(), BridgeError> {
         opts.device,
         opts.baud
     );
+    let mut ros = RosSide {
+        node: &node,
+        rx: lrx,
+        shared: shared.clone(),
+        cmds: Vec::new(),
+        params: BTreeMap::new(),
+        initial: opts.mcu_params.clone(),
+    };
 
     let mut st = LinkState::new(opts.cfg.clone(), opts.limits, opts.clock);
-    let _ = pubs.tf_static.publish(convert::static_transforms(
-        Time::from_nanos(now_ns()),
-        &st.cfg,
-    ));
+    let tf_static = convert::static_transforms(Time::from_nanos(now_ns()), &st.cfg);
+    tap.published(
+        "/tf_static",
+        QosInfo {
+            transient_local: true,
+            depth: 1,
+            ..QosInfo::TELEMETRY
+        },
+        &tf_static,
+        rec_time(&st),
+    );
+    let _ = pubs.tf_static.publish(tf_static);
     let mut rates = RateMeter::default();
     let mut first = true;
     let mut logged_open_error = false;
@@ -272,8 +648,11 @@ pub async fn run(opts: Options) -> Result<(), BridgeError> {
                     tracing::warn!("cannot open {}: {e}; retrying every 0.5 s", opts.device);
                     logged_open_error = true;
                 }
-                drain_inbound(&mut rx, &mut st);
-                publish_diag(&pubs, &st, &mut rates, &opts.device, false);
+                drain_inbound(&mut rx, &mut st, &tap);
+                while let Ok(r) = ros.rx.try_recv() {
+                    ros.request(r, &mut st);
+                }
+                publish_diag(&pubs, &st, &mut rates, &opts.device, false, &tap);
                 tokio::time::sleep(Duration::from_millis(500)).await;
                 continue;
             }
@@ -285,7 +664,8 @@ pub async fn run(opts: Options) -> Result<(), BridgeError> {
         }
         first = false;
         tracing::info!("opened {}", opts.device);
-        match session(port, &opts, &mut st, &pubs, &mut rx, &mut rates).await {
+        tap.raw_reset();
+        match session(port, &opts, &mut st, &pubs, &mut rx, &mut ros, &mut rates, &tap).await {
             Ok(reason) => tracing::warn!("link to {} lost ({reason}); reopening", opts.device),
             Err(Fatal::Handshake(e)) => return Err(BridgeError::Handshake(e)),
         }
@@ -294,13 +674,21 @@ pub async fn run(opts: Options) -> Result<(), BridgeError> {
 }
 
 /// While disconnected: refuse (and count) what arrives.
-fn drain_inbound(rx: &mut mpsc::Receiver<Inbound>, st: &mut LinkState) {
+fn drain_inbound(rx: &mut mpsc::Receiver<Inbound>, st: &mut LinkState, tap: &Tap) {
     while let Ok(m) = rx.try_recv() {
-        handle_inbound(m, st);
+        handle_inbound(m, st, tap);
     }
 }
 
-fn handle_inbound(m: Inbound, st: &mut LinkState) -> Option<link::Message> {
+fn handle_inbound(m: Inbound, st: &mut LinkState, tap: &Tap) -> Option<link::Message> {
+    let t = rec_time(st);
+    let q = QosInfo::BEST_EFFORT;
+    match &m {
+        Inbound::Setpoint(x) => tap.received("setpoint/velocity", q, x, t),
+        Inbound::Arm(x) => tap.received("cmd/arm", q, x, t),
+        Inbound::Mode(x) => tap.received("cmd/mode", q, x, t),
+        Inbound::Clock(_) => {}
+    }
     match m {
         Inbound::Setpoint(t) => st.on_setpoint(&t, now_ns()),
         Inbound::Arm(b) => st.on_command(
@@ -308,6 +696,10 @@ fn handle_inbound(m: Inbound, st: &mut LinkState) -> Option<link::Message> {
             if b.data { "arm" } else { "disarm" },
         ),
         Inbound::Mode(s) => st.on_command(convert::mode_command(&s), &s.data),
+        Inbound::Clock(c) => {
+            st.sim_offset_ns = Some(c.clock.to_nanos() - now_ns());
+            None
+        }
     }
 }
 
@@ -317,13 +709,14 @@ fn publish_diag(
     rates: &mut RateMeter,
     device: &str,
     connected: bool,
+    tap: &Tap,
 ) {
     let now = now_ns();
     rates.update(st, now);
-    let stamp = Time::from_nanos(st.ros_now_ns(now));
-    let _ = pubs
-        .diagnostics
-        .publish(diag::diagnostics(st, rates, device, connected, stamp));
+    let t = rec_time(st);
+    let d = diag::diagnostics(st, rates, device, connected, Time::from_nanos(t));
+    tap.published("/diagnostics", QosInfo::TELEMETRY, &d, t);
+    let _ = pubs.diagnostics.publish(d);
 }
 
 /// One connection: returns why it ended (IO), or a fatal handshake error.
@@ -333,8 +726,11 @@ async fn session(
     st: &mut LinkState,
     pubs: &Publishers,
     rx: &mut mpsc::Receiver<Inbound>,
+    ros: &mut RosSide<'_>,
     rates: &mut RateMeter,
+    tap: &Tap,
 ) -> Result<String, Fatal> {
+    let mut params_synced = false;
     let (mut rd, mut wr) = tokio::io::split(port);
     // A 0x00 first flushes any half frame at the MCU, then ask for its Hello.
     let mut hello = vec![0u8];
@@ -342,6 +738,7 @@ async fn session(
         &link::Message::HelloRequest(link::HelloRequest::ours()),
         now_ns(),
     ));
+    tap.raw_out(&hello, rec_time(st));
     if let Err(e) = wr.write_all(&hello).await {
         return Ok(format!("write: {e}"));
     }
@@ -362,15 +759,28 @@ async fn session(
                     Ok(n) => n,
                     Err(e) => return Ok(format!("read: {e}")),
                 };
-                let outs = st.on_bytes(&buf[..n], now_ns())?;
+                let now = now_ns();
+                let outs = st.on_bytes(&buf[..n], now)?;
+                let t = rec_time(st);
+                tap.raw_in(&buf[..n], t);
                 for o in outs {
-                    if !pubs.publish(o) {
+                    if !pubs.publish(o, tap, t) {
                         st.counters.publish_errors += 1;
                     }
                 }
+                ros.acks(st);
+                if !params_synced && st.handshake != Handshake::Waiting {
+                    params_synced = true;
+                    to_send.extend(ros.sync_params(st));
+                }
+            }
+            Some(r) = ros.rx.recv() => {
+                if let Some(msg) = ros.request(r, st) {
+                    to_send.extend(st.encode(&msg, now_ns()));
+                }
             }
             Some(m) = rx.recv() => {
-                if let Some(msg) = handle_inbound(m, st) {
+                if let Some(msg) = handle_inbound(m, st, tap) {
                     to_send.extend(st.encode(&msg, now_ns()));
                 }
             }
@@ -395,13 +805,15 @@ async fn session(
                         last_ping = now;
                     }
                 }
+                ros.expire();
                 if now - last_diag >= Duration::from_secs(1) {
-                    publish_diag(pubs, st, rates, &opts.device, true);
+                    publish_diag(pubs, st, rates, &opts.device, true, tap);
                     last_diag = now;
                 }
             }
         }
         if !to_send.is_empty() {
+            tap.raw_out(&to_send, rec_time(st));
             if let Err(e) = wr.write_all(&to_send).await {
                 return Ok(format!("write: {e}"));
             }

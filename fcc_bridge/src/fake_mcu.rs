@@ -71,6 +71,30 @@ pub struct FakeOptions {
     pub log: Option<String>,
     /// Also write garbage bytes every second (resync test).
     pub garbage: bool,
+    /// Telemetry rates (Hz). The IMU stream sets the loop's tick (at least 200 Hz); the other
+    /// streams go out on the ticks where their own schedule falls due. Laser and sonar share
+    /// `laser_raw_hz`. Default: [`FakeOptions::SCRIPT_RATES`].
+    pub rates: link::StreamRates,
+    /// Put the IMU frame counter (0, 1, 2, …) in gyro x instead of the script's value, so a
+    /// peer can count lost messages (exact in f32 up to 2²⁴ frames).
+    pub imu_counter: bool,
+}
+
+impl FakeOptions {
+    /// The fake's historical rates (what tests/dds/peer.py expects): IMU 200, nav 50,
+    /// mag/baro/altitude 20, GPS/ranges/status 10, battery 5 Hz.
+    pub const SCRIPT_RATES: link::StreamRates = link::StreamRates {
+        imu_raw_hz: 200,
+        mag_raw_hz: 20,
+        baro_raw_hz: 20,
+        gps_raw_hz: 10,
+        laser_raw_hz: 10,
+        sonar_raw_hz: 10,
+        battery_hz: 5,
+        nav_state_hz: 50,
+        altitude_hz: 20,
+        status_hz: 10,
+    };
 }
 
 impl Default for FakeOptions {
@@ -82,6 +106,8 @@ impl Default for FakeOptions {
             duration: None,
             log: None,
             garbage: false,
+            rates: FakeOptions::SCRIPT_RATES,
+            imu_counter: false,
         }
     }
 }
@@ -129,8 +155,28 @@ fn quat_from_euler(roll: f32, pitch: f32, yaw: f32) -> [f32; 4] {
     ]
 }
 
+/// Frames sent by [`run_stats`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FakeStats {
+    /// All frames (counted by their 0 delimiters).
+    pub frames: u64,
+    /// `ImuRaw` frames.
+    pub imu_frames: u64,
+    /// Loop ticks that started more than one tick period late (the writer fell behind).
+    pub late_ticks: u64,
+}
+
 /// Run the fake MCU on `pty` until the duration ends. Returns the number of frames sent.
-pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
+pub fn run(pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
+    run_stats(pty, o).map(|s| s.frames)
+}
+
+/// Like [`run`], with the counts of IMU frames and late ticks.
+pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
+    let rates = o.rates;
+    let tick_hz = u64::from(rates.imu_raw_hz.max(200));
+    let tick_us = (1_000_000 / tick_hz).max(1);
+    let mut stats = FakeStats::default();
     let s = o.script;
     let start = Instant::now();
     let now_us = || start.elapsed().as_micros() as u64;
@@ -156,22 +202,75 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
     let mut tick: u64 = 0;
     let mut armed = false;
     let mut mode = link::FlightMode::Disarmed;
-    let mut rx = [0u8; 1024];
+    // A reader thread timestamps input as it arrives (poll + read), like a UART RX interrupt,
+    // so a TimeSyncPing's receive time does not include the wait for the next telemetry tick
+    // (which would bias the bridge's time sync by up to half a tick).
+    let (tx_ch, rx_ch) = std::sync::mpsc::channel::<std::io::Result<(Vec<u8>, u64)>>();
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    /// Stops the reader thread however `run_stats` returns.
+    struct StopOnDrop(std::sync::Arc<std::sync::atomic::AtomicBool>);
+    impl Drop for StopOnDrop {
+        fn drop(&mut self) {
+            self.0.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+    }
+    let _stop_guard = StopOnDrop(stop.clone());
+    let reader = {
+        let mut f = pty.master.try_clone()?;
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 1024];
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                let mut pfd = nix::libc::pollfd {
+                    fd: f.as_raw_fd(),
+                    events: nix::libc::POLLIN,
+                    revents: 0,
+                };
+                // SAFETY: one valid pollfd, 50 ms timeout.
+                let r = unsafe { nix::libc::poll(&mut pfd, 1, 50) };
+                if r <= 0 {
+                    continue;
+                }
+                loop {
+                    match f.read(&mut buf) {
+                        Ok(0) => break,
+                        Ok(n) => {
+                            let t = start.elapsed().as_micros() as u64;
+                            if tx_ch.send(Ok((buf[..n].to_vec(), t))).is_err() {
+                                return;
+                            }
+                        }
+                        Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
+                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                        Err(e) => {
+                            let _ = tx_ch.send(Err(e));
+                            return;
+                        }
+                    }
+                }
+            }
+        })
+    };
     let mut laser_toggle = false;
+    let mut params: Vec<(u16, f32)> = crate::mcu_params::MCU_PARAMS
+        .iter()
+        .map(|p| (p.id, p.default))
+        .collect();
     loop {
         if let Some(d) = o.duration {
             if start.elapsed() >= d {
                 break;
             }
         }
-        // Receive.
-        loop {
-            match pty.master.read(&mut rx) {
-                Ok(0) => break,
-                Ok(n) => {
-                    let frames: Vec<_> = dec.push_slice(&rx[..n]).filter_map(Result::ok).collect();
+        // Receive: everything the reader thread has read since the last tick.
+        while let Ok(item) = rx_ch.try_recv() {
+                {
+                    let (bytes, t_rx) = item?;
+                    let frames: Vec<_> = dec.push_slice(&bytes).filter_map(Result::ok).collect();
                     for f in frames {
-                        let t = now_us();
+                        // Receive time: when the reader thread got the bytes (a UART RX
+                        // interrupt's timestamp), not when this loop got round to them.
+                        let t = t_rx;
                         match f.message {
                             link::Message::HelloRequest(_) => push(&hello, t, &mut enc, &mut out),
                             link::Message::TimeSyncPing(p) => push(
@@ -228,29 +327,80 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                                     l.flush()?;
                                 }
                             }
+                            link::Message::ParamSet(ps) => {
+                                let def = crate::mcu_params::by_id(ps.id);
+                                let slot = params.iter_mut().find(|(i, _)| *i == ps.id);
+                                let (result, value) = match (def, slot) {
+                                    (Some(d), Some(slot)) => {
+                                        let r = if !ps.value.is_finite() {
+                                            link::ParamResult::NotFinite
+                                        } else if d.check(ps.value as f64).is_err() {
+                                            link::ParamResult::OutOfRange
+                                        } else {
+                                            slot.1 = ps.value;
+                                            link::ParamResult::Accepted
+                                        };
+                                        (r, slot.1)
+                                    }
+                                    _ => (link::ParamResult::UnknownId, f32::NAN),
+                                };
+                                push(
+                                    &link::Message::ParamAck(link::ParamAck {
+                                        id: ps.id,
+                                        value,
+                                        result,
+                                    }),
+                                    t,
+                                    &mut enc,
+                                    &mut out,
+                                );
+                                if let Some(l) = log.as_mut() {
+                                    writeln!(
+                                        l,
+                                        "{{\"t_us\":{t},\"msg\":\"ParamSet\",\"id\":{},\"name\":\"{}\",\"value\":{},\"result\":\"{:?}\",\"now\":{}}}",
+                                        ps.id,
+                                        def.map_or("?", |d| d.name),
+                                        if ps.value.is_finite() { ps.value.to_string() } else { "null".into() },
+                                        result,
+                                        if value.is_finite() { value.to_string() } else { "null".into() },
+                                    )?;
+                                    l.flush()?;
+                                }
+                            }
                             _ => {}
                         }
                     }
                 }
-                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                Err(e) => return Err(e),
-            }
         }
-        // Telemetry on a 5 ms tick (200 Hz).
+        // Telemetry on a tick of 1/tick_hz (200 Hz unless the IMU goes faster); a stream of
+        // rate hz is due on the ticks where floor(tick·hz / tick_hz) steps (tick 0 included),
+        // which for hz dividing tick_hz is `tick % (tick_hz / hz) == 0`.
         let t = now_us();
-        let every = |hz: u64| tick % (200 / hz) == 0;
+        if t > tick * tick_us + tick_us {
+            stats.late_ticks += 1;
+        }
+        let every = |hz: u16| {
+            let hz = u64::from(hz);
+            hz > 0 && (tick == 0 || (tick * hz) / tick_hz != ((tick - 1) * hz) / tick_hz)
+        };
         let m = |v| v;
-        push(
-            &link::Message::ImuRaw(link::ImuRaw {
-                gyro_frd_radps: s.gyro_frd_radps,
-                accel_frd_mps2: s.accel_frd_mps2,
-            }),
-            t,
-            &mut enc,
-            &mut out,
-        );
-        if every(50) {
+        if every(rates.imu_raw_hz) {
+            let mut gyro = s.gyro_frd_radps;
+            if o.imu_counter {
+                gyro[0] = stats.imu_frames as f32;
+            }
+            push(
+                &link::Message::ImuRaw(link::ImuRaw {
+                    gyro_frd_radps: gyro,
+                    accel_frd_mps2: s.accel_frd_mps2,
+                }),
+                t,
+                &mut enc,
+                &mut out,
+            );
+            stats.imu_frames += 1;
+        }
+        if every(rates.nav_state_hz) {
             let nav = link::NavState {
                 q_body_to_ned: quat_from_euler(s.roll_rad, s.pitch_rad, s.yaw_rad),
                 rate_frd_radps: s.gyro_frd_radps,
@@ -266,7 +416,7 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
             };
             push(&link::Message::NavState(m(nav)), t, &mut enc, &mut out);
         }
-        if every(20) {
+        if every(rates.mag_raw_hz) {
             push(
                 &link::Message::MagRaw(link::MagRaw {
                     mag_frd_ut: s.mag_frd_ut,
@@ -275,6 +425,8 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                 &mut enc,
                 &mut out,
             );
+        }
+        if every(rates.baro_raw_hz) {
             push(
                 &link::Message::BaroRaw(link::BaroRaw {
                     pressure_pa: s.pressure_pa,
@@ -284,6 +436,8 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                 &mut enc,
                 &mut out,
             );
+        }
+        if every(rates.altitude_hz) {
             push(
                 &link::Message::AltitudeFusion(link::AltitudeFusion {
                     baro_alt_m: -s.pos_ned_m[2] + 0.1,
@@ -300,7 +454,7 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                 &mut out,
             );
         }
-        if every(10) {
+        if every(rates.gps_raw_hz) {
             push(
                 &link::Message::GpsRaw(link::GpsRaw {
                     lat_deg: s.lat_deg,
@@ -315,6 +469,8 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                 &mut enc,
                 &mut out,
             );
+        }
+        if every(rates.laser_raw_hz) {
             laser_toggle = !laser_toggle;
             let laser = if laser_toggle { s.laser_m } else { 99_999.0 };
             push(
@@ -335,6 +491,8 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                 &mut enc,
                 &mut out,
             );
+        }
+        if every(rates.status_hz) {
             push(
                 &link::Message::Status(link::Status {
                     mode,
@@ -351,7 +509,7 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                 &mut out,
             );
         }
-        if every(5) {
+        if every(rates.battery_hz) {
             push(
                 &link::Message::Battery(link::Battery {
                     voltage_v: s.voltage_v,
@@ -362,19 +520,22 @@ pub fn run(mut pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
                 &mut out,
             );
         }
-        if o.garbage && tick % 200 == 100 {
+        if o.garbage && tick % tick_hz == tick_hz / 2 {
             out.extend_from_slice(&[0x13, 0x37, 0xff, 0x42, 0x00]);
         }
         sent += out.iter().filter(|b| **b == 0).count() as u64;
         write_all_retry(&mut pty.master, &out)?;
         out.clear();
         tick += 1;
-        let next = start + Duration::from_micros(tick * 5_000);
+        let next = start + Duration::from_micros(tick * tick_us);
         if let Some(d) = next.checked_duration_since(Instant::now()) {
             std::thread::sleep(d);
         }
     }
-    Ok(sent)
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let _ = reader.join();
+    stats.frames = sent;
+    Ok(stats)
 }
 
 /// Write to the non-blocking master, waiting while the pty buffer is full.

@@ -7,14 +7,20 @@
 //! Layers: [`ros_types`] (message structs, Jazzy), [`frames`] (every NED/FRD ↔ ENU/FLU
 //! conversion), [`convert`] (pure link ↔ ROS conversions), [`timesync`], [`state`] (the
 //! sans-IO bridge state machine and counters), [`diag`] (`/diagnostics`), [`bridge`] (serial
-//! IO and DDS), [`fake_mcu`] (a scripted MCU on a pty, for tests).
+//! IO and DDS), [`record`] (the MCAP flight recorder), [`fake_mcu`] (a scripted MCU on a pty,
+//! for tests).
 
 pub mod bridge;
 pub mod convert;
 pub mod diag;
 pub mod fake_mcu;
 pub mod frames;
+pub mod mcu_params;
 pub mod params;
+pub mod ros_node;
+pub mod record;
+pub mod ros_api;
+pub mod report;
 pub mod ros_types;
 pub mod state;
 pub mod timesync;

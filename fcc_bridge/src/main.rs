@@ -1,11 +1,13 @@
 //! `fcc-bridge --device /dev/pts/N [--baud 921600] [--ros-args -r __ns:=/fcc -p name:=value …]`
 //!
-//! Exit codes: 0 on Ctrl-C, 1 on a setup error, 2 when the MCU's protocol version or schema
-//! hash does not match (one line on stderr says which).
+//! Exit codes: 0 on Ctrl-C, 1 on a setup error, 2 on a bad command-line/ROS argument or
+//! parameter value, or when the MCU's protocol version or schema hash does not match (one line
+//! on stderr says which).
 
 use clap::Parser;
 use fcc_bridge::bridge::{self, BridgeError, Options};
 use fcc_bridge::params::{self, parse_bool};
+use fcc_bridge::record::{RecordOptions, Tap};
 use fcc_bridge::state::ClockSource;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -14,11 +16,17 @@ use std::time::Duration;
 #[command(
     name = "fcc-bridge",
     about = "ROS 2 bridge for the fcc flight controller's serial link",
-    after_help = "ROS arguments: --ros-args [-r __ns:=/fcc] [-r __node:=fcc_bridge] [-p name:=value ...]\n\
+    after_help = "ROS arguments: --ros-args [-r __ns:=/fcc] [-r __node:=fcc_bridge] [-r topic:=new_name ...]\n\
+  [-p name:=value ...] [--params-file FILE.yaml ...]\n\
+MCU parameters (ROS parameters, set on the MCU): limits.max_horiz_speed_mps, limits.max_tilt_deg,\n\
+  control.cross_track_k_per_s, control.vel_p_per_s, limits.max_climb_mps, limits.max_descent_mps.\n\
+Services: arm (std_srvs/SetBool), land, hold (std_srvs/Trigger).\n\
 Parameters: localhost_only (true), ttl_ms (300), max_speed_mps (20), max_stamp_age_ms (500),\n\
   max_stamp_future_ms (500), clock_source (sync | mcu), ping_period_ms (1000),\n\
   map_frame (map), base_frame (base_link), imu_frame (imu_link), gps_frame (gps_link),\n\
-  laser_frame (laser_link), sonar_frame (sonar_link).\n\
+  laser_frame (laser_link), sonar_frame (sonar_link),\n\
+  record (off: PATH), record_on_arm (false), record_split_s, record_split_mb (off),\n\
+  record_compression (zstd | none), record_chunk_ms (500), record_chunk_mb (4).\n\
 Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE, RUST_LOG."
 )]
 struct Cli {
@@ -28,36 +36,49 @@ struct Cli {
     /// Baud rate.
     #[arg(long, default_value_t = 921_600)]
     baud: u32,
+    /// Record every topic (published, received, raw link frames) to this MCAP file
+    /// (rosbag2-compatible; same as `-p record:=PATH`).
+    #[arg(long, value_name = "PATH")]
+    record: Option<String>,
 }
 
-fn options() -> Result<Options, String> {
+fn options() -> Result<(Options, Option<RecordOptions>), String> {
     let argv: Vec<String> = std::env::args().collect();
-    let (prog, ros) = params::split_ros_args(&argv)?;
+    let (prog, mut ros) = params::split_ros_args(&argv)?;
     let cli = Cli::try_parse_from(prog).unwrap_or_else(|e| {
-        let _ = e.print();
-        std::process::exit(if e.use_stderr() { 1 } else { 0 });
+        if !e.use_stderr() {
+            let _ = e.print();
+            std::process::exit(0);
+        }
+        // One line and exit 2, as for every other bad input (clap's own text spans several).
+        let text = e.to_string();
+        eprintln!("fcc-bridge: {} (see --help)", text.split("\n\nUsage").next().unwrap_or("").split_whitespace().collect::<Vec<_>>().join(" ").trim_start_matches("error: "));
+        std::process::exit(2);
     });
     let mut o = Options {
         device: cli.device,
         baud: cli.baud,
         ..Options::default()
     };
-    if let Some(ns) = ros.namespace {
+    if let Some(ns) = ros.namespace.clone() {
         o.namespace = if ns.starts_with('/') {
             ns
         } else {
             format!("/{ns}")
         };
     }
-    if let Some(n) = ros.node_name {
+    if let Some(n) = ros.node_name.clone() {
         o.node_name = n;
     }
-    for (k, v) in &ros.remaps {
-        eprintln!("fcc-bridge: topic remapping '{k}:={v}' is not supported; ignored");
-    }
+    ros.load_params_files(&o.namespace, &o.node_name)?;
+    // Errors about a parameter name the --params-file it came from.
+    let ros_ref = ros.clone();
+    (move || -> Result<(Options, Option<RecordOptions>), String> {
+    o.remaps = ros.remaps.clone();
     let env = |k: &str| std::env::var(k).ok();
     o.domain_id = params::domain_id(env("ROS_DOMAIN_ID").as_deref())?;
     let p = &ros.params;
+    let rec = params::record_options(cli.record.as_deref(), p)?;
     o.localhost_only = params::localhost_only(
         p.get("localhost_only").map(String::as_str),
         env("ROS_LOCALHOST_ONLY").as_deref(),
@@ -73,7 +94,7 @@ fn options() -> Result<Options, String> {
     };
     if let Some(v) = num("ttl_ms")? {
         if !(1.0..=65535.0).contains(&v) {
-            return Err("parameter ttl_ms must be 1..=65535".into());
+            return Err(format!("parameter ttl_ms: {v} out of range 1..=65535"));
         }
         o.limits.ttl_ms = v as u16;
     }
@@ -97,8 +118,20 @@ fn options() -> Result<Options, String> {
         };
     }
     if let Some(v) = p.get("use_sim_time") {
-        if parse_bool(v)? {
-            eprintln!("fcc-bridge: use_sim_time is ignored; the bridge is a clock source (see clock_source:=mcu)");
+        o.use_sim_time =
+            parse_bool(v).map_err(|e| format!("parameter use_sim_time: {e}"))?;
+    }
+    if let Some(v) = p.get("localhost_only") {
+        parse_bool(v).map_err(|e| format!("parameter localhost_only: {e}"))?;
+    }
+    o.record = rec
+        .as_ref()
+        .map(|r| r.path.display().to_string())
+        .unwrap_or_default();
+    for mp in fcc_bridge::mcu_params::MCU_PARAMS {
+        if let Some(x) = num(mp.name)? {
+            mp.check(x).map_err(|e| format!("parameter {e}"))?;
+            o.mcu_params.insert(mp.name.to_string(), x);
         }
     }
     let c = &mut o.cfg;
@@ -135,35 +168,88 @@ fn options() -> Result<Options, String> {
         "sonar_frame",
     ];
     for k in p.keys() {
-        if !known.contains(&k.as_str()) {
+        if !known.contains(&k.as_str())
+            && !params::RECORD_PARAMS.contains(&k.as_str())
+            && fcc_bridge::mcu_params::by_name(k).is_none()
+        {
             return Err(format!("unknown parameter '{k}'"));
         }
     }
-    Ok(o)
+    Ok((o, rec))
+    })()
+    .map_err(|e| ros_ref.locate(e))
 }
 
 fn main() -> ExitCode {
+    use tracing_subscriber::layer::SubscriberExt;
+    use tracing_subscriber::util::SubscriberInitExt;
+    // stderr, and /rosout (the bridge's own events, INFO and above).
     tracing_subscriber::fmt()
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "info,rustdds=error,ros2_client=warn".into()),
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+                "info,rustdds=error,ros2_client=warn,ros2_client::service=error".into()
+            }),
         )
         .with_writer(std::io::stderr)
+        .finish()
+        .with(fcc_bridge::ros_api::RosoutLayer)
         .init();
-    let opts = match options() {
+    let (opts, rec) = match options() {
         Ok(o) => o,
         Err(e) => {
             eprintln!("fcc-bridge: {e}");
-            return ExitCode::from(1);
+            return ExitCode::from(2);
         }
+    };
+    let tap = match rec {
+        None => Tap::counting(&opts.namespace),
+        Some(r) => match Tap::recording(&opts.namespace, r.clone()) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("fcc-bridge: cannot record to {}: {e}", r.path.display());
+                return ExitCode::from(2);
+            }
+        },
     };
     let rt = tokio::runtime::Runtime::new().expect("tokio runtime");
     let r = rt.block_on(async {
+        let mut term =
+            tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+        let sigterm = async {
+            match term.as_mut() {
+                Some(t) => {
+                    t.recv().await;
+                }
+                None => std::future::pending::<()>().await,
+            }
+        };
         tokio::select! {
-            r = bridge::run(opts) => r,
+            r = bridge::run(opts, tap.clone()) => r,
             _ = tokio::signal::ctrl_c() => Ok(()),
+            _ = sigterm => Ok(()),
         }
     });
+    // Per-topic counts (published / received / raw frames), one JSON line on stderr; the
+    // recording is finished (summary, footer, PATH.counts.json).
+    eprintln!(
+        "fcc-bridge counts: {}",
+        serde_json::to_string(&tap.counts()).unwrap_or_default()
+    );
+    if tap.is_recording() {
+        match tap.finish(Duration::from_secs(20)) {
+            Some(rep) => eprintln!(
+                "fcc-bridge: recorded {} messages to {}{}",
+                rep.recorded.values().sum::<u64>(),
+                rep.files
+                    .iter()
+                    .map(|f| f.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                rep.error.map(|e| format!(" ({e})")).unwrap_or_default()
+            ),
+            None => eprintln!("fcc-bridge: the recorder did not finish in 20 s"),
+        }
+    }
     let code = match r {
         Ok(()) => 0,
         Err(BridgeError::Handshake(e)) => {

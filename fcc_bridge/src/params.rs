@@ -13,8 +13,143 @@ pub struct RosArgs {
     pub node_name: Option<String>,
     /// `-p name:=value`.
     pub params: BTreeMap<String, String>,
-    /// Other `-r from:=to` remaps (topic remapping is not supported; they are reported).
+    /// Other `-r from:=to` remaps (topic/service names; see [`remap`]).
     pub remaps: Vec<(String, String)>,
+    /// `--params-file FILE` (in order; see [`RosArgs::load_params_files`]).
+    pub params_files: Vec<String>,
+    /// For parameters that came from a `--params-file`: which file (for error messages).
+    pub param_origin: BTreeMap<String, String>,
+}
+
+impl RosArgs {
+    /// Merge the `--params-file` files into `params` for the node `namespace`/`node`: keys
+    /// `/**`, `/**/node`, `node`, `ns/node`, `/ns/node`, each with `ros__parameters`; nested
+    /// maps become dotted names. `-p` values win over files; later files win over earlier ones.
+    pub fn load_params_files(&mut self, namespace: &str, node: &str) -> Result<(), String> {
+        let mut from_files = BTreeMap::new();
+        for f in &self.params_files {
+            let text = std::fs::read_to_string(f)
+                .map_err(|e| format!("--params-file {f}: {e}"))?;
+            for (k, v) in params_from_yaml(&text, namespace, node)
+                .map_err(|e| format!("--params-file {f}: {e}"))?
+            {
+                from_files.insert(k, (v, f.clone()));
+            }
+        }
+        for (k, (v, f)) in from_files {
+            if !self.params.contains_key(&k) {
+                self.param_origin.insert(k.clone(), f);
+                self.params.insert(k, v);
+            }
+        }
+        Ok(())
+    }
+
+    /// Prefix an error about parameter `name` with the file it came from, if it came from one.
+    pub fn locate(&self, msg: String) -> String {
+        let name = msg.strip_prefix("parameter ").and_then(|r| r.split(|c: char| c == ':' || c == ' ').next());
+        match name.and_then(|n| self.param_origin.get(n)) {
+            Some(f) => format!("{f}: {msg}"),
+            None => msg,
+        }
+    }
+}
+
+/// Parameters for one node from a ROS 2 parameter YAML text (see
+/// [`RosArgs::load_params_files`]), as strings like `-p` values.
+pub fn params_from_yaml(
+    text: &str,
+    namespace: &str,
+    node: &str,
+) -> Result<BTreeMap<String, String>, String> {
+    let doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| format!("{e}"))?;
+    let top = doc
+        .as_mapping()
+        .ok_or("expected a mapping of node names")?;
+    let ns = namespace.trim_matches('/');
+    let fq = if ns.is_empty() {
+        format!("/{node}")
+    } else {
+        format!("/{ns}/{node}")
+    };
+    let mut out = BTreeMap::new();
+    // Wildcards first, so that a node's own section wins.
+    let mut sections: Vec<(u8, &serde_yaml::Value)> = Vec::new();
+    for (k, v) in top {
+        let k = k.as_str().ok_or("node names must be strings")?;
+        let rank = if k == "/**" {
+            0
+        } else if k == format!("/**/{node}") {
+            1
+        } else if k == node || k == fq || k == fq.trim_start_matches('/') {
+            2
+        } else {
+            continue;
+        };
+        let p = v
+            .get("ros__parameters")
+            .ok_or_else(|| format!("section '{k}' has no ros__parameters"))?;
+        sections.push((rank, p));
+    }
+    sections.sort_by_key(|(r, _)| *r);
+    fn flatten(
+        prefix: &str,
+        v: &serde_yaml::Value,
+        out: &mut BTreeMap<String, String>,
+    ) -> Result<(), String> {
+        use serde_yaml::Value as V;
+        match v {
+            V::Mapping(m) => {
+                for (k, v) in m {
+                    let k = match k {
+                        V::String(s) => s.clone(),
+                        other => serde_yaml::to_string(other)
+                            .map_err(|e| e.to_string())?
+                            .trim()
+                            .to_string(),
+                    };
+                    let name = if prefix.is_empty() {
+                        k
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    flatten(&name, v, out)?;
+                }
+            }
+            V::Bool(b) => {
+                out.insert(prefix.to_string(), b.to_string());
+            }
+            V::Number(n) => {
+                out.insert(prefix.to_string(), n.to_string());
+            }
+            V::String(s) => {
+                out.insert(prefix.to_string(), s.clone());
+            }
+            _ => return Err(format!("parameter {prefix}: unsupported value (arrays and null are not used by this node)")),
+        }
+        Ok(())
+    }
+    for (_, p) in sections {
+        flatten("", p, &mut out)?;
+    }
+    Ok(out)
+}
+
+/// Apply `-r from:=to` remaps to a topic or service name as the node writes it (`name`,
+/// relative or absolute) in namespace `ns`: a rule matches the name as written or its fully
+/// qualified form; the result is returned as given (relative names stay relative).
+pub fn remap(remaps: &[(String, String)], ns: &str, name: &str) -> String {
+    let fq = if name.starts_with('/') {
+        name.to_string()
+    } else {
+        format!("{}/{name}", ns.trim_end_matches('/'))
+    };
+    for (from, to) in remaps {
+        if from == name || *from == fq {
+            return to.clone();
+        }
+    }
+    name.to_string()
 }
 
 /// Split argv into (program args, ROS args). Accepts several `--ros-args` blocks, each ending
@@ -54,6 +189,13 @@ pub fn split_ros_args(args: &[String]) -> Result<(Vec<String>, RosArgs), String>
                         _ => ros.remaps.push((k.to_string(), val.to_string())),
                     }
                 }
+                i += 1;
+            }
+            "--params-file" => {
+                let v = args
+                    .get(i + 1)
+                    .ok_or_else(|| format!("{a} needs a file"))?;
+                ros.params_files.push(v.clone());
                 i += 1;
             }
             "--log-level" => {
@@ -113,6 +255,64 @@ pub fn domain_id(env: Option<&str>) -> Result<u16, String> {
     }
 }
 
+/// Recorder parameters (besides `--record PATH`).
+pub const RECORD_PARAMS: [&str; 7] = [
+    "record",
+    "record_on_arm",
+    "record_split_s",
+    "record_split_mb",
+    "record_compression",
+    "record_chunk_ms",
+    "record_chunk_mb",
+];
+
+/// Recording options from `--record PATH` (wins) or `-p record:=PATH`, and `-p record_*`:
+/// `record_on_arm` (false), `record_split_s`, `record_split_mb` (off), `record_compression`
+/// (`zstd` | `none`, default zstd), `record_chunk_ms` (500), `record_chunk_mb` (4).
+pub fn record_options(
+    flag: Option<&str>,
+    p: &BTreeMap<String, String>,
+) -> Result<Option<crate::record::RecordOptions>, String> {
+    let path = flag
+        .or(p.get("record").map(String::as_str))
+        .map(str::trim)
+        .filter(|s| !s.is_empty());
+    let Some(path) = path else {
+        if let Some(k) = RECORD_PARAMS[1..].iter().find(|k| p.contains_key(**k)) {
+            return Err(format!("parameter {k} needs --record PATH (or -p record:=PATH)"));
+        }
+        return Ok(None);
+    };
+    let mut o = crate::record::RecordOptions::new(path);
+    let pos = |k: &str| -> Result<Option<f64>, String> {
+        p.get(k)
+            .map(|v| match v.parse::<f64>() {
+                Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+                _ => Err(format!("parameter {k}: '{v}' is not a positive number")),
+            })
+            .transpose()
+    };
+    o.split_s = pos("record_split_s")?;
+    o.split_mb = pos("record_split_mb")?;
+    if let Some(ms) = pos("record_chunk_ms")? {
+        o.chunk_interval = std::time::Duration::from_millis(ms.max(1.0) as u64);
+    }
+    if let Some(mb) = pos("record_chunk_mb")? {
+        o.chunk_bytes = (mb * 1048576.0) as u64;
+    }
+    if let Some(v) = p.get("record_on_arm") {
+        o.on_arm = parse_bool(v)?;
+    }
+    if let Some(v) = p.get("record_compression") {
+        o.zstd = match v.as_str() {
+            "zstd" => true,
+            "none" | "" => false,
+            _ => return Err(format!("parameter record_compression: '{v}' (zstd | none)")),
+        };
+    }
+    Ok(Some(o))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,6 +351,40 @@ mod tests {
     }
 
     #[test]
+    fn params_file_and_remaps() {
+        let y = "/**:\n  ros__parameters:\n    ttl_ms: 400\n    use_sim_time: true\n\
+/uav1/fcc_bridge:\n  ros__parameters:\n    ttl_ms: 500\n    limits:\n      max_tilt_deg: 30.0\n\
+other_node:\n  ros__parameters:\n    ttl_ms: 9\n";
+        let p = params_from_yaml(y, "/uav1", "fcc_bridge").unwrap();
+        assert_eq!(p["ttl_ms"], "500");
+        assert_eq!(p["use_sim_time"], "true");
+        assert_eq!(p["limits.max_tilt_deg"], "30.0");
+        let p = params_from_yaml(y, "/uav2", "fcc_bridge").unwrap();
+        assert_eq!(p["ttl_ms"], "400");
+        assert!(params_from_yaml("/**:\n  ros__parameters:\n    a: [1, 2]\n", "/", "n")
+            .unwrap_err()
+            .contains("parameter a"));
+        let dir = std::env::temp_dir().join(format!("fcc_params_{}.yaml", std::process::id()));
+        std::fs::write(&dir, y).unwrap();
+        let (_, mut r) = split_ros_args(&s(&[
+            "x", "--ros-args", "--params-file", dir.to_str().unwrap(), "-p", "ttl_ms:=700",
+        ]))
+        .unwrap();
+        r.load_params_files("/uav1", "fcc_bridge").unwrap();
+        assert_eq!(r.params["ttl_ms"], "700", "-p wins over the file");
+        assert_eq!(r.params["limits.max_tilt_deg"], "30.0");
+        let _ = std::fs::remove_file(&dir);
+        let rm = vec![
+            ("imu/data_raw".to_string(), "imu/raw".to_string()),
+            ("/fcc/mag".to_string(), "/sensors/mag".to_string()),
+        ];
+        assert_eq!(remap(&rm, "/fcc", "imu/data_raw"), "imu/raw");
+        assert_eq!(remap(&rm, "/fcc", "mag"), "/sensors/mag");
+        assert_eq!(remap(&rm, "/uav1", "mag"), "mag");
+        assert_eq!(remap(&rm, "/fcc", "baro"), "baro");
+    }
+
+    #[test]
     fn dds_env() {
         assert!(localhost_only(None, None, None).unwrap());
         assert!(!localhost_only(Some("false"), Some("1"), None).unwrap());
@@ -162,5 +396,21 @@ mod tests {
         assert_eq!(domain_id(Some("42")).unwrap(), 42);
         assert!(domain_id(Some("300")).is_err());
         assert!(domain_id(Some("x")).is_err());
+    }
+
+    #[test]
+    fn record_params() {
+        let mut p = BTreeMap::new();
+        assert!(record_options(None, &p).unwrap().is_none());
+        p.insert("record_split_s".to_string(), "60".to_string());
+        assert!(record_options(None, &p).is_err());
+        p.insert("record".to_string(), "/tmp/a.mcap".to_string());
+        let o = record_options(None, &p).unwrap().unwrap();
+        assert_eq!(o.split_s, Some(60.0));
+        assert!(o.zstd && !o.on_arm);
+        let o = record_options(Some("/tmp/b.mcap"), &p).unwrap().unwrap();
+        assert_eq!(o.path, std::path::PathBuf::from("/tmp/b.mcap"));
+        p.insert("record_compression".to_string(), "lz5".to_string());
+        assert!(record_options(None, &p).is_err());
     }
 }

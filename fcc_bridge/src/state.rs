@@ -123,6 +123,11 @@ pub struct LinkState {
     pub yaw_ned: Option<f64>,
     /// MCU time of the latest frame.
     pub last_mcu_us: Option<u64>,
+    /// `use_sim_time` with `clock_source:=sync`: `/clock` minus the Linux clock at the latest
+    /// `/clock` (added to every stamp and to "now").
+    pub sim_offset_ns: Option<i64>,
+    /// `CommandAck`s and `ParamAck`s received, for the IO layer to answer services with.
+    pub acks: Vec<link::Message>,
 }
 
 impl LinkState {
@@ -139,6 +144,8 @@ impl LinkState {
             mcu_status: None,
             yaw_ned: None,
             last_mcu_us: None,
+            sim_offset_ns: None,
+            acks: Vec::new(),
         }
     }
 
@@ -158,7 +165,8 @@ impl LinkState {
 
     /// ROS stamp (ns) for an MCU time, given the Linux clock now.
     pub fn stamp_ns(&mut self, mcu_us: u64, now_ns: i64) -> i64 {
-        match self.clock {
+        let off = self.sim_offset_ns.unwrap_or(0);
+        off + match self.clock {
             ClockSource::Mcu => mcu_us as i64 * 1000,
             ClockSource::Sync => match self.timesync.to_ros_ns(mcu_us) {
                 Some(t) => t,
@@ -173,7 +181,7 @@ impl LinkState {
     /// ROS "now" (ns) for stamp checks: the Linux clock, or the MCU clock in `Mcu` mode.
     pub fn ros_now_ns(&self, now_ns: i64) -> i64 {
         match self.clock {
-            ClockSource::Sync => now_ns,
+            ClockSource::Sync => now_ns + self.sim_offset_ns.unwrap_or(0),
             ClockSource::Mcu => self.last_mcu_us.map_or(now_ns, |t| t as i64 * 1000),
         }
     }
@@ -242,7 +250,9 @@ impl LinkState {
                     );
                 }
             }
+            link::Message::ParamAck(_) => self.acks.push(f.message),
             link::Message::CommandAck(a) => {
+                self.acks.push(f.message);
                 let key = format!("{:?}:{}", a.command, convert::reject_name(a.result));
                 *self.counters.command_acks.entry(key).or_default() += 1;
                 if a.result != link::CommandResult::Accepted {

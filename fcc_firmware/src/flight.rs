@@ -12,7 +12,7 @@ use crate::control::velocity::{CrossTrack, VelocityController};
 use crate::control::vertical::VerticalController;
 use crate::geometry::MOTOR_COUNT;
 use crate::nav::{NavNotReady, NavState, Navigator};
-use crate::params::Params;
+use crate::params::{ParamError, Params};
 use crate::sensors::SensorInputs;
 use fcc_nav::ground_altitude::GroundSource;
 use fcc_nav::observer::AccelObserver;
@@ -136,6 +136,75 @@ impl FlightCore {
 
     pub fn params(&self) -> &Params {
         &self.params
+    }
+
+    /// Change one tunable parameter (ids: `fcc_msgs::param_id`) in flight: checked on a copy
+    /// with [`Params::validate`] (plus a range for gains it does not cover), then applied, and
+    /// the controllers that depend on it rebuilt (their integrators restart).
+    pub fn set_param(&mut self, id: u16, value: f32) -> Result<(), ParamError> {
+        use fcc_msgs::param_id as pid;
+        let range = |field: &'static str, lo: f32, hi: f32| -> Result<(), ParamError> {
+            if !value.is_finite() {
+                Err(ParamError { field, reason: "not finite" })
+            } else if value < lo || value > hi {
+                Err(ParamError { field, reason: "out of range" })
+            } else {
+                Ok(())
+            }
+        };
+        let mut p = self.params;
+        match id {
+            pid::MAX_HORIZ_SPEED_MPS => p.limits.max_horiz_speed_mps = value,
+            pid::MAX_TILT_DEG => p.limits.max_tilt_deg = value,
+            pid::CROSS_TRACK_K_PER_S => {
+                range("control.cross_track_k_per_s", 0.0, 5.0)?;
+                p.control.cross_track_k_per_s = value;
+            }
+            pid::VEL_P_PER_S => {
+                range("control.vel_p_per_s", 0.05, 10.0)?;
+                p.control.vel_p_per_s = value;
+            }
+            pid::MAX_CLIMB_MPS => p.limits.max_climb_mps = value,
+            pid::MAX_DESCENT_MPS => p.limits.max_descent_mps = value,
+            _ => return Err(ParamError { field: "id", reason: "unknown parameter" }),
+        }
+        p.validate()?;
+        self.params = p;
+        let c = p.control;
+        match id {
+            pid::MAX_TILT_DEG => {
+                let acc = AccelController::new(
+                    c.model_k1_mps2_per_rad,
+                    c.model_k2_per_s,
+                    c.accel_p_rad_per_mps2,
+                    c.accel_i_rad_per_mps,
+                    c.accel_forgetting,
+                    p.limits.max_tilt_deg.to_radians() * 0.5,
+                );
+                self.accel_ctrl = [acc, acc];
+            }
+            pid::CROSS_TRACK_K_PER_S => self.cross_track = CrossTrack::new(c.cross_track_k_per_s),
+            pid::VEL_P_PER_S => {
+                self.vel_ctrl = VelocityController::new(c.vel_p_per_s, c.vel_i_per_s2, c.vel_i_limit_mps2, c.accel_cmd_limit_mps2)
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// Current value of a tunable parameter (ids: `fcc_msgs::param_id`).
+    pub fn param(&self, id: u16) -> Option<f32> {
+        use fcc_msgs::param_id as pid;
+        let p = &self.params;
+        Some(match id {
+            pid::MAX_HORIZ_SPEED_MPS => p.limits.max_horiz_speed_mps,
+            pid::MAX_TILT_DEG => p.limits.max_tilt_deg,
+            pid::CROSS_TRACK_K_PER_S => p.control.cross_track_k_per_s,
+            pid::VEL_P_PER_S => p.control.vel_p_per_s,
+            pid::MAX_CLIMB_MPS => p.limits.max_climb_mps,
+            pid::MAX_DESCENT_MPS => p.limits.max_descent_mps,
+            _ => return None,
+        })
     }
     pub fn mode(&self) -> Mode {
         self.mode

@@ -52,3 +52,4 @@ pub mod mission;
 
 pub use follower::{Guidance, LegInfo, Phase, Request, WaypointFollower};
 pub use mission::{from_yaml_str, Mission, MissionError, Waypoint};
+pub mod track;

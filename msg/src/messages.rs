@@ -90,6 +90,21 @@ pub enum CommandResult {
     Incompatible,
 }
 
+/// Outcome of a [`ParamSet`] on the MCU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub enum ParamResult {
+    #[default]
+    Accepted,
+    /// No parameter with this id (see [`param_id`]).
+    UnknownId,
+    /// NaN or infinite (a NaN set is also how the Linux side reads the current value).
+    NotFinite,
+    /// Outside the parameter's range, or inconsistent with another parameter.
+    OutOfRange,
+    /// The peer announced a protocol version or schema hash the MCU does not share.
+    Incompatible,
+}
+
 /// Receive-side link statistics of one endpoint (all counters wrap at `u32::MAX`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub struct LinkCounters {
@@ -271,6 +286,15 @@ pub struct CommandAck {
     pub result: CommandResult,
 }
 
+/// Answer to one [`ParamSet`]: always carries the parameter's value now in use (so a refused
+/// set, or a NaN "read" set, reports the current value).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct ParamAck {
+    pub id: u16,
+    pub value: f32,
+    pub result: ParamResult,
+}
+
 // ---------------------------------------------------------------------------------------------
 // Linux → MCU
 // ---------------------------------------------------------------------------------------------
@@ -307,6 +331,42 @@ pub struct TimeSyncPing {
     pub linux_time_ns: u64,
 }
 
+/// Set one tunable MCU parameter (ids in [`param_id`]); answered by [`ParamAck`]. A NaN value
+/// changes nothing and reads the current value.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct ParamSet {
+    pub id: u16,
+    pub value: f32,
+}
+
+/// Ids of the MCU parameters settable over the link, with their names (as in the firmware's
+/// `Params`, `section.field`). Part of [`SCHEMA`].
+pub mod param_id {
+    pub const MAX_HORIZ_SPEED_MPS: u16 = 1;
+    pub const MAX_TILT_DEG: u16 = 2;
+    pub const CROSS_TRACK_K_PER_S: u16 = 3;
+    pub const VEL_P_PER_S: u16 = 4;
+    pub const MAX_CLIMB_MPS: u16 = 5;
+    pub const MAX_DESCENT_MPS: u16 = 6;
+    /// (id, name) of every settable parameter.
+    pub const ALL: &[(u16, &str)] = &[
+        (MAX_HORIZ_SPEED_MPS, "limits.max_horiz_speed_mps"),
+        (MAX_TILT_DEG, "limits.max_tilt_deg"),
+        (CROSS_TRACK_K_PER_S, "control.cross_track_k_per_s"),
+        (VEL_P_PER_S, "control.vel_p_per_s"),
+        (MAX_CLIMB_MPS, "limits.max_climb_mps"),
+        (MAX_DESCENT_MPS, "limits.max_descent_mps"),
+    ];
+    /// Name of a parameter id.
+    pub fn name(id: u16) -> Option<&'static str> {
+        ALL.iter().find(|(i, _)| *i == id).map(|(_, n)| *n)
+    }
+    /// Id of a parameter name.
+    pub fn by_name(name: &str) -> Option<u16> {
+        ALL.iter().find(|(_, n)| *n == name).map(|(i, _)| *i)
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The message enum, ids and schema
 // ---------------------------------------------------------------------------------------------
@@ -325,10 +385,12 @@ pub mod id {
     pub const STATUS: u8 = 0x0A;
     pub const TIME_SYNC_PONG: u8 = 0x0B;
     pub const COMMAND_ACK: u8 = 0x0C;
+    pub const PARAM_ACK: u8 = 0x0D;
     pub const HELLO_REQUEST: u8 = 0x40;
     pub const VELOCITY_SETPOINT: u8 = 0x41;
     pub const COMMAND: u8 = 0x42;
     pub const TIME_SYNC_PING: u8 = 0x43;
+    pub const PARAM_SET: u8 = 0x44;
 }
 
 /// Every message of the protocol, one variant per payload struct.
@@ -346,10 +408,12 @@ pub enum Message {
     Status(Status),
     TimeSyncPong(TimeSyncPong),
     CommandAck(CommandAck),
+    ParamAck(ParamAck),
     HelloRequest(HelloRequest),
     VelocitySetpoint(VelocitySetpoint),
     Command(Command),
     TimeSyncPing(TimeSyncPing),
+    ParamSet(ParamSet),
 }
 
 /// Which way a message travels.
@@ -375,10 +439,12 @@ macro_rules! for_each_message {
             Status, Status, STATUS;
             TimeSyncPong, TimeSyncPong, TIME_SYNC_PONG;
             CommandAck, CommandAck, COMMAND_ACK;
+            ParamAck, ParamAck, PARAM_ACK;
             HelloRequest, HelloRequest, HELLO_REQUEST;
             VelocitySetpoint, VelocitySetpoint, VELOCITY_SETPOINT;
             Command, Command, COMMAND;
             TimeSyncPing, TimeSyncPing, TIME_SYNC_PING;
+            ParamSet, ParamSet, PARAM_SET;
         }
     };
 }
@@ -475,6 +541,8 @@ enum FlightMode { Disarmed, Hold, Velocity, Land }
 enum FailsafeCause { None, SetpointStale, SetpointLost, Geofence, GpsLost }
 enum CommandKind { Arm, Disarm, Hold, Land, Velocity }
 enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible }
+enum ParamResult { Accepted, UnknownId, NotFinite, OutOfRange, Incompatible }
+params 1=limits.max_horiz_speed_mps 2=limits.max_tilt_deg 3=control.cross_track_k_per_s 4=control.vel_p_per_s 5=limits.max_climb_mps 6=limits.max_descent_mps
 struct LinkCounters max=60 { rx_bytes: u32, rx_frames: u32, crc_errors: u32, framing_errors: u32, overruns: u32, resyncs: u32, decode_errors: u32, unknown_ids: u32, version_errors: u32, seq_gaps: u32, frames_lost: u32, seq_resets: u32 }
 msg 0x01 Hello max=9 { protocol_version: u8, schema_hash: u32, firmware_version: [u8; 3] }
 msg 0x02 ImuRaw max=24 { gyro_frd_radps: [f32; 3], accel_frd_mps2: [f32; 3] }
@@ -488,10 +556,12 @@ msg 0x09 AltitudeFusion max=29 { baro_alt_m: f32, alt_m: f32, vel_down_mps: f32,
 msg 0x0A Status max=95 { mode: FlightMode, armed: bool, landed: bool, failsafe: FailsafeCause, loop_time_max_us: u32, loop_time_avg_us: u32, link_rx: LinkCounters, tx_frames: u32, tx_dropped: u32, setpoint_rejects: u32, command_rejects: u32, last_reject: CommandResult }
 msg 0x0B TimeSyncPong max=30 { linux_time_ns: u64, mcu_rx_time_us: u64, mcu_tx_time_us: u64 }
 msg 0x0C CommandAck max=2 { command: CommandKind, result: CommandResult }
+msg 0x0D ParamAck max=8 { id: u16, value: f32, result: ParamResult }
 msg 0x40 HelloRequest max=6 { protocol_version: u8, schema_hash: u32 }
 msg 0x41 VelocitySetpoint max=20 { vel_ned_mps: [f32; 3], has_yaw: bool, yaw_rad: f32, ttl_ms: u16 }
 msg 0x42 Command max=1 { command: CommandKind }
 msg 0x43 TimeSyncPing max=10 { linux_time_ns: u64 }
+msg 0x44 ParamSet max=7 { id: u16, value: f32 }
 ";
 
 /// FNV-1a, 32 bit, usable in `const` context.
@@ -590,5 +660,17 @@ mod tests {
         v.dedup();
         assert_eq!(v.len(), ALL_IDS.len());
         assert!(ALL_IDS.iter().all(|&i| i != 0 && i < 0x80));
+    }
+
+    /// The parameter table and the `params` line of [`SCHEMA`] agree.
+    #[test]
+    fn param_ids_in_schema() {
+        let line = SCHEMA.lines().find(|l| l.starts_with("params ")).unwrap();
+        let listed: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
+        let table: Vec<String> = param_id::ALL.iter().map(|(i, n)| std::format!("{i}={n}")).collect();
+        assert_eq!(listed, table, "update the params line of SCHEMA");
+        assert_eq!(param_id::by_name("limits.max_tilt_deg"), Some(param_id::MAX_TILT_DEG));
+        assert_eq!(param_id::name(param_id::VEL_P_PER_S), Some("control.vel_p_per_s"));
+        assert_eq!(param_id::name(999), None);
     }
 }

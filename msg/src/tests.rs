@@ -99,6 +99,11 @@ pub(crate) fn samples() -> Vec<Message> {
             command: CommandKind::Arm,
             result: CommandResult::NoHome,
         }),
+        Message::ParamAck(ParamAck {
+            id: param_id::MAX_TILT_DEG,
+            value: 25.0,
+            result: ParamResult::OutOfRange,
+        }),
         Message::HelloRequest(HelloRequest::ours()),
         Message::VelocitySetpoint(VelocitySetpoint {
             vel_ned_mps: [1.5, -0.5, -1.0],
@@ -111,6 +116,10 @@ pub(crate) fn samples() -> Vec<Message> {
         }),
         Message::TimeSyncPing(TimeSyncPing {
             linux_time_ns: 1_700_000_000_000_000_000,
+        }),
+        Message::ParamSet(ParamSet {
+            id: param_id::VEL_P_PER_S,
+            value: 1.5,
         }),
     ]
 }

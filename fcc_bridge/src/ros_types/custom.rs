@@ -88,3 +88,24 @@ impl Status {
     pub const FAILSAFE_GEOFENCE: u8 = 3;
     pub const FAILSAFE_GPS_LOST: u8 = 4;
 }
+
+/// fcc_msgs/msg/LinkFrame (see `msg/msg/LinkFrame.msg`): one raw link frame, as recorded.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LinkFrame {
+    pub header: Header,
+    pub direction: u8,
+    pub t_us: u64,
+    pub data: Vec<u8>,
+}
+ros_msg!(
+    LinkFrame,
+    "fcc_msgs",
+    "LinkFrame",
+    include_str!("../../../msg/msg/LinkFrame.msg"),
+    [Header]
+);
+
+impl LinkFrame {
+    pub const DIRECTION_MCU_TO_LINUX: u8 = 0;
+    pub const DIRECTION_LINUX_TO_MCU: u8 = 1;
+}

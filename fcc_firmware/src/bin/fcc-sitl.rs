@@ -32,7 +32,7 @@ struct Args {
     pty_link: Option<PathBuf>,
     /// Simulated seconds per wall-clock second; 0 = as fast as possible (lockstep).
     /// Default: 1 with --link-pty (real time, as a board), 0 otherwise.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     speed: Option<f64>,
 }
 
@@ -40,9 +40,14 @@ fn main() -> ExitCode {
     let args = match Args::try_parse() {
         Ok(a) => a,
         Err(e) => {
-            let code = if e.use_stderr() { 2 } else { 0 };
-            let _ = e.print();
-            return ExitCode::from(code);
+            if !e.use_stderr() {
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            // One line, as for every other bad input (clap's own text spans several).
+            let text = e.to_string();
+            eprintln!("fcc-sitl: {} (see --help)", text.split("\n\nUsage").next().unwrap_or("").split_whitespace().collect::<Vec<_>>().join(" ").trim_start_matches("error: "));
+            return ExitCode::from(2);
         }
     };
     let mut scenario = match Scenario::load(&args.scenario) {

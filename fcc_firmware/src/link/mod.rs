@@ -23,8 +23,8 @@ use fcc_nav::ground_altitude::GroundSource;
 use fcc_msgs::{
     period_us, AltitudeFusion, AltitudeSource, BaroRaw, Battery, CommandAck, CommandKind,
     CommandResult, EncodeError, Encoder, FailsafeCause, FlightMode, FrameDecoder, GpsRaw,
-    HandshakeError, Hello, ImuRaw, LinkCounters, MagRaw, Message, NavState, RangeRaw, RangeSensor,
-    Status, StreamRates, TimeSyncPong,
+    HandshakeError, Hello, ImuRaw, LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult,
+    RangeRaw, RangeSensor, Status, StreamRates, TimeSyncPong,
 };
 
 #[cfg(test)]
@@ -133,6 +133,7 @@ pub struct LinkEndpoint {
     /// (echoed Linux ns, MCU receive µs)
     pending_pong: Option<(u64, u64)>,
     acks: [Option<CommandAck>; ACK_QUEUE],
+    param_acks: [Option<ParamAck>; ACK_QUEUE],
     peer: PeerState,
     stats: LinkStats,
     loop_max_us: u32,
@@ -157,6 +158,7 @@ impl LinkEndpoint {
             pending_hello: true,
             pending_pong: None,
             acks: [None; ACK_QUEUE],
+            param_acks: [None; ACK_QUEUE],
             peer: PeerState::Unknown,
             stats: LinkStats::default(),
             loop_max_us: 0,
@@ -249,6 +251,34 @@ impl LinkEndpoint {
                     result: r,
                 });
             }
+            Message::ParamSet(ps) => {
+                let result = if matches!(self.peer, PeerState::Incompatible(_)) {
+                    ParamResult::Incompatible
+                } else if core.param(ps.id).is_none() {
+                    ParamResult::UnknownId
+                } else if !ps.value.is_finite() {
+                    // NaN: a read of the current value.
+                    ParamResult::NotFinite
+                } else {
+                    match core.set_param(ps.id, ps.value) {
+                        Ok(()) => ParamResult::Accepted,
+                        Err(e) if e.reason == "not finite" => ParamResult::NotFinite,
+                        Err(_) => ParamResult::OutOfRange,
+                    }
+                };
+                let ack = ParamAck {
+                    id: ps.id,
+                    value: core.param(ps.id).unwrap_or(f32::NAN),
+                    result,
+                };
+                if let Some(slot) = self.param_acks.iter_mut().find(|a| a.is_none()) {
+                    *slot = Some(ack);
+                } else {
+                    self.param_acks.rotate_left(1);
+                    self.param_acks[ACK_QUEUE - 1] = Some(ack);
+                    self.stats.tx_dropped = self.stats.tx_dropped.wrapping_add(1);
+                }
+            }
             _ => self.stats.unexpected = self.stats.unexpected.wrapping_add(1),
         }
     }
@@ -312,6 +342,16 @@ impl LinkEndpoint {
             }
             self.acks.rotate_left(1);
             self.acks[ACK_QUEUE - 1] = None;
+        }
+        while let Some(ack) = self.param_acks[0] {
+            if self
+                .emit(&Message::ParamAck(ack), now_us, out, &mut pos)
+                .is_err()
+            {
+                break;
+            }
+            self.param_acks.rotate_left(1);
+            self.param_acks[ACK_QUEUE - 1] = None;
         }
 
         let streams = self.rates.streams();

@@ -452,3 +452,46 @@ fn quaternion_from_euler() {
     let n: f32 = q.iter().map(|x| x * x).sum();
     assert!((n - 1.0).abs() < 1e-5);
 }
+
+#[test]
+fn param_set_is_applied_refused_with_a_reason_and_acknowledged() {
+    use fcc_msgs::{param_id, ParamSet};
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let mut linux = Linux::new();
+    let tilt0 = core.params().limits.max_tilt_deg;
+    let sets = [
+        (param_id::MAX_TILT_DEG, 30.0),           // accepted
+        (param_id::MAX_TILT_DEG, 80.0),           // out of range (validate: 5..=60)
+        (param_id::VEL_P_PER_S, f32::NAN),        // a read
+        (param_id::CROSS_TRACK_K_PER_S, -1.0),    // out of range (set_param's own range)
+    ];
+    for (id, value) in sets {
+        link.on_bytes(1_000, &linux.frame(Message::ParamSet(ParamSet { id, value })), &mut core);
+    }
+    link.on_bytes(1_000, &linux.frame(Message::ParamSet(ParamSet { id: 999, value: 1.0 })), &mut core);
+    assert_ne!(tilt0, 30.0);
+    assert_eq!(core.params().limits.max_tilt_deg, 30.0);
+    let acks: Vec<ParamAck> = linux
+        .receive(&tx(&mut link, 2_000, &core, &SensorInputs::default()))
+        .iter()
+        .filter_map(|f| match f.message {
+            Message::ParamAck(a) => Some(a),
+            _ => None,
+        })
+        .collect();
+    // Queue of 4: the oldest (the accepted set) was dropped for the unknown id's ack.
+    let r: Vec<(u16, ParamResult)> = acks.iter().map(|a| (a.id, a.result)).collect();
+    assert_eq!(
+        r,
+        [
+            (param_id::MAX_TILT_DEG, ParamResult::OutOfRange),
+            (param_id::VEL_P_PER_S, ParamResult::NotFinite),
+            (param_id::CROSS_TRACK_K_PER_S, ParamResult::OutOfRange),
+            (999, ParamResult::UnknownId),
+        ]
+    );
+    assert_eq!(acks[0].value, 30.0, "a refused set reports the value in use");
+    assert_eq!(acks[1].value, Params::default().control.vel_p_per_s);
+    assert_eq!(core.params().control.cross_track_k_per_s, Params::default().control.cross_track_k_per_s);
+}

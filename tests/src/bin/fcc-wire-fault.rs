@@ -31,13 +31,13 @@ struct Args {
     #[arg(long)]
     link: Option<PathBuf>,
     /// Bit-error rate applied to every bit in both directions.
-    #[arg(long, default_value_t = 1e-4)]
+    #[arg(long, default_value_t = 1e-4, allow_negative_numbers = true)]
     ber: f64,
     /// Probability that a byte is dropped.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     drop: f64,
     /// Probability that a byte is sent twice.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     dup: f64,
     /// Seed of the fault generator.
     #[arg(long, default_value_t = 1)]
@@ -99,9 +99,13 @@ fn main() -> ExitCode {
     let a = match Args::try_parse() {
         Ok(a) => a,
         Err(e) => {
-            let code = if e.use_stderr() { 2 } else { 0 };
-            let _ = e.print();
-            return ExitCode::from(code);
+            if !e.use_stderr() {
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            let text = e.to_string();
+            eprintln!("fcc-wire-fault: {} (see --help)", text.split("\n\nUsage").next().unwrap_or("").split_whitespace().collect::<Vec<_>>().join(" ").trim_start_matches("error: "));
+            return ExitCode::from(2);
         }
     };
     for (name, p) in [("--ber", a.ber), ("--drop", a.drop), ("--dup", a.dup)] {

@@ -1,0 +1,766 @@
+//! Flight recorder: every message the bridge publishes and receives, and the raw link frames,
+//! into rosbag2-compatible MCAP files (profile `ros2`, `ros2msg` schemas with their full
+//! dependency text, `cdr` payloads with the 4-byte encapsulation header, `offered_qos_profiles`
+//! channel metadata, a Statistics record).
+//!
+//! The bridge's link task calls a [`Tap`] (cheap: CDR-serialise and queue); one writer thread
+//! owns the file, so a slow disk never stalls the serial loop.
+//!
+//! **Chunking policy (crash safety)**: a chunk is closed and the file flushed to the OS every
+//! [`RecordOptions::chunk_interval`] (default 500 ms of wall time) or when it reaches
+//! [`RecordOptions::chunk_bytes`] (default 4 MiB), whichever comes first. A SIGKILL (or power
+//! loss after the kernel wrote its cache) therefore loses at most the open chunk: ≤ 0.5 s plus
+//! the queue, measured ≈ 0.5 s. A SIGINT/SIGTERM finishes the file (summary, footer).
+//!
+//! **Files**: the first file is `PATH`; a split (`record_split_s`, `record_split_mb`) or a new
+//! arm period (`record_on_arm`) opens `STEM_1.mcap`, `STEM_2.mcap`, … beside it. At the end the
+//! bridge writes `PATH.counts.json`: the per-topic counts it published/received and recorded.
+//!
+//! **Write errors** (disk full, …): one error is logged, the recording stops, the bridge runs on.
+
+use crate::ros_types::{full_definition, Header, LinkFrame, RosMsg, Time};
+use std::collections::{BTreeMap, HashMap};
+use std::io::{BufWriter, Seek, Write};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// The topic of the raw link frames.
+pub const RAW_FRAMES_TOPIC: &str = "link/raw_frames";
+
+/// Recording options (`--record PATH`, `-p record:=PATH`, `-p record_*`).
+#[derive(Clone, Debug)]
+pub struct RecordOptions {
+    pub path: PathBuf,
+    /// zstd chunk compression (`-p record_compression:=zstd|none`, default zstd).
+    pub zstd: bool,
+    /// Close the open chunk at least this often (crash-safety bound).
+    pub chunk_interval: Duration,
+    /// ... or when it holds this many bytes.
+    pub chunk_bytes: u64,
+    /// Start a new file after this many seconds of recording.
+    pub split_s: Option<f64>,
+    /// Start a new file after this many MB (10^6 B) of messages.
+    pub split_mb: Option<f64>,
+    /// Record only while armed (a new file per arm period).
+    pub on_arm: bool,
+}
+
+impl RecordOptions {
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        RecordOptions {
+            path: path.into(),
+            zstd: true,
+            chunk_interval: Duration::from_millis(500),
+            chunk_bytes: 4 << 20,
+            split_s: None,
+            split_mb: None,
+            on_arm: false,
+        }
+    }
+}
+
+/// QoS of a channel, as `offered_qos_profiles` (rmw integer enums).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct QosInfo {
+    pub reliable: bool,
+    pub transient_local: bool,
+    pub depth: u32,
+}
+
+impl QosInfo {
+    pub const TELEMETRY: QosInfo = QosInfo {
+        reliable: true,
+        transient_local: false,
+        depth: 10,
+    };
+    pub const BEST_EFFORT: QosInfo = QosInfo {
+        reliable: false,
+        transient_local: false,
+        depth: 10,
+    };
+
+    /// rosbag2's YAML (history 1 = keep last, reliability 1/2 = reliable/best effort,
+    /// durability 1/2 = transient local/volatile, liveliness 1 = automatic).
+    pub fn yaml(&self) -> String {
+        let inf = "{sec: 9223372036, nsec: 854775807}";
+        format!(
+            "- history: 1\n  depth: {}\n  reliability: {}\n  durability: {}\n  deadline: {inf}\n  lifespan: {inf}\n  liveliness: 1\n  liveliness_lease_duration: {inf}\n  avoid_ros_namespace_conventions: false\n",
+            self.depth,
+            if self.reliable { 1 } else { 2 },
+            if self.transient_local { 1 } else { 2 }
+        )
+    }
+}
+
+/// CDR (little endian) with the 4-byte encapsulation header `00 01 00 00`.
+pub fn cdr_bytes<T: serde::Serialize>(m: &T) -> Vec<u8> {
+    let mut v = vec![0u8, 1, 0, 0];
+    if let Err(e) = cdr_encoding::to_writer::<T, byteorder::LittleEndian, _>(&mut v, m) {
+        tracing::error!("CDR serialisation failed: {e}");
+    }
+    v
+}
+
+/// Decode a CDR payload (with its 4-byte header) into `T`.
+pub fn from_cdr<T: serde::de::DeserializeOwned>(data: &[u8]) -> Option<T> {
+    if data.len() < 4 {
+        return None;
+    }
+    let r = if data[1] == 1 {
+        cdr_encoding::from_bytes::<T, byteorder::LittleEndian>(&data[4..])
+    } else {
+        cdr_encoding::from_bytes::<T, byteorder::BigEndian>(&data[4..])
+    };
+    r.ok().map(|(t, _)| t)
+}
+
+/// Join a ROS name to the namespace (`imu` + `/fcc` → `/fcc/imu`; absolute names stay).
+pub fn full_topic(namespace: &str, name: &str) -> String {
+    if name.starts_with('/') {
+        name.to_string()
+    } else {
+        format!("{}/{}", namespace.trim_end_matches('/'), name)
+    }
+}
+
+/// Per-topic counts of what the bridge published and received.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Counts {
+    pub published: BTreeMap<String, u64>,
+    pub received: BTreeMap<String, u64>,
+    /// Raw link frames by direction (`mcu_to_linux`, `linux_to_mcu`).
+    pub raw_frames: BTreeMap<String, u64>,
+}
+
+impl Counts {
+    /// Everything by topic (published + received + raw frames on their topic).
+    pub fn by_topic(&self, raw_topic: &str) -> BTreeMap<String, u64> {
+        let mut m = self.published.clone();
+        for (k, v) in &self.received {
+            *m.entry(k.clone()).or_default() += v;
+        }
+        let raw: u64 = self.raw_frames.values().sum();
+        if raw > 0 {
+            *m.entry(raw_topic.to_string()).or_default() += raw;
+        }
+        m
+    }
+}
+
+struct ChannelDesc {
+    topic: String,
+    schema_name: String,
+    schema: String,
+    qos: String,
+}
+
+enum Ev {
+    Channel(u16, ChannelDesc),
+    Msg { ch: u16, t: u64, data: Vec<u8> },
+    Armed(bool),
+    Finish(Counts, mpsc::Sender<RecorderReport>),
+}
+
+/// What the writer thread did.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct RecorderReport {
+    pub files: Vec<PathBuf>,
+    /// Messages written, by topic.
+    pub recorded: BTreeMap<String, u64>,
+    /// Messages not written (not armed with record_on_arm, or after a write error).
+    pub not_recorded: u64,
+    pub error: Option<String>,
+}
+
+/// The bridge's side of the recorder: counts every message, and queues it for the writer
+/// thread when recording.
+pub struct Tap {
+    namespace: String,
+    inner: Mutex<TapInner>,
+    tx: Option<mpsc::Sender<Ev>>,
+    thread: Mutex<Option<std::thread::JoinHandle<()>>>,
+    pub path: Option<PathBuf>,
+}
+
+struct TapInner {
+    counts: Counts,
+    /// Relative or absolute name → (full topic, published, received).
+    names: HashMap<String, (String, u64, u64)>,
+    channels: HashMap<String, u16>,
+    raw_in: Vec<u8>,
+    raw_decoder: fcc_msgs::FrameDecoder,
+    armed: Option<bool>,
+}
+
+impl Tap {
+    /// A tap that only counts.
+    pub fn counting(namespace: &str) -> Arc<Tap> {
+        Arc::new(Tap {
+            namespace: namespace.to_string(),
+            inner: Mutex::new(TapInner {
+                counts: Counts::default(),
+                names: HashMap::new(),
+                channels: HashMap::new(),
+                raw_in: Vec::new(),
+                raw_decoder: fcc_msgs::FrameDecoder::new(),
+                armed: None,
+            }),
+            tx: None,
+            thread: Mutex::new(None),
+            path: None,
+        })
+    }
+
+    /// A recording tap; the writer thread starts now (the first file is created at once,
+    /// unless `on_arm`).
+    pub fn recording(namespace: &str, opts: RecordOptions) -> std::io::Result<Arc<Tap>> {
+        if let Some(d) = opts.path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(d)?;
+        }
+        let (tx, rx) = mpsc::channel();
+        let path = opts.path.clone();
+        let mut w = WriterThread::new(opts);
+        if !w.opts.on_arm {
+            w.open();
+        }
+        let th = std::thread::Builder::new()
+            .name("fcc-recorder".into())
+            .spawn(move || w.run(rx))?;
+        let mut t = Arc::try_unwrap(Tap::counting(namespace))
+            .ok()
+            .expect("fresh Arc");
+        t.tx = Some(tx);
+        t.thread = Mutex::new(Some(th));
+        t.path = Some(path);
+        Ok(Arc::new(t))
+    }
+
+    pub fn is_recording(&self) -> bool {
+        self.tx.is_some()
+    }
+
+    fn channel_id(&self, inner: &mut TapInner, topic: &str, make: impl FnOnce() -> ChannelDesc) -> u16 {
+        if let Some(id) = inner.channels.get(topic) {
+            return *id;
+        }
+        let id = inner.channels.len() as u16;
+        inner.channels.insert(topic.to_string(), id);
+        if let Some(tx) = &self.tx {
+            let _ = tx.send(Ev::Channel(id, make()));
+        }
+        id
+    }
+
+    fn record<T: RosMsg + serde::Serialize>(
+        &self,
+        inner: &mut TapInner,
+        topic: &str,
+        qos: QosInfo,
+        m: &T,
+        t_ns: i64,
+    ) {
+        if self.tx.is_none() {
+            return;
+        }
+        let ch = self.channel_id(inner, topic, || ChannelDesc {
+            topic: topic.to_string(),
+            schema_name: T::schema_name(),
+            schema: full_definition::<T>(),
+            qos: qos.yaml(),
+        });
+        let data = cdr_bytes(m);
+        if let Some(tx) = &self.tx {
+            let _ = tx.send(Ev::Msg {
+                ch,
+                t: t_ns.max(0) as u64,
+                data,
+            });
+        }
+    }
+
+    /// A message the bridge published on `name` (relative to the namespace or absolute), at ROS
+    /// time `t_ns`.
+    pub fn published<T: RosMsg + serde::Serialize>(&self, name: &str, qos: QosInfo, m: &T, t_ns: i64) {
+        self.count_and_record(name, true, qos, m, t_ns);
+    }
+
+    /// A message the bridge received.
+    pub fn received<T: RosMsg + serde::Serialize>(&self, name: &str, qos: QosInfo, m: &T, t_ns: i64) {
+        self.count_and_record(name, false, qos, m, t_ns);
+    }
+
+    fn count_and_record<T: RosMsg + serde::Serialize>(&self, name: &str, publ: bool, qos: QosInfo, m: &T, t_ns: i64) {
+        let mut g = self.inner.lock().unwrap();
+        let g = &mut *g;
+        if !g.names.contains_key(name) {
+            g.names.insert(name.to_string(), (full_topic(&self.namespace, name), 0, 0));
+        }
+        let e = g.names.get_mut(name).expect("inserted");
+        if publ {
+            e.1 += 1;
+        } else {
+            e.2 += 1;
+        }
+        if self.tx.is_none() {
+            return;
+        }
+        let ch = match g.channels.get(&e.0) {
+            Some(c) => *c,
+            None => {
+                let topic = e.0.clone();
+                self.channel_id(g, &topic, || ChannelDesc {
+                    topic: topic.clone(),
+                    schema_name: T::schema_name(),
+                    schema: full_definition::<T>(),
+                    qos: qos.yaml(),
+                })
+            }
+        };
+        let data = cdr_bytes(m);
+        if let Some(tx) = &self.tx {
+            let _ = tx.send(Ev::Msg { ch, t: t_ns.max(0) as u64, data });
+        }
+    }
+
+    /// Bytes read from the MCU (any split): recorded frame by frame at each 0x00.
+    pub fn raw_in(&self, bytes: &[u8], t_ns: i64) {
+        let mut g = self.inner.lock().unwrap();
+        let g = &mut *g;
+        for &b in bytes {
+            g.raw_in.push(b);
+            if b == 0 {
+                let data = std::mem::take(&mut g.raw_in);
+                if data.len() > 1 {
+                    self.raw_frame(g, LinkFrame::DIRECTION_MCU_TO_LINUX, data, t_ns);
+                }
+            }
+        }
+    }
+
+    /// Bytes written to the MCU (whole frames, possibly several).
+    pub fn raw_out(&self, bytes: &[u8], t_ns: i64) {
+        let mut g = self.inner.lock().unwrap();
+        let g = &mut *g;
+        for f in bytes.split_inclusive(|b| *b == 0) {
+            if f.len() > 1 {
+                self.raw_frame(g, LinkFrame::DIRECTION_LINUX_TO_MCU, f.to_vec(), t_ns);
+            }
+        }
+    }
+
+    /// A new connection: forget a half frame.
+    pub fn raw_reset(&self) {
+        self.inner.lock().unwrap().raw_in.clear();
+    }
+
+    fn raw_frame(&self, g: &mut TapInner, direction: u8, data: Vec<u8>, t_ns: i64) {
+        let key = if direction == LinkFrame::DIRECTION_MCU_TO_LINUX {
+            "mcu_to_linux"
+        } else {
+            "linux_to_mcu"
+        };
+        *g.counts.raw_frames.entry(key.into()).or_default() += 1;
+        if self.tx.is_none() {
+            return;
+        }
+        // The frame header's time, through the same codec (stateless for one whole frame).
+        g.raw_decoder.reset();
+        let t_us = g
+            .raw_decoder
+            .push_slice(&data)
+            .filter_map(|r| r.ok())
+            .last()
+            .map_or(0, |f| f.header.t_us);
+        let m = LinkFrame {
+            header: Header {
+                stamp: Time::from_nanos(t_ns),
+                frame_id: String::new(),
+            },
+            direction,
+            t_us,
+            data,
+        };
+        let topic = full_topic(&self.namespace, RAW_FRAMES_TOPIC);
+        self.record(g, &topic, QosInfo::TELEMETRY, &m, t_ns);
+    }
+
+    /// The vehicle's armed state (for `record_on_arm`); only changes are forwarded.
+    pub fn armed(&self, armed: bool) {
+        let mut g = self.inner.lock().unwrap();
+        if g.armed != Some(armed) {
+            g.armed = Some(armed);
+            if let Some(tx) = &self.tx {
+                let _ = tx.send(Ev::Armed(armed));
+            }
+        }
+    }
+
+    pub fn counts(&self) -> Counts {
+        let g = self.inner.lock().unwrap();
+        let mut c = g.counts.clone();
+        for (topic, p, r) in g.names.values() {
+            if *p > 0 {
+                *c.published.entry(topic.clone()).or_default() += p;
+            }
+            if *r > 0 {
+                *c.received.entry(topic.clone()).or_default() += r;
+            }
+        }
+        c
+    }
+
+    /// Finish the recording (summary, footer, `PATH.counts.json`); returns the writer's report.
+    /// Idempotent; waits at most `timeout` for the writer thread.
+    pub fn finish(&self, timeout: Duration) -> Option<RecorderReport> {
+        let tx = self.tx.as_ref()?;
+        let (rtx, rrx) = mpsc::channel();
+        tx.send(Ev::Finish(self.counts(), rtx)).ok()?;
+        let r = rrx.recv_timeout(timeout).ok();
+        if let Some(th) = self.thread.lock().unwrap().take() {
+            if r.is_some() {
+                let _ = th.join();
+            }
+        }
+        r
+    }
+}
+
+/// The sidecar next to the first file.
+pub fn counts_path(path: &Path) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(".counts.json");
+    PathBuf::from(s)
+}
+
+/// `PATH` for index 0, `STEM_i.EXT` after.
+pub fn split_path(path: &Path, i: usize) -> PathBuf {
+    if i == 0 {
+        return path.to_path_buf();
+    }
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = path.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "mcap".into());
+    path.with_file_name(format!("{stem}_{i}.{ext}"))
+}
+
+/// Any `Write + Seek` file the writer can use.
+pub type McapFile = BufWriter<std::fs::File>;
+
+/// Write options shared by the recorder and the benchmark's bare writer.
+pub fn write_options(zstd: bool, chunk_bytes: u64) -> mcap::WriteOptions {
+    mcap::WriteOptions::new()
+        .profile("ros2")
+        .library(concat!("fcc-bridge ", env!("CARGO_PKG_VERSION"), " (mcap 0.26)"))
+        .compression(if zstd { Some(mcap::Compression::Zstd) } else { None })
+        .compression_level(1)
+        .chunk_size(Some(chunk_bytes))
+}
+
+/// One open MCAP file with its channel mapping.
+pub struct BagWriter<W: Write + Seek> {
+    pub writer: mcap::Writer<W>,
+    /// Our channel id → (mcap channel id, next sequence number).
+    map: HashMap<u16, (u16, u32)>,
+    schemas: HashMap<String, u16>,
+    pub bytes: u64,
+}
+
+impl<W: Write + Seek> BagWriter<W> {
+    pub fn new(w: W, zstd: bool, chunk_bytes: u64) -> mcap::McapResult<Self> {
+        Ok(BagWriter {
+            writer: write_options(zstd, chunk_bytes).create(w)?,
+            map: HashMap::new(),
+            schemas: HashMap::new(),
+            bytes: 0,
+        })
+    }
+
+    fn add_channel(&mut self, id: u16, d: &ChannelDesc) -> mcap::McapResult<u16> {
+        let sid = match self.schemas.get(&d.schema_name) {
+            Some(s) => *s,
+            None => {
+                let s = self.writer.add_schema(&d.schema_name, "ros2msg", d.schema.as_bytes())?;
+                self.schemas.insert(d.schema_name.clone(), s);
+                s
+            }
+        };
+        let mut md = BTreeMap::new();
+        md.insert("offered_qos_profiles".to_string(), d.qos.clone());
+        let c = self.writer.add_channel(sid, &d.topic, "cdr", &md)?;
+        self.map.insert(id, (c, 0));
+        Ok(c)
+    }
+
+    fn write(&mut self, id: u16, desc: &ChannelDesc, t: u64, data: &[u8]) -> mcap::McapResult<()> {
+        if !self.map.contains_key(&id) {
+            self.add_channel(id, desc)?;
+        }
+        let e = self.map.get_mut(&id).expect("added");
+        let seq = e.1;
+        e.1 = e.1.wrapping_add(1);
+        self.bytes += data.len() as u64 + 31;
+        self.writer.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id: e.0,
+                sequence: seq,
+                log_time: t,
+                publish_time: t,
+            },
+            data,
+        )
+    }
+}
+
+struct WriterThread {
+    opts: RecordOptions,
+    channels: Vec<Option<ChannelDesc>>,
+    bag: Option<BagWriter<McapFile>>,
+    file_index: usize,
+    opened_at: Instant,
+    last_flush: Instant,
+    armed: bool,
+    failed: bool,
+    report: RecorderReport,
+    /// Messages written per channel id (→ `report.recorded` at the end).
+    written: Vec<u64>,
+}
+
+impl WriterThread {
+    fn new(opts: RecordOptions) -> Self {
+        WriterThread {
+            opts,
+            channels: Vec::new(),
+            bag: None,
+            file_index: 0,
+            opened_at: Instant::now(),
+            last_flush: Instant::now(),
+            armed: false,
+            failed: false,
+            report: RecorderReport::default(),
+            written: Vec::new(),
+        }
+    }
+
+    fn fail(&mut self, what: &str, e: impl std::fmt::Display) {
+        if !self.failed {
+            let path = self.report.files.last().cloned().unwrap_or_default();
+            let msg = format!("recording to {} stopped: {what}: {e} (the bridge keeps running)", path.display());
+            tracing::error!("{msg}");
+            self.report.error = Some(msg);
+        }
+        self.failed = true;
+        // Drop without finishing: the file stays readable up to its last closed chunk.
+        if let Some(b) = self.bag.take() {
+            drop(b.writer.into_inner());
+        }
+    }
+
+    fn open(&mut self) {
+        if self.failed {
+            return;
+        }
+        let path = split_path(&self.opts.path, self.file_index);
+        self.file_index += 1;
+        let r = std::fs::File::create(&path)
+            .map_err(|e| e.to_string())
+            .and_then(|f| {
+                BagWriter::new(BufWriter::with_capacity(1 << 20, f), self.opts.zstd, self.opts.chunk_bytes)
+                    .map_err(|e| e.to_string())
+            });
+        self.report.files.push(path.clone());
+        match r {
+            Ok(b) => {
+                tracing::info!(
+                    "recording to {} (chunks closed every {} ms or {} MiB{})",
+                    path.display(),
+                    self.opts.chunk_interval.as_millis(),
+                    self.opts.chunk_bytes >> 20,
+                    if self.opts.zstd { ", zstd" } else { "" }
+                );
+                self.bag = Some(b);
+                self.opened_at = Instant::now();
+                self.last_flush = Instant::now();
+            }
+            Err(e) => self.fail("create", e),
+        }
+    }
+
+    fn close(&mut self) {
+        if let Some(mut b) = self.bag.take() {
+            match b.writer.finish() {
+                Ok(_) => {
+                    let mut inner = b.writer.into_inner();
+                    if let Err(e) = inner.flush() {
+                        self.fail("flush", e);
+                    }
+                }
+                Err(e) => self.fail("finish", e),
+            }
+        }
+    }
+
+    fn on_msg(&mut self, ch: u16, t: u64, data: Vec<u8>) {
+        if !matches!(self.channels.get(ch as usize), Some(Some(_)))
+            || self.failed
+            || (self.opts.on_arm && !self.armed)
+        {
+            self.report.not_recorded += 1;
+            return;
+        }
+        if self.bag.is_none() {
+            self.open();
+        }
+        let (Some(bag), Some(Some(desc))) = (self.bag.as_mut(), self.channels.get(ch as usize)) else {
+            self.report.not_recorded += 1;
+            return;
+        };
+        if let Err(e) = bag.write(ch, desc, t, &data) {
+            self.report.not_recorded += 1;
+            self.fail("write", e);
+            return;
+        }
+        let i = ch as usize;
+        if self.written.len() <= i {
+            self.written.resize(i + 1, 0);
+        }
+        self.written[i] += 1;
+        let split_bytes = self.opts.split_mb.is_some_and(|mb| bag.bytes as f64 >= mb * 1e6);
+        let split_time = self
+            .opts
+            .split_s
+            .is_some_and(|s| self.opened_at.elapsed().as_secs_f64() >= s);
+        if split_bytes || split_time {
+            self.close();
+            self.open();
+        }
+    }
+
+    fn maybe_flush(&mut self) {
+        if self.last_flush.elapsed() >= self.opts.chunk_interval {
+            self.last_flush = Instant::now();
+            if let Some(b) = self.bag.as_mut() {
+                if let Err(e) = b.writer.flush() {
+                    self.fail("write", e);
+                }
+            }
+        }
+    }
+
+    fn run(mut self, rx: mpsc::Receiver<Ev>) {
+        loop {
+            let wait = self
+                .opts
+                .chunk_interval
+                .saturating_sub(self.last_flush.elapsed())
+                .max(Duration::from_millis(1));
+            match rx.recv_timeout(wait) {
+                Ok(ev) => {
+                    if self.handle(ev, &rx) {
+                        return;
+                    }
+                    // Batch what is queued before looking at the clock again.
+                    for _ in 0..4096 {
+                        match rx.try_recv() {
+                            Ok(ev) => {
+                                if self.handle(ev, &rx) {
+                                    return;
+                                }
+                            }
+                            Err(_) => break,
+                        }
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    self.close();
+                    return;
+                }
+            }
+            self.maybe_flush();
+        }
+    }
+
+    fn add_desc(&mut self, id: u16, d: ChannelDesc) {
+        let i = id as usize;
+        if self.channels.len() <= i {
+            self.channels.resize_with(i + 1, || None);
+        }
+        self.channels[i] = Some(d);
+    }
+
+    /// One event; true when finished.
+    fn handle(&mut self, ev: Ev, rx: &mpsc::Receiver<Ev>) -> bool {
+        match ev {
+            Ev::Channel(id, d) => self.add_desc(id, d),
+            Ev::Msg { ch, t, data } => self.on_msg(ch, t, data),
+            Ev::Armed(a) => {
+                self.armed = a;
+                if self.opts.on_arm {
+                    if a {
+                        if self.bag.is_none() {
+                            self.open();
+                        }
+                    } else {
+                        self.close();
+                    }
+                }
+            }
+            Ev::Finish(counts, reply) => {
+                // Whatever is still queued was sent before Finish: drain it first.
+                while let Ok(ev) = rx.try_recv() {
+                    match ev {
+                        Ev::Msg { ch, t, data } => self.on_msg(ch, t, data),
+                        Ev::Channel(id, d) => self.add_desc(id, d),
+                        _ => {}
+                    }
+                }
+                self.close();
+                for (i, n) in self.written.iter().enumerate() {
+                    if let Some(Some(c)) = self.channels.get(i) {
+                        *self.report.recorded.entry(c.topic.clone()).or_default() += n;
+                    }
+                }
+                let side = counts_path(&self.opts.path);
+                let doc = serde_json::json!({
+                    "bridge": counts,
+                    "recorder": self.report,
+                    "raw_frames_topic": self.channels.iter().flatten()
+                        .find(|c| c.schema_name == "fcc_msgs/msg/LinkFrame").map(|c| c.topic.clone()),
+                });
+                if let Err(e) = std::fs::write(&side, serde_json::to_string_pretty(&doc).unwrap_or_default()) {
+                    tracing::warn!("{}: {e}", side.display());
+                }
+                let _ = reply.send(self.report.clone());
+                return true;
+            }
+        }
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ros_types::Imu;
+
+    #[test]
+    fn cdr_has_encapsulation_header_and_roundtrips() {
+        let m = Imu::default();
+        let b = cdr_bytes(&m);
+        assert_eq!(&b[..4], &[0, 1, 0, 0]);
+        let back: Imu = from_cdr(&b).unwrap();
+        assert_eq!(back, m);
+        let f = LinkFrame { direction: 1, t_us: 7, data: vec![1, 2, 0], ..Default::default() };
+        assert_eq!(from_cdr::<LinkFrame>(&cdr_bytes(&f)).unwrap(), f);
+    }
+
+    #[test]
+    fn names_and_paths() {
+        assert_eq!(full_topic("/fcc", "imu/data_raw"), "/fcc/imu/data_raw");
+        assert_eq!(full_topic("/fcc/", "/tf"), "/tf");
+        assert_eq!(split_path(Path::new("/x/b.mcap"), 0), PathBuf::from("/x/b.mcap"));
+        assert_eq!(split_path(Path::new("/x/b.mcap"), 2), PathBuf::from("/x/b_2.mcap"));
+        assert!(QosInfo::TELEMETRY.yaml().starts_with("- history: 1\n  depth: 10\n  reliability: 1\n  durability: 2\n"));
+    }
+}

@@ -1,0 +1,132 @@
+//! Small helpers shared by the project's other ROS 2 nodes (e.g. `fcc-mission`): the DDS
+//! participant with the same loopback default as the bridge, the DDS environment
+//! (`ROS_DOMAIN_ID`, `ROS_LOCALHOST_ONLY`, `ROS_AUTOMATIC_DISCOVERY_RANGE`), publishers and
+//! subscriptions by relative ROS name, and the ROS clock (system or `/clock`).
+
+use crate::params::{self, RosArgs};
+use crate::ros_types::{Clock, RosMsg};
+use ros2_client::qos::{Durability, History, WhenFull};
+use ros2_client::{Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription};
+use std::net::Ipv4Addr;
+
+/// DDS settings from the environment and the `localhost_only` parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DdsEnv {
+    pub domain_id: u16,
+    pub localhost_only: bool,
+}
+
+impl DdsEnv {
+    /// Read `ROS_DOMAIN_ID`, `ROS_LOCALHOST_ONLY`, `ROS_AUTOMATIC_DISCOVERY_RANGE` and the
+    /// `localhost_only` ROS parameter (loopback only by default, as the bridge).
+    pub fn from_env(ros: &RosArgs) -> Result<Self, String> {
+        let env = |k: &str| std::env::var(k).ok();
+        Ok(DdsEnv {
+            domain_id: params::domain_id(env("ROS_DOMAIN_ID").as_deref())?,
+            localhost_only: params::localhost_only(
+                ros.params.get("localhost_only").map(String::as_str),
+                env("ROS_LOCALHOST_ONLY").as_deref(),
+                env("ROS_AUTOMATIC_DISCOVERY_RANGE").as_deref(),
+            )?,
+        })
+    }
+}
+
+/// A ros2-client context on a participant restricted to loopback unless disabled.
+pub fn context(env: DdsEnv) -> Result<Context, String> {
+    let mut b = rustdds::DomainParticipantBuilder::new(env.domain_id);
+    if env.localhost_only {
+        b = b.with_only_networks([Ipv4Addr::LOCALHOST]);
+    }
+    let dp = b.build().map_err(|e| format!("DDS participant: {e:?}"))?;
+    Context::from_domain_participant(dp).map_err(|e| format!("ROS context: {e:?}"))
+}
+
+/// A node `namespace/name` with `/rosout`; spawns its spinner on the current tokio runtime.
+pub fn node(ctx: &Context, namespace: &str, name: &str) -> Result<Node, String> {
+    let ns = if namespace.starts_with('/') {
+        namespace.to_string()
+    } else {
+        format!("/{namespace}")
+    };
+    let mut node = ctx
+        .new_node(
+            NodeName::new(&ns, name).map_err(|e| format!("node name {ns}/{name}: {e:?}"))?,
+            NodeOptions::new().enable_rosout(true),
+        )
+        .map_err(|e| format!("node: {e:?}"))?;
+    tokio::spawn(node.spinner().map_err(|e| format!("spinner: {e:?}"))?.spin());
+    Ok(node)
+}
+
+/// Reliable, volatile, keep-last `depth` (what rclcpp's default publisher does). Matches both
+/// reliable and best-effort readers.
+pub fn reliable_qos(depth: usize) -> QosProfile {
+    QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::Fail)
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth })
+}
+
+/// Best-effort keep-last `depth`: matches reliable and best-effort writers.
+pub fn best_effort_qos(depth: usize) -> QosProfile {
+    QosProfile::subscription_default().history(History::KeepLast { depth })
+}
+
+/// Publisher on a ROS name (relative names go under the node's namespace).
+pub fn publisher<T: RosMsg>(node: &mut Node, name: &str, qos: &QosProfile) -> Result<Publisher<T>, String> {
+    let topic = node
+        .create_topic(
+            &Name::parse(name).map_err(|e| format!("topic {name}: {e:?}"))?,
+            T::type_name(),
+            qos,
+        )
+        .map_err(|e| format!("topic {name}: {e:?}"))?;
+    node.create_publisher::<T>(&topic, None)
+        .map_err(|e| format!("publisher {name}: {e:?}"))
+}
+
+/// Subscription on a ROS name.
+pub fn subscription<T: RosMsg>(
+    node: &mut Node,
+    name: &str,
+    qos: &QosProfile,
+) -> Result<Subscription<T>, String> {
+    let topic = node
+        .create_topic(
+            &Name::parse(name).map_err(|e| format!("topic {name}: {e:?}"))?,
+            T::type_name(),
+            qos,
+        )
+        .map_err(|e| format!("topic {name}: {e:?}"))?;
+    node.create_subscription::<T>(&topic, None)
+        .map_err(|e| format!("subscription {name}: {e:?}"))
+}
+
+/// ROS time: the Linux clock, or the latest `/clock` with `use_sim_time`.
+#[derive(Clone, Debug, Default)]
+pub struct RosClock {
+    pub use_sim_time: bool,
+    last_clock_ns: Option<i64>,
+}
+
+impl RosClock {
+    pub fn new(use_sim_time: bool) -> Self {
+        RosClock {
+            use_sim_time,
+            last_clock_ns: None,
+        }
+    }
+    /// Feed a `/clock` message.
+    pub fn on_clock(&mut self, c: &Clock) {
+        self.last_clock_ns = Some(c.clock.to_nanos());
+    }
+    /// Now in ns, or None with `use_sim_time` before the first `/clock`.
+    pub fn now_ns(&self) -> Option<i64> {
+        if self.use_sim_time {
+            self.last_clock_ns
+        } else {
+            Some(crate::now_ns())
+        }
+    }
+}

@@ -1,0 +1,390 @@
+//! `fcc-mission --mission FILE [--ros-args -r __ns:=/fcc -p name:=value …]`
+//!
+//! The mission node: flies a mission YAML (see `launch_configs/missions/`) through the bridge.
+//! Subscribes `state/odom` (nav_msgs/Odometry, ENU/FLU) and `status` (fcc_msgs/Status),
+//! publishes `setpoint/velocity` (geometry_msgs/TwistStamped, frame `map`, ENU) at `rate_hz`,
+//! `cmd/arm` (std_msgs/Bool), `cmd/mode` (std_msgs/String "land") and `mission/status`
+//! (std_msgs/String, one JSON object per message).
+//!
+//! Exit codes: 0 when the vehicle is landed and disarmed after the mission; 1 on a failure
+//! (timeout, disarmed in flight, DDS setup); 2 on a bad mission file or bad arguments.
+
+use clap::Parser;
+use fcc_bridge::frames;
+use fcc_bridge::params::{self, parse_bool};
+use fcc_bridge::ros_node::{self, DdsEnv, RosClock};
+use fcc_bridge::ros_types::{Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3};
+use fcc_mission::{Mission, Phase, Request, WaypointFollower};
+use futures::StreamExt;
+use std::time::{Duration, Instant};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "fcc-mission",
+    about = "ROS 2 mission node: flies a waypoint mission through fcc-bridge",
+    after_help = "ROS arguments: --ros-args [-r __ns:=/fcc] [-r __node:=fcc_mission] [-p name:=value ...]\n\
+Parameters: mission (file; or --mission), rate_hz (50), use_sim_time (false: stamp with the\n\
+  Linux clock; true: with /clock, e.g. from fcc-bridge -p clock_source:=mcu),\n\
+  timeout_s (600, from start), arm_timeout_s (60), localhost_only (true).\n\
+Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE."
+)]
+struct Cli {
+    /// Mission YAML (launch_configs/missions/*.yaml).
+    #[arg(long)]
+    mission: Option<String>,
+}
+
+struct Options {
+    mission_file: String,
+    mission: Mission,
+    namespace: String,
+    node_name: String,
+    dds: DdsEnv,
+    rate_hz: f64,
+    use_sim_time: bool,
+    timeout_s: f64,
+    arm_timeout_s: f64,
+}
+
+fn fail(code: i32, msg: String) -> ! {
+    eprintln!("fcc-mission: {msg}");
+    std::process::exit(code)
+}
+
+fn options() -> Options {
+    let argv: Vec<String> = std::env::args().collect();
+    let (prog, ros) = params::split_ros_args(&argv).unwrap_or_else(|e| fail(2, e));
+    let cli = Cli::try_parse_from(prog).unwrap_or_else(|e| {
+        if !e.use_stderr() {
+            let _ = e.print();
+            std::process::exit(0);
+        }
+        // One line, as for every other bad input (clap's own text spans several).
+        let text = e.to_string();
+        fail(2, format!("{} (see --help)", text.split("\n\nUsage").next().unwrap_or("").split_whitespace().collect::<Vec<_>>().join(" ").trim_start_matches("error: ")))
+    });
+    let p = &ros.params;
+    let known = ["mission", "rate_hz", "use_sim_time", "timeout_s", "arm_timeout_s", "localhost_only"];
+    if let Some(k) = p.keys().find(|k| !known.contains(&k.as_str())) {
+        fail(2, format!("unknown parameter '{k}'"));
+    }
+    for (k, v) in &ros.remaps {
+        eprintln!("fcc-mission: topic remapping '{k}:={v}' is not supported; ignored");
+    }
+    let num = |k: &str, def: f64| -> f64 {
+        match p.get(k) {
+            None => def,
+            Some(v) => match v.parse::<f64>() {
+                Ok(x) if x.is_finite() && x > 0.0 => x,
+                _ => fail(2, format!("parameter {k}: '{v}' is not a positive number")),
+            },
+        }
+    };
+    let mission_file = cli
+        .mission
+        .or_else(|| p.get("mission").cloned())
+        .unwrap_or_else(|| fail(2, "no mission: use --mission FILE or -p mission:=FILE".into()));
+    let text = std::fs::read_to_string(&mission_file).unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
+    let mission = fcc_mission::from_yaml_str(&text).unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
+    let use_sim_time = p
+        .get("use_sim_time")
+        .map(|v| parse_bool(v).unwrap_or_else(|e| fail(2, format!("parameter use_sim_time: {e}"))))
+        .unwrap_or(false);
+    let rate_hz = num("rate_hz", 50.0);
+    if rate_hz < 20.0 {
+        fail(2, format!("parameter rate_hz: {rate_hz} is below 20 Hz"));
+    }
+    Options {
+        mission_file,
+        mission,
+        namespace: ros.namespace.clone().unwrap_or_else(|| "/fcc".into()),
+        node_name: ros.node_name.clone().unwrap_or_else(|| "fcc_mission".into()),
+        dds: DdsEnv::from_env(&ros).unwrap_or_else(|e| fail(2, e)),
+        rate_hz,
+        use_sim_time,
+        timeout_s: num("timeout_s", 600.0),
+        arm_timeout_s: num("arm_timeout_s", 60.0),
+    }
+}
+
+/// The ONE place where ROS state (ENU position, FLU body twist) becomes the follower's NED:
+/// position ENU → NED; velocity FLU → ENU (rotated by the ENU/FLU attitude) → NED.
+fn odom_to_ned(o: &Odometry) -> ([f32; 3], [f32; 3]) {
+    let p = &o.pose.pose.position;
+    let q = &o.pose.pose.orientation;
+    let pos = frames::enu_to_ned([p.x, p.y, p.z]);
+    let v_enu = frames::quat_rotate(
+        frames::quat_normalize([q.w, q.x, q.y, q.z]),
+        o.twist.twist.linear.to_array(),
+    );
+    let vel = frames::enu_to_ned(v_enu);
+    let f = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32];
+    (f(pos), f(vel))
+}
+
+fn phase_name(p: Phase) -> (&'static str, Option<usize>) {
+    match p {
+        Phase::Idle => ("idle", None),
+        Phase::Takeoff => ("takeoff", None),
+        Phase::Leg(i) => ("leg", Some(i)),
+        Phase::Hold(i) => ("hold", Some(i)),
+        Phase::Landing => ("landing", None),
+        Phase::Done => ("done", None),
+    }
+}
+
+/// Cross-track statistics of the estimated position on the legs (as the node sees it).
+#[derive(Default)]
+struct Track {
+    n: usize,
+    sum_sq: f64,
+    max: f64,
+}
+
+impl Track {
+    fn add(&mut self, from: [f32; 3], to: [f32; 3], pos: [f32; 3]) {
+        let (dn, de) = ((to[0] - from[0]) as f64, (to[1] - from[1]) as f64);
+        let len = (dn * dn + de * de).sqrt();
+        if len < 1.0 {
+            return;
+        }
+        let (pn, pe) = ((pos[0] - from[0]) as f64, (pos[1] - from[1]) as f64);
+        let along = (pn * dn + pe * de) / len;
+        if along < 0.0 || along > len {
+            return;
+        }
+        let xt = (pn * de - pe * dn).abs() / len;
+        self.n += 1;
+        self.sum_sq += xt * xt;
+        self.max = self.max.max(xt);
+    }
+    fn rms(&self) -> f64 {
+        if self.n == 0 {
+            0.0
+        } else {
+            (self.sum_sq / self.n as f64).sqrt()
+        }
+    }
+}
+
+fn stamp(ns: i64) -> Time {
+    Time::from_nanos(ns)
+}
+
+#[tokio::main(flavor = "current_thread")]
+async fn main() {
+    let o = options();
+    match run(o).await {
+        Ok(()) => std::process::exit(0),
+        Err((code, msg)) => fail(code, msg),
+    }
+}
+
+async fn run(o: Options) -> Result<(), (i32, String)> {
+    let e1 = |e: String| (1, e);
+    let ctx = ros_node::context(o.dds).map_err(e1)?;
+    let mut node = ros_node::node(&ctx, &o.namespace, &o.node_name).map_err(e1)?;
+    let odom_sub = ros_node::subscription::<Odometry>(&mut node, "state/odom", &ros_node::best_effort_qos(1)).map_err(e1)?;
+    let status_sub = ros_node::subscription::<Status>(&mut node, "status", &ros_node::best_effort_qos(5)).map_err(e1)?;
+    let clock_sub = if o.use_sim_time {
+        Some(ros_node::subscription::<Clock>(&mut node, "/clock", &ros_node::best_effort_qos(1)).map_err(e1)?)
+    } else {
+        None
+    };
+    let sp_pub = ros_node::publisher::<TwistStamped>(&mut node, "setpoint/velocity", &ros_node::reliable_qos(10)).map_err(e1)?;
+    let arm_pub = ros_node::publisher::<Bool>(&mut node, "cmd/arm", &ros_node::reliable_qos(10)).map_err(e1)?;
+    let mode_pub = ros_node::publisher::<StringMsg>(&mut node, "cmd/mode", &ros_node::reliable_qos(10)).map_err(e1)?;
+    let status_pub = ros_node::publisher::<StringMsg>(&mut node, "mission/status", &ros_node::reliable_qos(10)).map_err(e1)?;
+
+    let n_wp = o.mission.waypoints.len();
+    println!(
+        "fcc-mission: node {}/{} (DDS domain {}, {}), mission {} ({} waypoints, {} m/s), setpoints at {} Hz, {} time",
+        o.namespace.trim_end_matches('/'),
+        o.node_name,
+        o.dds.domain_id,
+        if o.dds.localhost_only { "loopback only" } else { "all interfaces" },
+        o.mission_file,
+        n_wp,
+        o.mission.speed_mps,
+        o.rate_hz,
+        if o.use_sim_time { "sim (/clock)" } else { "system" }
+    );
+    if o.mission.yaw_deg.is_some() {
+        println!("fcc-mission: note: yaw_deg is not sent (TwistStamped carries no heading; the bridge keeps the current heading)");
+    }
+
+    let odom_stream = odom_sub.async_stream();
+    let status_stream = status_sub.async_stream();
+    tokio::pin!(odom_stream);
+    tokio::pin!(status_stream);
+    let mut clock_stream = clock_sub.as_ref().map(|s| Box::pin(s.async_stream()));
+
+    let mut clock = RosClock::new(o.use_sim_time);
+    let mut odom: Option<Odometry> = None;
+    let mut status: Option<Status> = None;
+    let mut follower: Option<WaypointFollower> = None;
+    let mut last_phase: Option<(&'static str, Option<usize>)> = None;
+    let mut arm_sent_at: Option<Instant> = None;
+    let mut arm_attempts = 0u32;
+    let mut armed_at_ns: Option<i64> = None;
+    let mut land_sent_at: Option<Instant> = None;
+    let mut land_requested_ns: Option<i64> = None;
+    let mut last_report = Instant::now() - Duration::from_secs(10);
+    let mut setpoints = 0u64;
+    let mut track = Track::default();
+    let mut last_reject = String::new();
+    let started = Instant::now();
+    let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / o.rate_hz));
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let mut waiting_note = false;
+    let mut t_first: Option<f64> = None;
+
+    loop {
+        tokio::select! {
+            Some(r) = odom_stream.next() => { if let Ok((m, _)) = r { odom = Some(m); } continue; }
+            Some(r) = status_stream.next() => { if let Ok((m, _)) = r { status = Some(m); } continue; }
+            Some(r) = async {
+                match clock_stream.as_mut() {
+                    Some(s) => s.next().await,
+                    None => std::future::pending().await,
+                }
+            } => { if let Ok((m, _)) = r { clock.on_clock(&m); } continue; }
+            _ = tick.tick() => {}
+        }
+        let elapsed = started.elapsed().as_secs_f64();
+        if elapsed > o.timeout_s {
+            return Err((1, format!("timeout: mission not finished after {:.0} s (phase {:?})", o.timeout_s, last_phase)));
+        }
+        let (Some(od), Some(st), Some(now_ns)) = (odom.as_ref(), status.as_ref(), clock.now_ns()) else {
+            if !waiting_note && elapsed > 5.0 {
+                println!(
+                    "fcc-mission: waiting for the bridge: state/odom {}, status {}, clock {}",
+                    if odom.is_some() { "ok" } else { "none yet" },
+                    if status.is_some() { "ok" } else { "none yet" },
+                    if clock.now_ns().is_some() { "ok" } else { "no /clock yet" }
+                );
+                waiting_note = true;
+            }
+            continue;
+        };
+        let t_s = now_ns as f64 * 1e-9;
+        // For messages: seconds since the first state (ROS time may be the epoch).
+        let t0 = *t_first.get_or_insert(t_s);
+        let tr = t_s - t0;
+        let (pos, vel) = odom_to_ned(od);
+        if st.last_reject != last_reject {
+            last_reject = st.last_reject.clone();
+            if !last_reject.is_empty() && last_reject != "accepted" {
+                println!("fcc-mission: MCU/bridge reject: {last_reject}");
+            }
+        }
+
+        // ---- before arming: the follower asks for Arm; home is captured when armed.
+        if armed_at_ns.is_none() {
+            if st.armed {
+                armed_at_ns = Some(now_ns);
+                let mut f = WaypointFollower::new(o.mission.clone());
+                let _ = f.update(t_s, pos, vel);
+                follower = Some(f);
+                println!("fcc-mission: armed at t={tr:.2} s, home NED [{:.2}, {:.2}, {:.2}] m", pos[0], pos[1], pos[2]);
+            } else {
+                let mut probe = WaypointFollower::new(o.mission.clone());
+                let g = probe.update(t_s, pos, vel);
+                if g.request == Some(Request::Arm) && arm_sent_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1)) {
+                    if arm_attempts as f64 > o.arm_timeout_s {
+                        return Err((1, format!("could not arm within {:.0} s (last reject: '{}')", o.arm_timeout_s, st.last_reject)));
+                    }
+                    let _ = arm_pub.publish(Bool { data: true });
+                    arm_sent_at = Some(Instant::now());
+                    arm_attempts += 1;
+                }
+                report(&status_pub, &mut last_report, "arming", None, n_wp, None, st, t_s, false);
+                continue;
+            }
+        }
+        let f = follower.as_mut().expect("follower after arming");
+
+        // ---- flying
+        if !st.armed {
+            let flight_s = (now_ns - armed_at_ns.unwrap_or(now_ns)) as f64 * 1e-9;
+            if land_requested_ns.is_some() && st.landed {
+                let _ = status_pub.publish(StringMsg {
+                    data: format!("{{\"phase\":\"finished\",\"waypoint\":{n_wp},\"of\":{n_wp},\"dist_to_go_m\":0.0,\"armed\":false,\"landed\":true}}"),
+                });
+                println!(
+                    "fcc-mission: mission complete: {n_wp}/{n_wp} waypoints, {flight_s:.1} s armed, {setpoints} setpoints, cross-track (estimate, as seen on state/odom) RMS {:.3} m max {:.3} m; landed and disarmed",
+                    track.rms(),
+                    track.max
+                );
+                return Ok(());
+            }
+            return Err((1, format!(
+                "disarmed in flight after {flight_s:.1} s (phase {:?}, mode {}, failsafe {}, landed {})",
+                last_phase, st.mode_name, st.failsafe_name, st.landed
+            )));
+        }
+        let g = f.update(t_s, pos, vel);
+        let (name, idx) = phase_name(g.phase);
+        if last_phase != Some((name, idx)) {
+            println!("fcc-mission: t={tr:.2} s {name}{}", idx.map(|i| format!(" {i}")).unwrap_or_default());
+            last_phase = Some((name, idx));
+        }
+        if let (Phase::Leg(_), Some(leg)) = (g.phase, g.leg) {
+            track.add(leg.from_ned_m, leg.to_ned_m, pos);
+        }
+        let dist = g.leg.map(|l| {
+            let d = [l.to_ned_m[0] - pos[0], l.to_ned_m[1] - pos[1], l.to_ned_m[2] - pos[2]];
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+        });
+        if g.request == Some(Request::Land) || land_requested_ns.is_some() {
+            if land_requested_ns.is_none() {
+                land_requested_ns = Some(now_ns);
+                println!("fcc-mission: t={tr:.2} s mission done, landing");
+            }
+            // Resend until the MCU reports land mode (commands travel best-effort).
+            if st.mode_name != "land" && land_sent_at.is_none_or(|t| t.elapsed() >= Duration::from_millis(500)) {
+                let _ = mode_pub.publish(StringMsg { data: "land".into() });
+                land_sent_at = Some(Instant::now());
+            }
+            report(&status_pub, &mut last_report, "landing", None, n_wp, None, st, t_s, true);
+            continue;
+        }
+        let v_enu = frames::ned_to_enu([g.vel_ned_mps[0] as f64, g.vel_ned_mps[1] as f64, g.vel_ned_mps[2] as f64]);
+        let msg = TwistStamped {
+            header: Header::new(stamp(now_ns), "map"),
+            twist: Twist { linear: Vector3::new(v_enu), angular: Vector3::default() },
+        };
+        if sp_pub.publish(msg).is_ok() {
+            setpoints += 1;
+        }
+        report(&status_pub, &mut last_report, name, idx, n_wp, dist, st, t_s, false);
+    }
+}
+
+/// `mission/status` at 2 Hz: `{"phase":"leg","waypoint":1,"of":4,"dist_to_go_m":12.3,...}`.
+#[allow(clippy::too_many_arguments)]
+fn report(
+    p: &ros2_client::Publisher<StringMsg>,
+    last: &mut Instant,
+    phase: &str,
+    idx: Option<usize>,
+    n: usize,
+    dist: Option<f32>,
+    st: &Status,
+    t_s: f64,
+    force: bool,
+) {
+    let _ = force;
+    if last.elapsed() < Duration::from_millis(500) {
+        return;
+    }
+    *last = Instant::now();
+    let wp = idx.map(|i| i.to_string()).unwrap_or_else(|| "null".into());
+    let d = dist.map(|d| format!("{d:.2}")).unwrap_or_else(|| "null".into());
+    let _ = p.publish(StringMsg {
+        data: format!(
+            "{{\"t_s\":{t_s:.2},\"phase\":\"{phase}\",\"waypoint\":{wp},\"of\":{n},\"dist_to_go_m\":{d},\"armed\":{},\"mode\":\"{}\"}}",
+            st.armed, st.mode_name
+        ),
+    });
+}

@@ -1,0 +1,100 @@
+//! Test helper: fly a mission YAML through the bridge's ROS topics (odom in, arm / mode /
+//! velocity setpoints out) with `fcc_mission`'s waypoint follower — a minimal stand-in for the
+//! mission node, so that a SITL flight over the real link can be recorded.
+//!   fly_mission MISSION.yaml [--ns /fcc] [--timeout S]    (run under netns-run, with the bridge)
+//! Exits 0 when the vehicle has landed and disarmed after the mission.
+
+use fcc_bridge::report::bag::odom_ned;
+use fcc_bridge::ros_types::*;
+use fcc_mission::{Request, WaypointFollower};
+use futures::StreamExt;
+use ros2_client::qos::{History, WhenFull};
+use ros2_client::{Context, Name, NodeName, NodeOptions, QosProfile};
+use std::time::{Duration, Instant};
+
+#[tokio::main]
+async fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().collect();
+    let mission_path = args.get(1).expect("usage: fly_mission MISSION.yaml [--timeout S]");
+    let timeout = args
+        .iter()
+        .position(|a| a == "--timeout")
+        .and_then(|i| args.get(i + 1)?.parse::<f64>().ok())
+        .unwrap_or(300.0);
+    let mission = fcc_mission::from_yaml_str(&std::fs::read_to_string(mission_path)?)
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut follower = WaypointFollower::new(mission);
+    let ctx = Context::new()?;
+    let mut node = ctx.new_node(NodeName::new("/fcc", "fly_mission")?, NodeOptions::new())?;
+    tokio::spawn(node.spinner()?.spin());
+    let rel = QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::Fail)
+        .history(History::KeepLast { depth: 10 });
+    let t_odom = node.create_topic(&Name::parse("/fcc/state/odom")?, Odometry::type_name(), &rel)?;
+    let t_status = node.create_topic(&Name::parse("/fcc/status")?, Status::type_name(), &rel)?;
+    let t_sp = node.create_topic(&Name::parse("/fcc/setpoint/velocity")?, TwistStamped::type_name(), &rel)?;
+    let t_arm = node.create_topic(&Name::parse("/fcc/cmd/arm")?, Bool::type_name(), &rel)?;
+    let t_mode = node.create_topic(&Name::parse("/fcc/cmd/mode")?, StringMsg::type_name(), &rel)?;
+    let odom = node.create_subscription::<Odometry>(&t_odom, Some(rel.clone()))?;
+    let status = node.create_subscription::<Status>(&t_status, Some(rel.clone()))?;
+    let sp = node.create_publisher::<TwistStamped>(&t_sp, None)?;
+    let arm = node.create_publisher::<Bool>(&t_arm, None)?;
+    let mode = node.create_publisher::<StringMsg>(&t_mode, None)?;
+    let odom_s = odom.async_stream();
+    let status_s = status.async_stream();
+    tokio::pin!(odom_s);
+    tokio::pin!(status_s);
+    let start = Instant::now();
+    let (mut armed, mut was_armed, mut land_sent, mut landed) = (false, false, false, false);
+    let mut first_odom: Option<Instant> = None;
+    let mut last_arm = Instant::now() - Duration::from_secs(10);
+    let mut ready = false;
+    loop {
+        if start.elapsed().as_secs_f64() > timeout {
+            anyhow::bail!("mission not finished in {timeout} s");
+        }
+        tokio::select! {
+            Some(Ok((s, _))) = status_s.next() => {
+                armed = s.armed;
+                landed = s.landed;
+                was_armed |= armed;
+                ready |= s.time_synced || s.header.stamp.to_nanos() > 0;
+                if was_armed && !armed && land_sent {
+                    eprintln!("fly_mission: landed and disarmed after the mission");
+                    return Ok(());
+                }
+            }
+            Some(Ok((o, _))) = odom_s.next() => {
+                // Let the navigation calibrate (≈ 5 s after the first state) before starting.
+                let f = *first_odom.get_or_insert_with(Instant::now);
+                if !ready || f.elapsed() < Duration::from_secs(6) || land_sent {
+                    continue;
+                }
+                let t = o.header.stamp.to_nanos() as f64 * 1e-9;
+                let (p, v, _) = odom_ned(&o);
+                let g = follower.update(t, [p[0] as f32, p[1] as f32, p[2] as f32], [v[0] as f32, v[1] as f32, v[2] as f32]);
+                match g.request {
+                    Some(Request::Arm) if !armed && last_arm.elapsed() > Duration::from_secs(1) => {
+                        let _ = arm.publish(Bool { data: true });
+                        last_arm = Instant::now();
+                    }
+                    Some(Request::Land) if !land_sent => {
+                        let _ = mode.publish(StringMsg { data: "land".into() });
+                        land_sent = true;
+                        eprintln!("fly_mission: mission done, landing");
+                        continue;
+                    }
+                    _ => {}
+                }
+                if armed {
+                    let vn = g.vel_ned_mps;
+                    let mut m = TwistStamped::default();
+                    m.header = Header::new(o.header.stamp, "map");
+                    m.twist.linear = Vector3::new([vn[1] as f64, vn[0] as f64, -vn[2] as f64]);
+                    let _ = sp.publish(m);
+                }
+            }
+        }
+        let _ = landed;
+    }
+}

@@ -1,0 +1,68 @@
+//! PNG line/scatter plots (plotters, bitmap backend).
+
+use plotters::prelude::*;
+
+pub struct Line<'a> {
+    pub name: &'a str,
+    pub pts: Vec<(f64, f64)>,
+    pub color: RGBColor,
+    /// Draw points instead of a line.
+    pub dots: bool,
+}
+
+fn bounds(lines: &[Line]) -> ((f64, f64), (f64, f64)) {
+    let mut x = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut y = x;
+    for l in lines {
+        for &(a, b) in &l.pts {
+            if a.is_finite() && b.is_finite() {
+                x = (x.0.min(a), x.1.max(a));
+                y = (y.0.min(b), y.1.max(b));
+            }
+        }
+    }
+    if !x.0.is_finite() {
+        return ((0.0, 1.0), (0.0, 1.0));
+    }
+    let pad = |r: (f64, f64)| {
+        let d = ((r.1 - r.0) * 0.05).max(1e-3);
+        (r.0 - d, r.1 + d)
+    };
+    (pad(x), pad(y))
+}
+
+/// One chart; `equal` makes both axes the same scale (paths).
+pub fn chart(path: &std::path::Path, title: &str, xl: &str, yl: &str, lines: Vec<Line>, equal: bool) -> Result<(), String> {
+    let root = BitMapBackend::new(path, (1000, 700)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let ((mut x0, mut x1), (mut y0, mut y1)) = bounds(&lines);
+    if equal {
+        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        let h = ((x1 - x0) / 2.0).max((y1 - y0) / 2.0);
+        (x0, x1, y0, y1) = (cx - h, cx + h, cy - h, cy + h);
+    }
+    let mut c = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| e.to_string())?;
+    c.configure_mesh().x_desc(xl).y_desc(yl).draw().map_err(|e| e.to_string())?;
+    for l in lines {
+        let col = l.color;
+        if l.dots {
+            c.draw_series(l.pts.iter().filter(|p| p.0.is_finite() && p.1.is_finite()).map(|p| Circle::new(*p, 1, col.filled())))
+                .map_err(|e| e.to_string())?
+                .label(l.name)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 3, col.filled()));
+        } else {
+            c.draw_series(LineSeries::new(l.pts.into_iter().filter(|p| p.0.is_finite() && p.1.is_finite()), col))
+                .map_err(|e| e.to_string())?
+                .label(l.name)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col));
+        }
+    }
+    c.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())
+}

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# Acceptance through the full stack, all in ONE loopback-only network namespace:
+#   (a) fcc-launch flies the square (fcc-sitl --link-pty ⇄ fcc-bridge ⇄ fcc-mission) while the
+#       independent Cyclone DDS peer subscribes to every topic; after the run the peer checks
+#       rates, frames and values against the simulator's CSV truth;
+#   (b) fcc-sitl --link-pty ⇄ fcc-bridge, and the peer flies the vehicle itself (cmd/arm,
+#       reliable TwistStamped setpoints, cmd/mode hold/land); the CSV truth must show it.
+#       The peer also checks the VALUES on altitude and altitude/ground (issue 4) against the
+#       CSV's ground_m / true_agl_m / ground_source / laser_m / sonar_m at the same sim times.
+# FCC_E2E_KEEP=DIR keeps (a)'s CSV and the received altitude messages (altitude.json) there;
+# `stack_peer.py check-altitude --csv DIR/square_stack.csv --dump DIR/altitude.json` re-checks.
+# Simulated time runs at FCC_E2E_SPEED (default 2) × real time; ROS time is the MCU's
+# (fcc-bridge -p clock_source:=mcu, /clock) so the checks do not depend on the speed.
+#   usage: tests/e2e/run_stack.sh [PYTHON]   (PYTHON must import cyclonedds; default python3)
+# Needs: release builds of fcc-sitl, fcc-bridge, fcc-mission and fcc-launch (FCC_BIN_DIR).
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+py="${1:-${FCC_DDS_PYTHON:-python3}}"
+if [ -z "${FCC_IN_NETNS:-}" ]; then
+  for c in "$root/../shared/tools/netns-run" /work/shared/tools/netns-run; do
+    if [ -x "$c" ]; then exec env FCC_IN_NETNS=1 "$c" "$0" "$py"; fi
+  done
+  echo "run_stack.sh: netns-run not found; refusing to run DDS outside a loopback-only namespace" >&2
+  exit 3
+fi
+if ip -o link show | awk -F': ' '{print $2}' | grep -qv '^lo$'; then
+  echo "run_stack.sh: not in a loopback-only namespace; refusing" >&2; exit 3
+fi
+bin="${FCC_BIN_DIR:-$root/target/release}"
+speed="${FCC_E2E_SPEED:-2}"
+tmp="$(mktemp -d)"
+trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$tmp"' EXIT
+export PYTHONPATH="$root/tests/dds"
+rc=0
+
+echo "=== (a) square mission through the full stack, peer observing (speed $speed)"
+t0=$(date +%s)
+"$py" "$here/stack_peer.py" observe --csv "$tmp/square_stack.csv" --until-file "$tmp/done" \
+  --dump "$tmp/altitude.json" > "$tmp/peer_a.log" 2>&1 &
+peer=$!
+sleep 2   # the peer's readers exist before the nodes start (discovery info is seen from the start)
+set +e
+"$bin/fcc-launch" "$root/launch_configs/square_flight.yaml" BIN:="$bin" out:="$tmp" speed:="$speed" \
+  clock_source:=mcu use_sim_time:=true > "$tmp/launch.log" 2>&1
+lrc=$?
+touch "$tmp/done"
+wait $peer
+prc=$?
+set -e
+grep -E '^\[mission\] fcc-mission: mission complete|^== |^leg |^all |^armed ' "$tmp/launch.log" || true
+cat "$tmp/peer_a.log"
+echo "(a) launcher exit $lrc, peer exit $prc, $(( $(date +%s) - t0 )) s wall"
+if [ -n "${FCC_E2E_KEEP:-}" ]; then  # keep the truth log and the altitude messages (check-altitude)
+  mkdir -p "$FCC_E2E_KEEP"; cp "$tmp/square_stack.csv" "$tmp/altitude.json" "$tmp/launch.log" "$FCC_E2E_KEEP/" 2>/dev/null || true
+fi
+if [ $lrc -ne 0 ] || [ $prc -ne 0 ]; then echo "--- launch log (tail)"; tail -40 "$tmp/launch.log"; rc=1; fi
+
+echo "=== (b) the peer flies the vehicle through fcc-bridge (speed $speed)"
+t0=$(date +%s)
+"$bin/fcc-sitl" --scenario "$root/launch_configs/scenarios/square.yaml" --link-pty --pty-link "$tmp/link.tty" \
+  --speed "$speed" --csv "$tmp/fly.csv" > "$tmp/sitl_b.log" 2>&1 &
+sitl=$!
+for _ in $(seq 100); do [ -e "$tmp/link.tty" ] && break; sleep 0.05; done
+"$bin/fcc-bridge" --device "$tmp/link.tty" --ros-args -r __ns:=/fcc -p clock_source:=mcu > "$tmp/bridge_b.log" 2>&1 &
+bridge=$!
+set +e
+"$py" "$here/stack_peer.py" fly --events "$tmp/events.json"
+frc=$?
+kill -TERM $bridge; kill -TERM $sitl; wait $sitl; wait $bridge 2>/dev/null
+"$py" "$here/stack_peer.py" check-fly --csv "$tmp/fly.csv" --events "$tmp/events.json"
+crc=$?
+set -e
+echo "(b) peer flight exit $frc, truth check exit $crc, $(( $(date +%s) - t0 )) s wall"
+if [ $frc -ne 0 ] || [ $crc -ne 0 ]; then echo "--- bridge log (tail)"; tail -20 "$tmp/bridge_b.log"; rc=1; fi
+exit $rc

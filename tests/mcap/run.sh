@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Recorder tests with the fake MCU, in ONE loopback-only network namespace:
+#  1. a bag from a clean SIGINT stop: independent readers decode every message; counts == the
+#     bridge's own (0 lost); fcc-replay --decode-raw re-decodes the raw frames; fcc-replay
+#     republishes the bag (rate 4) without error.
+#  2. SIGKILL mid-flight: the bag opens (streamed) and loses ≤ 1 s (printed).
+#  3. A full disk (/dev/full): one clear error, the bridge keeps running.
+#   usage: tests/mcap/run.sh [PYTHON]   (PYTHON with mcap, mcap-ros2-support, rosbags)
+# Needs: cargo build --release -p fcc_bridge -p fcc_report.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+py="${1:-${FCC_DDS_PYTHON:-python3}}"
+if [ -z "${FCC_IN_NETNS:-}" ]; then
+  for c in "$root/../shared/tools/netns-run" /work/shared/tools/netns-run; do
+    if [ -x "$c" ]; then exec env FCC_IN_NETNS=1 "$c" "$0" "$py"; fi
+  done
+  echo "run.sh: netns-run not found; refusing to run DDS outside a loopback-only namespace" >&2
+  exit 3
+fi
+if ip -o link show | awk -F': ' '{print $2}' | grep -qv '^lo$'; then
+  echo "run.sh: not in a loopback-only namespace; refusing" >&2; exit 3
+fi
+bin="${FCC_BIN_DIR:-$root/target/release}"
+tmp="$(mktemp -d)"
+trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$tmp"' EXIT
+fake() { # $1 = name, $2 = seconds → prints the pty
+  "$bin/fcc-fake-mcu" --duration "$2" > "$tmp/$1.out" 2>/dev/null &
+  for _ in $(seq 50); do grep -q '^PTY' "$tmp/$1.out" && break; sleep 0.1; done
+  awk '/^PTY/{print $2}' "$tmp/$1.out"
+}
+rc=0
+# 1. clean stop
+pty=$(fake a 30)
+"$bin/fcc-bridge" --device "$pty" --record "$tmp/a.mcap" > "$tmp/a.log" 2>&1 &
+b=$!; sleep 8; kill -INT $b; wait $b || true
+"$py" "$here/check_bag.py" "$tmp/a.mcap" --counts "$tmp/a.mcap.counts.json" --min-seconds 5 || rc=1
+"$bin/fcc-replay" "$tmp/a.mcap" --decode-raw > "$tmp/raw.txt"; head -4 "$tmp/raw.txt"
+grep -q "mcu→linux ImuRaw" "$tmp/raw.txt" && echo "PASS fcc-replay --decode-raw" || { echo "FAIL decode-raw"; rc=1; }
+if timeout 20 "$bin/fcc-replay" "$tmp/a.mcap" --rate 4 2> "$tmp/replay.err"; then
+  echo "PASS fcc-replay --rate 4: $(tail -1 "$tmp/replay.err")"
+else echo "FAIL fcc-replay"; cat "$tmp/replay.err"; rc=1; fi
+# 2. SIGKILL
+pty=$(fake k 30)
+"$bin/fcc-bridge" --device "$pty" --record "$tmp/k.mcap" > "$tmp/k.log" 2>&1 &
+b=$!; sleep 6.3; kill -KILL $b; kill_ns=$(date +%s%N); wait $b 2>/dev/null || true
+"$py" "$here/check_bag.py" "$tmp/k.mcap" --truncated --kill-ns "$kill_ns" || rc=1
+# 3. disk full
+pty=$(fake f 30)
+"$bin/fcc-bridge" --device "$pty" --record /dev/full > "$tmp/f.log" 2>&1 &
+b=$!; sleep 3
+n=$(grep -c "recording to /dev/full stopped" "$tmp/f.log" || true)
+if kill -0 $b 2>/dev/null && [ "$n" = 1 ]; then
+  echo "PASS disk full: one error ($(grep -o 'stopped: .*' "$tmp/f.log" | head -1)), bridge still running"
+else echo "FAIL disk full: alive=$(kill -0 $b 2>/dev/null && echo yes || echo no), errors=$n"; tail -5 "$tmp/f.log"; rc=1; fi
+kill -INT $b; wait $b || true
+exit $rc

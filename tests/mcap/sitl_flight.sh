@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# A real SITL flight recorded by the bridge: fcc-sitl (square, --link-pty, 2× real time) ⇄
+# fcc-bridge --record ⇄ a mission driver (fcc_mission's follower over ROS), all in ONE
+# loopback-only network namespace. Leaves the bag, the sidecar counts, the 50 Hz truth CSV and
+# fcc-sitl's own summary in OUT_DIR, then checks the bag with independent readers.
+#   usage: tests/mcap/sitl_flight.sh OUT_DIR [PYTHON]
+# Needs: cargo build --release -p fcc_bridge --bins --examples; -p fcc_firmware --bin fcc-sitl.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+out="$(mkdir -p "$1" && cd "$1" && pwd)"
+py="${2:-${FCC_DDS_PYTHON:-python3}}"
+if [ -z "${FCC_IN_NETNS:-}" ]; then
+  for c in "$root/../shared/tools/netns-run" /work/shared/tools/netns-run; do
+    if [ -x "$c" ]; then exec env FCC_IN_NETNS=1 "$c" "$0" "$out" "$py"; fi
+  done
+  echo "sitl_flight.sh: netns-run not found; refusing to run DDS outside a loopback-only namespace" >&2
+  exit 3
+fi
+if ip -o link show | awk -F': ' '{print $2}' | grep -qv '^lo$'; then
+  echo "sitl_flight.sh: not in a loopback-only namespace; refusing" >&2; exit 3
+fi
+bin="${FCC_BIN_DIR:-$root/target/release}"
+cd "$root"
+rm -f "$out"/flight.mcap* "$out"/flight.csv
+trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true' EXIT
+"$bin/fcc-sitl" --scenario launch_configs/scenarios/square.yaml --link-pty --pty-link "$out/sitl.tty" \
+  --speed 2 --csv "$out/flight.csv" > "$out/sitl.out" 2> "$out/sitl.err" &
+sitl=$!
+for _ in $(seq 100); do [ -e "$out/sitl.tty" ] && break; sleep 0.1; done
+"$bin/fcc-bridge" --device "$out/sitl.tty" --record "$out/flight.mcap" \
+  --ros-args -p clock_source:=mcu > "$out/bridge.log" 2>&1 &
+bridge=$!
+set +e
+timeout 200 "$bin/examples/fly_mission" launch_configs/missions/square.yaml --timeout 190 > "$out/mission.log" 2>&1
+rc=$?
+set -e
+sleep 1
+kill -INT "$bridge"; wait "$bridge" || true
+kill -INT "$sitl"; wait "$sitl" || true
+if [ $rc -ne 0 ]; then echo "mission driver failed ($rc):"; tail -5 "$out/mission.log"; tail -20 "$out/bridge.log"; exit 1; fi
+grep -E "^fcc-bridge (counts|: recorded)" "$out/bridge.log" | cut -c1-300
+"$py" "$here/check_bag.py" "$out/flight.mcap" --counts "$out/flight.mcap.counts.json" --min-seconds 60
+# The report on the same flight, and its cross-track figures vs the flight core's own log.
+"$bin/fcc-report" "$out/flight.mcap" --out "$out/report" --mission launch_configs/missions/square.yaml
+"$py" "$here/compare_csv.py" "$out/report/summary.json" "$out/flight.csv"
