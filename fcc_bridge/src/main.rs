@@ -186,9 +186,11 @@ fn main() -> ExitCode {
     // stderr, and /rosout (the bridge's own events, INFO and above).
     tracing_subscriber::fmt()
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
-                "info,rustdds=error,ros2_client=warn,ros2_client::service=error".into()
-            }),
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| "info,rustdds=error,ros2_client=warn,ros2_client::service=error".into())
+                // ros2-client echoes every /rosout record as an event of its own: the line is
+                // already on stderr once, from the event itself.
+                .add_directive("ros2_client::rosout=off".parse().expect("static directive")),
         )
         .with_writer(std::io::stderr)
         .finish()
