@@ -11,8 +11,8 @@ use crate::ros_types::*;
 use crate::state::{ClockSource, Fatal, Handshake, LinkState, Out};
 use fcc_msgs as link;
 use futures::StreamExt;
-use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::parameters::ParameterValue;
+use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
     Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, ServiceMapping,
     ServiceTypeName,
@@ -158,7 +158,9 @@ impl Publishers {
             odom: publisher(node, &o.name("state/odom"), &q)?,
             state_imu: publisher(node, &o.name("state/imu"), &q)?,
             tf: publisher(node, &o.name("/tf"), &telemetry_qos(100))?,
-            tf_static: publisher(node, &o.name("/tf_static"),
+            tf_static: publisher(
+                node,
+                &o.name("/tf_static"),
                 &QosProfile::publisher_default()
                     .reliability_reliable(WhenFull::Fail)
                     .durability(Durability::TransientLocal)
@@ -277,8 +279,18 @@ struct RosSide<'a> {
     node: &'a Node,
     rx: mpsc::Receiver<LinkRequest>,
     shared: Arc<ParamShared>,
-    cmds: Vec<(link::CommandKind, tokio::sync::oneshot::Sender<(bool, String)>, tokio::time::Instant)>,
-    params: BTreeMap<u16, (std::sync::mpsc::Sender<Result<f32, String>>, tokio::time::Instant)>,
+    cmds: Vec<(
+        link::CommandKind,
+        tokio::sync::oneshot::Sender<(bool, String)>,
+        tokio::time::Instant,
+    )>,
+    params: BTreeMap<
+        u16,
+        (
+            std::sync::mpsc::Sender<Result<f32, String>>,
+            tokio::time::Instant,
+        ),
+    >,
     /// Start-up values of MCU parameters (sent after each handshake).
     initial: BTreeMap<String, f64>,
 }
@@ -333,7 +345,11 @@ impl RosSide<'_> {
                         let msg = if ok {
                             format!("MCU accepted {:?}", a.command)
                         } else {
-                            format!("MCU refused {:?}: {}", a.command, convert::reject_name(a.result))
+                            format!(
+                                "MCU refused {:?}: {}",
+                                a.command,
+                                convert::reject_name(a.result)
+                            )
                         };
                         let _ = reply.send((ok, msg));
                     }
@@ -397,7 +413,8 @@ impl RosSide<'_> {
                 i += 1;
             }
         }
-        self.params.retain(|_, (_, t)| now - *t <= ros_api::ACK_TIMEOUT * 2);
+        self.params
+            .retain(|_, (_, t)| now - *t <= ros_api::ACK_TIMEOUT * 2);
     }
 
     /// After a handshake: read every MCU parameter (NaN set) or send its start-up value.
@@ -486,13 +503,26 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         .declare_parameter("ttl_ms", P::Integer(l.ttl_ms as i64))
         .declare_parameter("max_speed_mps", P::Double(l.max_speed_mps))
         .declare_parameter("max_stamp_age_ms", P::Double(l.max_age_ns as f64 / 1e6))
-        .declare_parameter("max_stamp_future_ms", P::Double(l.max_future_ns as f64 / 1e6))
+        .declare_parameter(
+            "max_stamp_future_ms",
+            P::Double(l.max_future_ns as f64 / 1e6),
+        )
         .declare_parameter(
             "clock_source",
-            P::String(if opts.clock == ClockSource::Mcu { "mcu" } else { "sync" }.into()),
+            P::String(
+                if opts.clock == ClockSource::Mcu {
+                    "mcu"
+                } else {
+                    "sync"
+                }
+                .into(),
+            ),
         )
         .declare_parameter("localhost_only", P::Boolean(opts.localhost_only))
-        .declare_parameter("ping_period_ms", P::Integer(opts.ping_period.as_millis() as i64))
+        .declare_parameter(
+            "ping_period_ms",
+            P::Integer(opts.ping_period.as_millis() as i64),
+        )
         .declare_parameter("record", P::String(opts.record.clone()));
     for (k, v) in [
         ("map_frame", &c.map_frame),
@@ -507,7 +537,11 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         nopts = nopts.declare_parameter(k, P::String(v.clone()));
     }
     for p in MCU_PARAMS {
-        let v = opts.mcu_params.get(p.name).copied().unwrap_or(p.default as f64);
+        let v = opts
+            .mcu_params
+            .get(p.name)
+            .copied()
+            .unwrap_or(p.default as f64);
         nopts = nopts.declare_parameter(p.name, P::Double(v));
     }
     let sh = shared.clone();
@@ -516,7 +550,9 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         .parameter_validator(Box::new(move |n, v| ros_api::validate(&sh, n, v)))
         .parameter_set_action(Box::new(move |n, v| {
             if sh2.live.load(Ordering::SeqCst) && ros_api::DYNAMIC_BRIDGE_PARAMS.contains(&n) {
-                let _ = sh2.link.try_send(LinkRequest::BridgeParam(n.to_string(), v.clone()));
+                let _ = sh2
+                    .link
+                    .try_send(LinkRequest::BridgeParam(n.to_string(), v.clone()));
             }
             Ok(())
         }));
@@ -532,7 +568,10 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
     std::thread::Builder::new()
         .name("ros-spinner".into())
         .spawn(move || {
-            match tokio::runtime::Builder::new_current_thread().enable_all().build() {
+            match tokio::runtime::Builder::new_current_thread()
+                .enable_all()
+                .build()
+            {
                 Ok(rt) => {
                     let _ = rt.block_on(spinner.spin());
                 }
@@ -665,7 +704,11 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         first = false;
         tracing::info!("opened {}", opts.device);
         tap.raw_reset();
-        match session(port, &opts, &mut st, &pubs, &mut rx, &mut ros, &mut rates, &tap).await {
+        match session(
+            port, &opts, &mut st, &pubs, &mut rx, &mut ros, &mut rates, &tap,
+        )
+        .await
+        {
             Ok(reason) => tracing::warn!("link to {} lost ({reason}); reopening", opts.device),
             Err(Fatal::Handshake(e)) => return Err(BridgeError::Handshake(e)),
         }

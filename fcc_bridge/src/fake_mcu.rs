@@ -264,98 +264,96 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
         }
         // Receive: everything the reader thread has read since the last tick.
         while let Ok(item) = rx_ch.try_recv() {
-                {
-                    let (bytes, t_rx) = item?;
-                    let frames: Vec<_> = dec.push_slice(&bytes).filter_map(Result::ok).collect();
-                    for f in frames {
-                        // Receive time: when the reader thread got the bytes (a UART RX
-                        // interrupt's timestamp), not when this loop got round to them.
-                        let t = t_rx;
-                        match f.message {
-                            link::Message::HelloRequest(_) => push(&hello, t, &mut enc, &mut out),
-                            link::Message::TimeSyncPing(p) => push(
-                                &link::Message::TimeSyncPong(link::TimeSyncPong {
-                                    linux_time_ns: p.linux_time_ns,
-                                    mcu_rx_time_us: t,
-                                    mcu_tx_time_us: now_us(),
-                                }),
-                                t,
-                                &mut enc,
-                                &mut out,
-                            ),
-                            link::Message::VelocitySetpoint(sp) => {
-                                if let Some(l) = log.as_mut() {
-                                    writeln!(
+            {
+                let (bytes, t_rx) = item?;
+                let frames: Vec<_> = dec.push_slice(&bytes).filter_map(Result::ok).collect();
+                for f in frames {
+                    // Receive time: when the reader thread got the bytes (a UART RX
+                    // interrupt's timestamp), not when this loop got round to them.
+                    let t = t_rx;
+                    match f.message {
+                        link::Message::HelloRequest(_) => push(&hello, t, &mut enc, &mut out),
+                        link::Message::TimeSyncPing(p) => push(
+                            &link::Message::TimeSyncPong(link::TimeSyncPong {
+                                linux_time_ns: p.linux_time_ns,
+                                mcu_rx_time_us: t,
+                                mcu_tx_time_us: now_us(),
+                            }),
+                            t,
+                            &mut enc,
+                            &mut out,
+                        ),
+                        link::Message::VelocitySetpoint(sp) => {
+                            if let Some(l) = log.as_mut() {
+                                writeln!(
                                         l,
                                         "{{\"t_us\":{t},\"msg\":\"VelocitySetpoint\",\"vel_ned_mps\":[{},{},{}],\"has_yaw\":{},\"yaw_rad\":{},\"ttl_ms\":{}}}",
                                         sp.vel_ned_mps[0], sp.vel_ned_mps[1], sp.vel_ned_mps[2], sp.has_yaw, sp.yaw_rad, sp.ttl_ms
                                     )?;
-                                    l.flush()?;
-                                }
+                                l.flush()?;
                             }
-                            link::Message::Command(c) => {
-                                match c.command {
-                                    link::CommandKind::Arm => {
-                                        armed = true;
-                                        mode = link::FlightMode::Hold;
-                                    }
-                                    link::CommandKind::Disarm => {
-                                        armed = false;
-                                        mode = link::FlightMode::Disarmed;
-                                    }
-                                    link::CommandKind::Hold => mode = link::FlightMode::Hold,
-                                    link::CommandKind::Land => mode = link::FlightMode::Land,
-                                    link::CommandKind::Velocity => {
-                                        mode = link::FlightMode::Velocity
-                                    }
+                        }
+                        link::Message::Command(c) => {
+                            match c.command {
+                                link::CommandKind::Arm => {
+                                    armed = true;
+                                    mode = link::FlightMode::Hold;
                                 }
-                                push(
-                                    &link::Message::CommandAck(link::CommandAck {
-                                        command: c.command,
-                                        result: link::CommandResult::Accepted,
-                                    }),
-                                    t,
-                                    &mut enc,
-                                    &mut out,
-                                );
-                                if let Some(l) = log.as_mut() {
-                                    writeln!(
-                                        l,
-                                        "{{\"t_us\":{t},\"msg\":\"Command\",\"command\":\"{:?}\"}}",
-                                        c.command
-                                    )?;
-                                    l.flush()?;
+                                link::CommandKind::Disarm => {
+                                    armed = false;
+                                    mode = link::FlightMode::Disarmed;
                                 }
+                                link::CommandKind::Hold => mode = link::FlightMode::Hold,
+                                link::CommandKind::Land => mode = link::FlightMode::Land,
+                                link::CommandKind::Velocity => mode = link::FlightMode::Velocity,
                             }
-                            link::Message::ParamSet(ps) => {
-                                let def = crate::mcu_params::by_id(ps.id);
-                                let slot = params.iter_mut().find(|(i, _)| *i == ps.id);
-                                let (result, value) = match (def, slot) {
-                                    (Some(d), Some(slot)) => {
-                                        let r = if !ps.value.is_finite() {
-                                            link::ParamResult::NotFinite
-                                        } else if d.check(ps.value as f64).is_err() {
-                                            link::ParamResult::OutOfRange
-                                        } else {
-                                            slot.1 = ps.value;
-                                            link::ParamResult::Accepted
-                                        };
-                                        (r, slot.1)
-                                    }
-                                    _ => (link::ParamResult::UnknownId, f32::NAN),
-                                };
-                                push(
-                                    &link::Message::ParamAck(link::ParamAck {
-                                        id: ps.id,
-                                        value,
-                                        result,
-                                    }),
-                                    t,
-                                    &mut enc,
-                                    &mut out,
-                                );
-                                if let Some(l) = log.as_mut() {
-                                    writeln!(
+                            push(
+                                &link::Message::CommandAck(link::CommandAck {
+                                    command: c.command,
+                                    result: link::CommandResult::Accepted,
+                                }),
+                                t,
+                                &mut enc,
+                                &mut out,
+                            );
+                            if let Some(l) = log.as_mut() {
+                                writeln!(
+                                    l,
+                                    "{{\"t_us\":{t},\"msg\":\"Command\",\"command\":\"{:?}\"}}",
+                                    c.command
+                                )?;
+                                l.flush()?;
+                            }
+                        }
+                        link::Message::ParamSet(ps) => {
+                            let def = crate::mcu_params::by_id(ps.id);
+                            let slot = params.iter_mut().find(|(i, _)| *i == ps.id);
+                            let (result, value) = match (def, slot) {
+                                (Some(d), Some(slot)) => {
+                                    let r = if !ps.value.is_finite() {
+                                        link::ParamResult::NotFinite
+                                    } else if d.check(ps.value as f64).is_err() {
+                                        link::ParamResult::OutOfRange
+                                    } else {
+                                        slot.1 = ps.value;
+                                        link::ParamResult::Accepted
+                                    };
+                                    (r, slot.1)
+                                }
+                                _ => (link::ParamResult::UnknownId, f32::NAN),
+                            };
+                            push(
+                                &link::Message::ParamAck(link::ParamAck {
+                                    id: ps.id,
+                                    value,
+                                    result,
+                                }),
+                                t,
+                                &mut enc,
+                                &mut out,
+                            );
+                            if let Some(l) = log.as_mut() {
+                                writeln!(
                                         l,
                                         "{{\"t_us\":{t},\"msg\":\"ParamSet\",\"id\":{},\"name\":\"{}\",\"value\":{},\"result\":\"{:?}\",\"now\":{}}}",
                                         ps.id,
@@ -364,13 +362,13 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                                         result,
                                         if value.is_finite() { value.to_string() } else { "null".into() },
                                     )?;
-                                    l.flush()?;
-                                }
+                                l.flush()?;
                             }
-                            _ => {}
                         }
+                        _ => {}
                     }
                 }
+            }
         }
         // Telemetry on a tick of 1/tick_hz (200 Hz unless the IMU goes faster); a stream of
         // rate hz is due on the ticks where floor(tick·hz / tick_hz) steps (tick 0 included),

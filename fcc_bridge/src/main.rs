@@ -52,7 +52,16 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
         }
         // One line and exit 2, as for every other bad input (clap's own text spans several).
         let text = e.to_string();
-        eprintln!("fcc-bridge: {} (see --help)", text.split("\n\nUsage").next().unwrap_or("").split_whitespace().collect::<Vec<_>>().join(" ").trim_start_matches("error: "));
+        eprintln!(
+            "fcc-bridge: {} (see --help)",
+            text.split("\n\nUsage")
+                .next()
+                .unwrap_or("")
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ")
+                .trim_start_matches("error: ")
+        );
         std::process::exit(2);
     });
     let mut o = Options {
@@ -74,108 +83,107 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
     // Errors about a parameter name the --params-file it came from.
     let ros_ref = ros.clone();
     (move || -> Result<(Options, Option<RecordOptions>), String> {
-    o.remaps = ros.remaps.clone();
-    let env = |k: &str| std::env::var(k).ok();
-    o.domain_id = params::domain_id(env("ROS_DOMAIN_ID").as_deref())?;
-    let p = &ros.params;
-    let rec = params::record_options(cli.record.as_deref(), p)?;
-    o.localhost_only = params::localhost_only(
-        p.get("localhost_only").map(String::as_str),
-        env("ROS_LOCALHOST_ONLY").as_deref(),
-        env("ROS_AUTOMATIC_DISCOVERY_RANGE").as_deref(),
-    )?;
-    let num = |k: &str| -> Result<Option<f64>, String> {
-        p.get(k)
-            .map(|v| {
-                v.parse::<f64>()
-                    .map_err(|_| format!("parameter {k}: '{v}' is not a number"))
-            })
-            .transpose()
-    };
-    if let Some(v) = num("ttl_ms")? {
-        if !(1.0..=65535.0).contains(&v) {
-            return Err(format!("parameter ttl_ms: {v} out of range 1..=65535"));
-        }
-        o.limits.ttl_ms = v as u16;
-    }
-    if let Some(v) = num("max_speed_mps")? {
-        o.limits.max_speed_mps = v;
-    }
-    if let Some(v) = num("max_stamp_age_ms")? {
-        o.limits.max_age_ns = (v * 1e6) as i64;
-    }
-    if let Some(v) = num("max_stamp_future_ms")? {
-        o.limits.max_future_ns = (v * 1e6) as i64;
-    }
-    if let Some(v) = num("ping_period_ms")? {
-        o.ping_period = Duration::from_millis(v.max(10.0) as u64);
-    }
-    if let Some(v) = p.get("clock_source") {
-        o.clock = match v.as_str() {
-            "sync" => ClockSource::Sync,
-            "mcu" => ClockSource::Mcu,
-            _ => return Err(format!("parameter clock_source: '{v}' (sync | mcu)")),
+        o.remaps = ros.remaps.clone();
+        let env = |k: &str| std::env::var(k).ok();
+        o.domain_id = params::domain_id(env("ROS_DOMAIN_ID").as_deref())?;
+        let p = &ros.params;
+        let rec = params::record_options(cli.record.as_deref(), p)?;
+        o.localhost_only = params::localhost_only(
+            p.get("localhost_only").map(String::as_str),
+            env("ROS_LOCALHOST_ONLY").as_deref(),
+            env("ROS_AUTOMATIC_DISCOVERY_RANGE").as_deref(),
+        )?;
+        let num = |k: &str| -> Result<Option<f64>, String> {
+            p.get(k)
+                .map(|v| {
+                    v.parse::<f64>()
+                        .map_err(|_| format!("parameter {k}: '{v}' is not a number"))
+                })
+                .transpose()
         };
-    }
-    if let Some(v) = p.get("use_sim_time") {
-        o.use_sim_time =
-            parse_bool(v).map_err(|e| format!("parameter use_sim_time: {e}"))?;
-    }
-    if let Some(v) = p.get("localhost_only") {
-        parse_bool(v).map_err(|e| format!("parameter localhost_only: {e}"))?;
-    }
-    o.record = rec
-        .as_ref()
-        .map(|r| r.path.display().to_string())
-        .unwrap_or_default();
-    for mp in fcc_bridge::mcu_params::MCU_PARAMS {
-        if let Some(x) = num(mp.name)? {
-            mp.check(x).map_err(|e| format!("parameter {e}"))?;
-            o.mcu_params.insert(mp.name.to_string(), x);
+        if let Some(v) = num("ttl_ms")? {
+            if !(1.0..=65535.0).contains(&v) {
+                return Err(format!("parameter ttl_ms: {v} out of range 1..=65535"));
+            }
+            o.limits.ttl_ms = v as u16;
         }
-    }
-    let c = &mut o.cfg;
-    for (k, slot) in [
-        ("map_frame", &mut c.map_frame),
-        ("base_frame", &mut c.base_frame),
-        ("imu_frame", &mut c.imu_frame),
-        ("mag_frame", &mut c.mag_frame),
-        ("baro_frame", &mut c.baro_frame),
-        ("gps_frame", &mut c.gps_frame),
-        ("laser_frame", &mut c.laser_frame),
-        ("sonar_frame", &mut c.sonar_frame),
-    ] {
-        if let Some(v) = p.get(k) {
-            *slot = v.clone();
+        if let Some(v) = num("max_speed_mps")? {
+            o.limits.max_speed_mps = v;
         }
-    }
-    let known = [
-        "localhost_only",
-        "ttl_ms",
-        "max_speed_mps",
-        "max_stamp_age_ms",
-        "max_stamp_future_ms",
-        "ping_period_ms",
-        "clock_source",
-        "use_sim_time",
-        "map_frame",
-        "base_frame",
-        "imu_frame",
-        "mag_frame",
-        "baro_frame",
-        "gps_frame",
-        "laser_frame",
-        "sonar_frame",
-    ];
-    for k in p.keys() {
-        if !known.contains(&k.as_str())
-            && !params::RECORD_PARAMS.contains(&k.as_str())
-            && fcc_bridge::mcu_params::by_name(k).is_none()
-        {
-            return Err(format!("unknown parameter '{k}'"));
+        if let Some(v) = num("max_stamp_age_ms")? {
+            o.limits.max_age_ns = (v * 1e6) as i64;
         }
-    }
-    Ok((o, rec))
+        if let Some(v) = num("max_stamp_future_ms")? {
+            o.limits.max_future_ns = (v * 1e6) as i64;
+        }
+        if let Some(v) = num("ping_period_ms")? {
+            o.ping_period = Duration::from_millis(v.max(10.0) as u64);
+        }
+        if let Some(v) = p.get("clock_source") {
+            o.clock = match v.as_str() {
+                "sync" => ClockSource::Sync,
+                "mcu" => ClockSource::Mcu,
+                _ => return Err(format!("parameter clock_source: '{v}' (sync | mcu)")),
+            };
+        }
+        if let Some(v) = p.get("use_sim_time") {
+            o.use_sim_time = parse_bool(v).map_err(|e| format!("parameter use_sim_time: {e}"))?;
+        }
+        if let Some(v) = p.get("localhost_only") {
+            parse_bool(v).map_err(|e| format!("parameter localhost_only: {e}"))?;
+        }
+        o.record = rec
+            .as_ref()
+            .map(|r| r.path.display().to_string())
+            .unwrap_or_default();
+        for mp in fcc_bridge::mcu_params::MCU_PARAMS {
+            if let Some(x) = num(mp.name)? {
+                mp.check(x).map_err(|e| format!("parameter {e}"))?;
+                o.mcu_params.insert(mp.name.to_string(), x);
+            }
+        }
+        let c = &mut o.cfg;
+        for (k, slot) in [
+            ("map_frame", &mut c.map_frame),
+            ("base_frame", &mut c.base_frame),
+            ("imu_frame", &mut c.imu_frame),
+            ("mag_frame", &mut c.mag_frame),
+            ("baro_frame", &mut c.baro_frame),
+            ("gps_frame", &mut c.gps_frame),
+            ("laser_frame", &mut c.laser_frame),
+            ("sonar_frame", &mut c.sonar_frame),
+        ] {
+            if let Some(v) = p.get(k) {
+                *slot = v.clone();
+            }
+        }
+        let known = [
+            "localhost_only",
+            "ttl_ms",
+            "max_speed_mps",
+            "max_stamp_age_ms",
+            "max_stamp_future_ms",
+            "ping_period_ms",
+            "clock_source",
+            "use_sim_time",
+            "map_frame",
+            "base_frame",
+            "imu_frame",
+            "mag_frame",
+            "baro_frame",
+            "gps_frame",
+            "laser_frame",
+            "sonar_frame",
+        ];
+        for k in p.keys() {
+            if !known.contains(&k.as_str())
+                && !params::RECORD_PARAMS.contains(&k.as_str())
+                && fcc_bridge::mcu_params::by_name(k).is_none()
+            {
+                return Err(format!("unknown parameter '{k}'"));
+            }
+        }
+        Ok((o, rec))
     })()
     .map_err(|e| ros_ref.locate(e))
 }
@@ -187,7 +195,9 @@ fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "info,rustdds=error,ros2_client=warn,ros2_client::service=error".into())
+                .unwrap_or_else(|_| {
+                    "info,rustdds=error,ros2_client=warn,ros2_client::service=error".into()
+                })
                 // ros2-client echoes every /rosout record as an event of its own: the line is
                 // already on stderr once, from the event itself.
                 .add_directive("ros2_client::rosout=off".parse().expect("static directive")),

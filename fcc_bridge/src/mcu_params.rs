@@ -15,12 +15,48 @@ pub struct McuParam {
 }
 
 pub const MCU_PARAMS: &[McuParam] = &[
-    McuParam { name: "limits.max_horiz_speed_mps", id: pid::MAX_HORIZ_SPEED_MPS, default: 8.0, min: 0.1, max: 30.0 },
-    McuParam { name: "limits.max_tilt_deg", id: pid::MAX_TILT_DEG, default: 25.0, min: 5.0, max: 60.0 },
-    McuParam { name: "control.cross_track_k_per_s", id: pid::CROSS_TRACK_K_PER_S, default: 2.0, min: 0.0, max: 5.0 },
-    McuParam { name: "control.vel_p_per_s", id: pid::VEL_P_PER_S, default: 3.0, min: 0.05, max: 10.0 },
-    McuParam { name: "limits.max_climb_mps", id: pid::MAX_CLIMB_MPS, default: 2.5, min: 0.1, max: 10.0 },
-    McuParam { name: "limits.max_descent_mps", id: pid::MAX_DESCENT_MPS, default: 1.5, min: 0.1, max: 10.0 },
+    McuParam {
+        name: "limits.max_horiz_speed_mps",
+        id: pid::MAX_HORIZ_SPEED_MPS,
+        default: 8.0,
+        min: 0.1,
+        max: 30.0,
+    },
+    McuParam {
+        name: "limits.max_tilt_deg",
+        id: pid::MAX_TILT_DEG,
+        default: 25.0,
+        min: 5.0,
+        max: 60.0,
+    },
+    McuParam {
+        name: "control.cross_track_k_per_s",
+        id: pid::CROSS_TRACK_K_PER_S,
+        default: 2.0,
+        min: 0.0,
+        max: 5.0,
+    },
+    McuParam {
+        name: "control.vel_p_per_s",
+        id: pid::VEL_P_PER_S,
+        default: 3.0,
+        min: 0.05,
+        max: 10.0,
+    },
+    McuParam {
+        name: "limits.max_climb_mps",
+        id: pid::MAX_CLIMB_MPS,
+        default: 2.5,
+        min: 0.1,
+        max: 10.0,
+    },
+    McuParam {
+        name: "limits.max_descent_mps",
+        id: pid::MAX_DESCENT_MPS,
+        default: 1.5,
+        min: 0.1,
+        max: 10.0,
+    },
 ];
 
 pub fn by_name(name: &str) -> Option<&'static McuParam> {

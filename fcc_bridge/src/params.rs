@@ -28,8 +28,7 @@ impl RosArgs {
     pub fn load_params_files(&mut self, namespace: &str, node: &str) -> Result<(), String> {
         let mut from_files = BTreeMap::new();
         for f in &self.params_files {
-            let text = std::fs::read_to_string(f)
-                .map_err(|e| format!("--params-file {f}: {e}"))?;
+            let text = std::fs::read_to_string(f).map_err(|e| format!("--params-file {f}: {e}"))?;
             for (k, v) in params_from_yaml(&text, namespace, node)
                 .map_err(|e| format!("--params-file {f}: {e}"))?
             {
@@ -47,7 +46,9 @@ impl RosArgs {
 
     /// Prefix an error about parameter `name` with the file it came from, if it came from one.
     pub fn locate(&self, msg: String) -> String {
-        let name = msg.strip_prefix("parameter ").and_then(|r| r.split(|c: char| c == ':' || c == ' ').next());
+        let name = msg
+            .strip_prefix("parameter ")
+            .and_then(|r| r.split(|c: char| c == ':' || c == ' ').next());
         match name.and_then(|n| self.param_origin.get(n)) {
             Some(f) => format!("{f}: {msg}"),
             None => msg,
@@ -63,9 +64,7 @@ pub fn params_from_yaml(
     node: &str,
 ) -> Result<BTreeMap<String, String>, String> {
     let doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| format!("{e}"))?;
-    let top = doc
-        .as_mapping()
-        .ok_or("expected a mapping of node names")?;
+    let top = doc.as_mapping().ok_or("expected a mapping of node names")?;
     let ns = namespace.trim_matches('/');
     let fq = if ns.is_empty() {
         format!("/{node}")
@@ -125,7 +124,11 @@ pub fn params_from_yaml(
             V::String(s) => {
                 out.insert(prefix.to_string(), s.clone());
             }
-            _ => return Err(format!("parameter {prefix}: unsupported value (arrays and null are not used by this node)")),
+            _ => {
+                return Err(format!(
+                "parameter {prefix}: unsupported value (arrays and null are not used by this node)"
+            ))
+            }
         }
         Ok(())
     }
@@ -192,9 +195,7 @@ pub fn split_ros_args(args: &[String]) -> Result<(Vec<String>, RosArgs), String>
                 i += 1;
             }
             "--params-file" => {
-                let v = args
-                    .get(i + 1)
-                    .ok_or_else(|| format!("{a} needs a file"))?;
+                let v = args.get(i + 1).ok_or_else(|| format!("{a} needs a file"))?;
                 ros.params_files.push(v.clone());
                 i += 1;
             }
@@ -279,7 +280,9 @@ pub fn record_options(
         .filter(|s| !s.is_empty());
     let Some(path) = path else {
         if let Some(k) = RECORD_PARAMS[1..].iter().find(|k| p.contains_key(**k)) {
-            return Err(format!("parameter {k} needs --record PATH (or -p record:=PATH)"));
+            return Err(format!(
+                "parameter {k} needs --record PATH (or -p record:=PATH)"
+            ));
         }
         return Ok(None);
     };
@@ -361,13 +364,20 @@ other_node:\n  ros__parameters:\n    ttl_ms: 9\n";
         assert_eq!(p["limits.max_tilt_deg"], "30.0");
         let p = params_from_yaml(y, "/uav2", "fcc_bridge").unwrap();
         assert_eq!(p["ttl_ms"], "400");
-        assert!(params_from_yaml("/**:\n  ros__parameters:\n    a: [1, 2]\n", "/", "n")
-            .unwrap_err()
-            .contains("parameter a"));
+        assert!(
+            params_from_yaml("/**:\n  ros__parameters:\n    a: [1, 2]\n", "/", "n")
+                .unwrap_err()
+                .contains("parameter a")
+        );
         let dir = std::env::temp_dir().join(format!("fcc_params_{}.yaml", std::process::id()));
         std::fs::write(&dir, y).unwrap();
         let (_, mut r) = split_ros_args(&s(&[
-            "x", "--ros-args", "--params-file", dir.to_str().unwrap(), "-p", "ttl_ms:=700",
+            "x",
+            "--ros-args",
+            "--params-file",
+            dir.to_str().unwrap(),
+            "-p",
+            "ttl_ms:=700",
         ]))
         .unwrap();
         r.load_params_files("/uav1", "fcc_bridge").unwrap();

@@ -241,7 +241,12 @@ impl Tap {
         self.tx.is_some()
     }
 
-    fn channel_id(&self, inner: &mut TapInner, topic: &str, make: impl FnOnce() -> ChannelDesc) -> u16 {
+    fn channel_id(
+        &self,
+        inner: &mut TapInner,
+        topic: &str,
+        make: impl FnOnce() -> ChannelDesc,
+    ) -> u16 {
         if let Some(id) = inner.channels.get(topic) {
             return *id;
         }
@@ -282,20 +287,40 @@ impl Tap {
 
     /// A message the bridge published on `name` (relative to the namespace or absolute), at ROS
     /// time `t_ns`.
-    pub fn published<T: RosMsg + serde::Serialize>(&self, name: &str, qos: QosInfo, m: &T, t_ns: i64) {
+    pub fn published<T: RosMsg + serde::Serialize>(
+        &self,
+        name: &str,
+        qos: QosInfo,
+        m: &T,
+        t_ns: i64,
+    ) {
         self.count_and_record(name, true, qos, m, t_ns);
     }
 
     /// A message the bridge received.
-    pub fn received<T: RosMsg + serde::Serialize>(&self, name: &str, qos: QosInfo, m: &T, t_ns: i64) {
+    pub fn received<T: RosMsg + serde::Serialize>(
+        &self,
+        name: &str,
+        qos: QosInfo,
+        m: &T,
+        t_ns: i64,
+    ) {
         self.count_and_record(name, false, qos, m, t_ns);
     }
 
-    fn count_and_record<T: RosMsg + serde::Serialize>(&self, name: &str, publ: bool, qos: QosInfo, m: &T, t_ns: i64) {
+    fn count_and_record<T: RosMsg + serde::Serialize>(
+        &self,
+        name: &str,
+        publ: bool,
+        qos: QosInfo,
+        m: &T,
+        t_ns: i64,
+    ) {
         let mut g = self.inner.lock().unwrap();
         let g = &mut *g;
         if !g.names.contains_key(name) {
-            g.names.insert(name.to_string(), (full_topic(&self.namespace, name), 0, 0));
+            g.names
+                .insert(name.to_string(), (full_topic(&self.namespace, name), 0, 0));
         }
         let e = g.names.get_mut(name).expect("inserted");
         if publ {
@@ -320,7 +345,11 @@ impl Tap {
         };
         let data = cdr_bytes(m);
         if let Some(tx) = &self.tx {
-            let _ = tx.send(Ev::Msg { ch, t: t_ns.max(0) as u64, data });
+            let _ = tx.send(Ev::Msg {
+                ch,
+                t: t_ns.max(0) as u64,
+                data,
+            });
         }
     }
 
@@ -439,8 +468,14 @@ pub fn split_path(path: &Path, i: usize) -> PathBuf {
     if i == 0 {
         return path.to_path_buf();
     }
-    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let ext = path.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "mcap".into());
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "mcap".into());
     path.with_file_name(format!("{stem}_{i}.{ext}"))
 }
 
@@ -451,8 +486,16 @@ pub type McapFile = BufWriter<std::fs::File>;
 pub fn write_options(zstd: bool, chunk_bytes: u64) -> mcap::WriteOptions {
     mcap::WriteOptions::new()
         .profile("ros2")
-        .library(concat!("fcc-bridge ", env!("CARGO_PKG_VERSION"), " (mcap 0.26)"))
-        .compression(if zstd { Some(mcap::Compression::Zstd) } else { None })
+        .library(concat!(
+            "fcc-bridge ",
+            env!("CARGO_PKG_VERSION"),
+            " (mcap 0.26)"
+        ))
+        .compression(if zstd {
+            Some(mcap::Compression::Zstd)
+        } else {
+            None
+        })
         .compression_level(1)
         .chunk_size(Some(chunk_bytes))
 }
@@ -480,7 +523,9 @@ impl<W: Write + Seek> BagWriter<W> {
         let sid = match self.schemas.get(&d.schema_name) {
             Some(s) => *s,
             None => {
-                let s = self.writer.add_schema(&d.schema_name, "ros2msg", d.schema.as_bytes())?;
+                let s = self
+                    .writer
+                    .add_schema(&d.schema_name, "ros2msg", d.schema.as_bytes())?;
                 self.schemas.insert(d.schema_name.clone(), s);
                 s
             }
@@ -545,7 +590,10 @@ impl WriterThread {
     fn fail(&mut self, what: &str, e: impl std::fmt::Display) {
         if !self.failed {
             let path = self.report.files.last().cloned().unwrap_or_default();
-            let msg = format!("recording to {} stopped: {what}: {e} (the bridge keeps running)", path.display());
+            let msg = format!(
+                "recording to {} stopped: {what}: {e} (the bridge keeps running)",
+                path.display()
+            );
             tracing::error!("{msg}");
             self.report.error = Some(msg);
         }
@@ -565,8 +613,12 @@ impl WriterThread {
         let r = std::fs::File::create(&path)
             .map_err(|e| e.to_string())
             .and_then(|f| {
-                BagWriter::new(BufWriter::with_capacity(1 << 20, f), self.opts.zstd, self.opts.chunk_bytes)
-                    .map_err(|e| e.to_string())
+                BagWriter::new(
+                    BufWriter::with_capacity(1 << 20, f),
+                    self.opts.zstd,
+                    self.opts.chunk_bytes,
+                )
+                .map_err(|e| e.to_string())
             });
         self.report.files.push(path.clone());
         match r {
@@ -611,7 +663,8 @@ impl WriterThread {
         if self.bag.is_none() {
             self.open();
         }
-        let (Some(bag), Some(Some(desc))) = (self.bag.as_mut(), self.channels.get(ch as usize)) else {
+        let (Some(bag), Some(Some(desc))) = (self.bag.as_mut(), self.channels.get(ch as usize))
+        else {
             self.report.not_recorded += 1;
             return;
         };
@@ -625,7 +678,10 @@ impl WriterThread {
             self.written.resize(i + 1, 0);
         }
         self.written[i] += 1;
-        let split_bytes = self.opts.split_mb.is_some_and(|mb| bag.bytes as f64 >= mb * 1e6);
+        let split_bytes = self
+            .opts
+            .split_mb
+            .is_some_and(|mb| bag.bytes as f64 >= mb * 1e6);
         let split_time = self
             .opts
             .split_s
@@ -728,7 +784,10 @@ impl WriterThread {
                     "raw_frames_topic": self.channels.iter().flatten()
                         .find(|c| c.schema_name == "fcc_msgs/msg/LinkFrame").map(|c| c.topic.clone()),
                 });
-                if let Err(e) = std::fs::write(&side, serde_json::to_string_pretty(&doc).unwrap_or_default()) {
+                if let Err(e) = std::fs::write(
+                    &side,
+                    serde_json::to_string_pretty(&doc).unwrap_or_default(),
+                ) {
                     tracing::warn!("{}: {e}", side.display());
                 }
                 let _ = reply.send(self.report.clone());
@@ -751,7 +810,12 @@ mod tests {
         assert_eq!(&b[..4], &[0, 1, 0, 0]);
         let back: Imu = from_cdr(&b).unwrap();
         assert_eq!(back, m);
-        let f = LinkFrame { direction: 1, t_us: 7, data: vec![1, 2, 0], ..Default::default() };
+        let f = LinkFrame {
+            direction: 1,
+            t_us: 7,
+            data: vec![1, 2, 0],
+            ..Default::default()
+        };
         assert_eq!(from_cdr::<LinkFrame>(&cdr_bytes(&f)).unwrap(), f);
     }
 
@@ -759,8 +823,16 @@ mod tests {
     fn names_and_paths() {
         assert_eq!(full_topic("/fcc", "imu/data_raw"), "/fcc/imu/data_raw");
         assert_eq!(full_topic("/fcc/", "/tf"), "/tf");
-        assert_eq!(split_path(Path::new("/x/b.mcap"), 0), PathBuf::from("/x/b.mcap"));
-        assert_eq!(split_path(Path::new("/x/b.mcap"), 2), PathBuf::from("/x/b_2.mcap"));
-        assert!(QosInfo::TELEMETRY.yaml().starts_with("- history: 1\n  depth: 10\n  reliability: 1\n  durability: 2\n"));
+        assert_eq!(
+            split_path(Path::new("/x/b.mcap"), 0),
+            PathBuf::from("/x/b.mcap")
+        );
+        assert_eq!(
+            split_path(Path::new("/x/b.mcap"), 2),
+            PathBuf::from("/x/b_2.mcap")
+        );
+        assert!(QosInfo::TELEMETRY
+            .yaml()
+            .starts_with("- history: 1\n  depth: 10\n  reliability: 1\n  durability: 2\n"));
     }
 }

@@ -60,8 +60,12 @@ pub enum LinkRequest {
 // --------------------------------------------------------------------------- parameters
 
 /// Bridge parameters that can be changed at run time (the rest are read-only after start).
-pub const DYNAMIC_BRIDGE_PARAMS: [&str; 4] =
-    ["ttl_ms", "max_speed_mps", "max_stamp_age_ms", "max_stamp_future_ms"];
+pub const DYNAMIC_BRIDGE_PARAMS: [&str; 4] = [
+    "ttl_ms",
+    "max_speed_mps",
+    "max_stamp_age_ms",
+    "max_stamp_future_ms",
+];
 
 /// State shared between the parameter validator (ros2-client's spinner thread) and the link task.
 pub struct ParamShared {
@@ -223,7 +227,10 @@ mod tests {
         sh.live.store(true, Ordering::SeqCst);
         assert!(validate(&sh, "clock_source", &ParameterValue::String("mcu".into())).is_err());
         // Live: the same value as the MCU's passes without a link round trip …
-        sh.mcu_values.lock().unwrap().insert(fcc_msgs::param_id::MAX_TILT_DEG, 30.0);
+        sh.mcu_values
+            .lock()
+            .unwrap()
+            .insert(fcc_msgs::param_id::MAX_TILT_DEG, 30.0);
         assert!(validate(&sh, "limits.max_tilt_deg", &d(30.0)).is_ok());
         // … another value goes to the link task and its answer decides.
         let h = std::thread::spawn(move || {

@@ -6,7 +6,9 @@
 use crate::params::{self, RosArgs};
 use crate::ros_types::{Clock, RosMsg};
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription};
+use ros2_client::{
+    Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription,
+};
 use std::net::Ipv4Addr;
 
 /// DDS settings from the environment and the `localhost_only` parameter.
@@ -55,7 +57,11 @@ pub fn node(ctx: &Context, namespace: &str, name: &str) -> Result<Node, String> 
             NodeOptions::new().enable_rosout(true),
         )
         .map_err(|e| format!("node: {e:?}"))?;
-    tokio::spawn(node.spinner().map_err(|e| format!("spinner: {e:?}"))?.spin());
+    tokio::spawn(
+        node.spinner()
+            .map_err(|e| format!("spinner: {e:?}"))?
+            .spin(),
+    );
     Ok(node)
 }
 
@@ -74,7 +80,11 @@ pub fn best_effort_qos(depth: usize) -> QosProfile {
 }
 
 /// Publisher on a ROS name (relative names go under the node's namespace).
-pub fn publisher<T: RosMsg>(node: &mut Node, name: &str, qos: &QosProfile) -> Result<Publisher<T>, String> {
+pub fn publisher<T: RosMsg>(
+    node: &mut Node,
+    name: &str,
+    qos: &QosProfile,
+) -> Result<Publisher<T>, String> {
     let topic = node
         .create_topic(
             &Name::parse(name).map_err(|e| format!("topic {name}: {e:?}"))?,

@@ -17,7 +17,10 @@ fn ros_interfaces_against_cyclone_peer() {
         .status()
         .is_ok_and(|s| s.success());
     if !has_cyclone {
-        assert!(!required, "{py} cannot import cyclonedds (pip install cyclonedds)");
+        assert!(
+            !required,
+            "{py} cannot import cyclonedds (pip install cyclonedds)"
+        );
         eprintln!("SKIPPED: {py} has no cyclonedds; set FCC_DDS_PYTHON to a python with it");
         return;
     }

@@ -111,12 +111,32 @@ impl FlightCore {
             landed: true,
             touchdown_s: 0.0,
             cross_track: CrossTrack::new(c.cross_track_k_per_s),
-            vel_ctrl: VelocityController::new(c.vel_p_per_s, c.vel_i_per_s2, c.vel_i_limit_mps2, c.accel_cmd_limit_mps2),
+            vel_ctrl: VelocityController::new(
+                c.vel_p_per_s,
+                c.vel_i_per_s2,
+                c.vel_i_limit_mps2,
+                c.accel_cmd_limit_mps2,
+            ),
             accel_ctrl: [acc, acc],
             observer: [obs, obs],
-            vert_ctrl: VerticalController::new(a.mass_kg, c.vz_p_per_s, c.vz_i_per_s2, c.vz_i_limit_mps2),
-            roll_pid: TiltPid::new(c.att_p_nm_per_rad, c.att_i_nm_per_rad_s, c.att_d_nm_per_radps, c.att_i_limit_nm),
-            pitch_pid: TiltPid::new(c.att_p_nm_per_rad, c.att_i_nm_per_rad_s, c.att_d_nm_per_radps, c.att_i_limit_nm),
+            vert_ctrl: VerticalController::new(
+                a.mass_kg,
+                c.vz_p_per_s,
+                c.vz_i_per_s2,
+                c.vz_i_limit_mps2,
+            ),
+            roll_pid: TiltPid::new(
+                c.att_p_nm_per_rad,
+                c.att_i_nm_per_rad_s,
+                c.att_d_nm_per_radps,
+                c.att_i_limit_nm,
+            ),
+            pitch_pid: TiltPid::new(
+                c.att_p_nm_per_rad,
+                c.att_i_nm_per_rad_s,
+                c.att_d_nm_per_radps,
+                c.att_i_limit_nm,
+            ),
             yaw_ctrl: YawController::new(
                 c.yaw_p_per_s,
                 c.yaw_rate_ff_nm_per_radps,
@@ -125,7 +145,12 @@ impl FlightCore {
                 c.yaw_rate_forgetting,
                 c.yaw_rate_limit_radps,
             ),
-            mixer: Mixer::new(a.arm_m, a.torque_to_thrust_m, a.max_thrust_per_motor_n, a.idle_cmd),
+            mixer: Mixer::new(
+                a.arm_m,
+                a.torque_to_thrust_m,
+                a.max_thrust_per_motor_n,
+                a.idle_cmd,
+            ),
             tilt_cmd_fr_rad: [0.0; 2],
             tilt_sat_fr: [0.0; 2],
             last_step_us: None,
@@ -145,9 +170,15 @@ impl FlightCore {
         use fcc_msgs::param_id as pid;
         let range = |field: &'static str, lo: f32, hi: f32| -> Result<(), ParamError> {
             if !value.is_finite() {
-                Err(ParamError { field, reason: "not finite" })
+                Err(ParamError {
+                    field,
+                    reason: "not finite",
+                })
             } else if value < lo || value > hi {
-                Err(ParamError { field, reason: "out of range" })
+                Err(ParamError {
+                    field,
+                    reason: "out of range",
+                })
             } else {
                 Ok(())
             }
@@ -166,7 +197,12 @@ impl FlightCore {
             }
             pid::MAX_CLIMB_MPS => p.limits.max_climb_mps = value,
             pid::MAX_DESCENT_MPS => p.limits.max_descent_mps = value,
-            _ => return Err(ParamError { field: "id", reason: "unknown parameter" }),
+            _ => {
+                return Err(ParamError {
+                    field: "id",
+                    reason: "unknown parameter",
+                })
+            }
         }
         p.validate()?;
         self.params = p;
@@ -185,7 +221,12 @@ impl FlightCore {
             }
             pid::CROSS_TRACK_K_PER_S => self.cross_track = CrossTrack::new(c.cross_track_k_per_s),
             pid::VEL_P_PER_S => {
-                self.vel_ctrl = VelocityController::new(c.vel_p_per_s, c.vel_i_per_s2, c.vel_i_limit_mps2, c.accel_cmd_limit_mps2)
+                self.vel_ctrl = VelocityController::new(
+                    c.vel_p_per_s,
+                    c.vel_i_per_s2,
+                    c.vel_i_limit_mps2,
+                    c.accel_cmd_limit_mps2,
+                )
             }
             _ => {}
         }
@@ -286,7 +327,10 @@ impl FlightCore {
     /// Accept a velocity setpoint from the mission computer. Out-of-limit speeds are clamped to
     /// the MCU's limits; non-finite or absurd values are refused.
     pub fn setpoint(&mut self, now_us: u64, sp: VelocitySetpoint) -> Result<(), CommandError> {
-        let finite = sp.vel_ned_mps.iter().all(|v| v.is_finite() && v.abs() <= SETPOINT_ABS_LIMIT_MPS)
+        let finite = sp
+            .vel_ned_mps
+            .iter()
+            .all(|v| v.is_finite() && v.abs() <= SETPOINT_ABS_LIMIT_MPS)
             && sp.yaw_rad.map_or(true, |y| y.is_finite());
         if !finite {
             return Err(CommandError::InvalidSetpoint);
@@ -302,7 +346,13 @@ impl FlightCore {
             v[1] *= l.max_horiz_speed_mps / h;
         }
         v[2] = v[2].clamp(-l.max_climb_mps, l.max_descent_mps);
-        self.setpoint = Some((VelocitySetpoint { vel_ned_mps: v, ..sp }, now_us));
+        self.setpoint = Some((
+            VelocitySetpoint {
+                vel_ned_mps: v,
+                ..sp
+            },
+            now_us,
+        ));
         self.last_setpoint_us = Some(now_us);
         // A fresh setpoint resumes velocity mode from hold (but never overrides a landing).
         if self.mode == Mode::Hold {
@@ -354,7 +404,10 @@ impl FlightCore {
         self.last_step_us = Some(now_us);
         let still = self.mode == Mode::Disarmed && self.landed;
         let nav = *self.nav.step(now_us, inputs, still);
-        self.telemetry = StepTelemetry { t_us: now_us, ..Default::default() };
+        self.telemetry = StepTelemetry {
+            t_us: now_us,
+            ..Default::default()
+        };
         if self.mode == Mode::Disarmed {
             self.motors = [0.0; MOTOR_COUNT];
             return self.motors;
@@ -374,7 +427,9 @@ impl FlightCore {
 
     fn update_mode(&mut self, now_us: u64, nav: &NavState) {
         let l = self.params.limits;
-        let since_sp_s = self.last_setpoint_us.map_or(f32::MAX, |t| now_us.saturating_sub(t) as f32 * 1e-6);
+        let since_sp_s = self
+            .last_setpoint_us
+            .map_or(f32::MAX, |t| now_us.saturating_sub(t) as f32 * 1e-6);
         match self.mode {
             Mode::Velocity => {
                 let stale = match self.setpoint {
@@ -407,12 +462,19 @@ impl FlightCore {
         let c = self.params.control;
         let alt = -nav.pos_ned_m[2];
         let hold_ne = |s: &Self| {
-            let e = [s.hold_ne_m[0] - nav.pos_ned_m[0], s.hold_ne_m[1] - nav.pos_ned_m[1]];
-            clamp_norm([c.pos_p_per_s * e[0], c.pos_p_per_s * e[1]], l.hold_max_speed_mps)
+            let e = [
+                s.hold_ne_m[0] - nav.pos_ned_m[0],
+                s.hold_ne_m[1] - nav.pos_ned_m[1],
+            ];
+            clamp_norm(
+                [c.pos_p_per_s * e[0], c.pos_p_per_s * e[1]],
+                l.hold_max_speed_mps,
+            )
         };
         let (mut v_ne, mut vz_down, yaw) = match self.mode {
             Mode::Hold => {
-                let vz = (-(c.alt_p_per_s * (self.hold_alt_m - alt))).clamp(-l.max_climb_mps, l.max_descent_mps);
+                let vz = (-(c.alt_p_per_s * (self.hold_alt_m - alt)))
+                    .clamp(-l.max_climb_mps, l.max_descent_mps);
                 (hold_ne(self), vz, self.yaw_hold_rad)
             }
             Mode::Velocity => match self.setpoint {
@@ -420,7 +482,11 @@ impl FlightCore {
                     if let Some(y) = sp.yaw_rad {
                         self.yaw_hold_rad = y;
                     }
-                    ([sp.vel_ned_mps[0], sp.vel_ned_mps[1]], sp.vel_ned_mps[2], self.yaw_hold_rad)
+                    (
+                        [sp.vel_ned_mps[0], sp.vel_ned_mps[1]],
+                        sp.vel_ned_mps[2],
+                        self.yaw_hold_rad,
+                    )
                 }
                 None => (hold_ne(self), 0.0, self.yaw_hold_rad),
             },
@@ -441,7 +507,11 @@ impl FlightCore {
             let out = [nav.pos_ned_m[0] / r, nav.pos_ned_m[1] / r];
             let v_out = v_ne[0] * out[0] + v_ne[1] * out[1];
             let to_fence = l.fence_radius_m - r;
-            let v_out_max = if to_fence > 0.0 { libm::sqrtf(2.0 * FENCE_BRAKE_MPS2 * to_fence) } else { -0.5 * (-to_fence).min(2.0) };
+            let v_out_max = if to_fence > 0.0 {
+                libm::sqrtf(2.0 * FENCE_BRAKE_MPS2 * to_fence)
+            } else {
+                -0.5 * (-to_fence).min(2.0)
+            };
             if v_out > v_out_max {
                 let remove = v_out - v_out_max;
                 v_ne = [v_ne[0] - remove * out[0], v_ne[1] - remove * out[1]];
@@ -458,7 +528,14 @@ impl FlightCore {
         (v_ne, vz_down, yaw)
     }
 
-    fn control(&mut self, dt_s: f32, nav: &NavState, v_cmd_ne: [f32; 2], vz_cmd_down: f32, yaw_cmd: f32) {
+    fn control(
+        &mut self,
+        dt_s: f32,
+        nav: &NavState,
+        v_cmd_ne: [f32; 2],
+        vz_cmd_down: f32,
+        yaw_cmd: f32,
+    ) {
         let c = self.params.control;
         let l = self.params.limits;
         let e = nav.euler;
@@ -479,9 +556,16 @@ impl FlightCore {
         };
         let (sy, cy) = (libm::sinf(e.yaw_rad), libm::cosf(e.yaw_rad));
         let to_fr = |v: [f32; 2]| [cy * v[0] + sy * v[1], -sy * v[0] + cy * v[1]];
-        let sat_ne = [cy * self.tilt_sat_fr[0] - sy * self.tilt_sat_fr[1], sy * self.tilt_sat_fr[0] + cy * self.tilt_sat_fr[1]];
+        let sat_ne = [
+            cy * self.tilt_sat_fr[0] - sy * self.tilt_sat_fr[1],
+            sy * self.tilt_sat_fr[0] + cy * self.tilt_sat_fr[1],
+        ];
         let sat_ne = [sign_or_zero(sat_ne[0]), sign_or_zero(sat_ne[1])];
-        let mut a_cmd_ne = if airborne { self.vel_ctrl.update(dt_s, v_cmd, v_ne, sat_ne) } else { [0.0; 2] };
+        let mut a_cmd_ne = if airborne {
+            self.vel_ctrl.update(dt_s, v_cmd, v_ne, sat_ne)
+        } else {
+            [0.0; 2]
+        };
         if !airborne {
             self.vel_ctrl.reset();
         }
@@ -494,7 +578,8 @@ impl FlightCore {
         let mut tilt_cmd = [0.0f32; 2];
         let mut a_est = [0.0f32; 2];
         for i in 0..2 {
-            a_est[i] = self.observer[i].update(tilt_fr[i], self.tilt_cmd_fr_rad[i], a_meas_fr[i], dt_s);
+            a_est[i] =
+                self.observer[i].update(tilt_fr[i], self.tilt_cmd_fr_rad[i], a_meas_fr[i], dt_s);
             tilt_cmd[i] = if airborne {
                 self.accel_ctrl[i].update(dt_s, a_cmd_fr[i], a_est[i], v_fr[i], self.tilt_sat_fr[i])
             } else {
@@ -530,17 +615,30 @@ impl FlightCore {
             0.0
         } else {
             let sat = self.telemetry.saturation.thrust_shift_sign;
-            self.vert_ctrl.update(dt_s, -vz_cmd_down, vz_up_meas, tilt_cos, sat)
+            self.vert_ctrl
+                .update(dt_s, -vz_cmd_down, vz_up_meas, tilt_cos, sat)
         };
 
         // Attitude and yaw → torques → mixer.
         let r = nav.rate_frd_radps;
         let (torque, yaw_sat) = if airborne {
             let t_roll = self.roll_pid.update(dt_s, roll_cmd, e.roll_rad, r[0], true);
-            let t_pitch = self.pitch_pid.update(dt_s, pitch_cmd, e.pitch_rad, r[1], true);
+            let t_pitch = self
+                .pitch_pid
+                .update(dt_s, pitch_cmd, e.pitch_rad, r[1], true);
             let yaw_rate = fcc_nav::attitude::euler_rates(r, e.roll_rad, e.pitch_rad)[2];
-            let ys = if self.telemetry.saturation.yaw_scale < 1.0 { 1.0 } else { 0.0 };
-            let t_yaw = self.yaw_ctrl.update(dt_s, yaw_cmd, e.yaw_rad, yaw_rate, ys * sign_or_zero(yaw_cmd - e.yaw_rad));
+            let ys = if self.telemetry.saturation.yaw_scale < 1.0 {
+                1.0
+            } else {
+                0.0
+            };
+            let t_yaw = self.yaw_ctrl.update(
+                dt_s,
+                yaw_cmd,
+                e.yaw_rad,
+                yaw_rate,
+                ys * sign_or_zero(yaw_cmd - e.yaw_rad),
+            );
             ([t_roll, t_pitch, t_yaw], ys)
         } else {
             self.roll_pid.reset();
@@ -595,8 +693,13 @@ impl FlightCore {
     fn detect_touchdown(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) {
         let hover_n = self.params.airframe.mass_kg * GRAVITY_MPS2;
         let descending_cmd = vz_cmd_down > 0.0;
-        let near_ground = self.height_above_ground_m(nav) < self.params.airframe.sensor_height_on_ground_m + CONTACT_MARGIN_M;
-        let vz = if near_ground && self.ground_usable(nav) { nav.ground_rate_up_mps } else { nav.vel_ned_mps[2] };
+        let near_ground = self.height_above_ground_m(nav)
+            < self.params.airframe.sensor_height_on_ground_m + CONTACT_MARGIN_M;
+        let vz = if near_ground && self.ground_usable(nav) {
+            nav.ground_rate_up_mps
+        } else {
+            nav.vel_ned_mps[2]
+        };
         let not_moving = libm::fabsf(vz) < 0.25;
         let low_thrust = self.telemetry.thrust_n < if near_ground { 0.9 } else { 0.8 } * hover_n;
         if self.landed || (descending_cmd && not_moving && low_thrust) {

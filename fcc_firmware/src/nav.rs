@@ -7,7 +7,10 @@
 
 use crate::params::NavParams;
 use crate::sensors::SensorInputs;
-use fcc_nav::attitude::{accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, rot_body_to_ned, AttitudeEstimator, Euler};
+use fcc_nav::attitude::{
+    accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, rot_body_to_ned, AttitudeEstimator,
+    Euler,
+};
 use fcc_nav::geodesy::{Lla, LocalNed};
 use fcc_nav::ground_altitude::{GroundAltitude, GroundAltitudeFilter, GroundAltitudeParams};
 use fcc_nav::horizontal::HorizontalEstimator;
@@ -88,13 +91,22 @@ pub struct Navigator {
 impl Navigator {
     pub fn new(params: NavParams) -> Self {
         let mut horiz = HorizontalEstimator::new(params.horiz_gains());
-        horiz.n.set_bias_gain(params.horiz_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
-        horiz.e.set_bias_gain(params.horiz_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+        horiz
+            .n
+            .set_bias_gain(params.horiz_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+        horiz
+            .e
+            .set_bias_gain(params.horiz_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
         let mut vert = VerticalEstimator::new(params.vert_gains());
-        vert.down.set_bias_gain(params.vert_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+        vert.down
+            .set_bias_gain(params.vert_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
         Self {
             params,
-            att: AttitudeEstimator::new(params.tilt_gains(), params.yaw_gains(), params.declination_deg.to_radians()),
+            att: AttitudeEstimator::new(
+                params.tilt_gains(),
+                params.yaw_gains(),
+                params.declination_deg.to_radians(),
+            ),
             horiz,
             vert,
             home: None,
@@ -178,7 +190,11 @@ impl Navigator {
             // Remove the manoeuvre acceleration (GPS-derived, NED → body) from the specific
             // force before it is read as a gravity direction.
             let r = rot_body_to_ned(&self.att.euler());
-            let a = if self.state.gps_ok { self.gps_accel_ned_mps2 } else { [0.0; 3] };
+            let a = if self.state.gps_ok {
+                self.gps_accel_ned_mps2
+            } else {
+                [0.0; 3]
+            };
             let mut f_tilt = f_lp;
             for (i, ft) in f_tilt.iter_mut().enumerate() {
                 *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
@@ -209,7 +225,11 @@ impl Navigator {
         }
         if let Some(g) = s.gps {
             if g.fix_ok && g.lat_deg.is_finite() && g.lon_deg.is_finite() {
-                let lla = Lla { lat_deg: g.lat_deg, lon_deg: g.lon_deg, alt_m: g.alt_m as f64 };
+                let lla = Lla {
+                    lat_deg: g.lat_deg,
+                    lon_deg: g.lon_deg,
+                    alt_m: g.alt_m as f64,
+                };
                 if self.home.is_none() && self.calibrated {
                     self.home = Some(LocalNed::new(lla));
                     let p = self.state.pos_ned_m;
@@ -253,10 +273,12 @@ impl Navigator {
             }
             if let Some(r) = s.sonar {
                 self.state.sonar_m = Some(r.range_m);
-                self.ground.update_sonar(r.range_m, e.roll_rad, e.pitch_rad, self.air_temp_c);
+                self.ground
+                    .update_sonar(r.range_m, e.roll_rad, e.pitch_rad, self.air_temp_c);
             }
             self.state.ground = self.ground.output();
-            self.state.ground_rate_up_mps = -self.vert.vel_down_mps() + self.ground.rate_residual_mps();
+            self.state.ground_rate_up_mps =
+                -self.vert.vel_down_mps() + self.ground.rate_residual_mps();
         }
         let pn = self.horiz.pos_ne_m();
         let vn = self.horiz.vel_ne_mps();
@@ -288,15 +310,29 @@ impl Navigator {
         let elapsed_s = now_us.saturating_sub(start) as f32 * 1e-6;
         if elapsed_s >= self.params.calibration_s && self.cal_imu_n > 100 && self.cal_baro_n > 5 {
             let n = self.cal_imu_n as f32;
-            self.gyro_bias_frd_radps = [self.cal_gyro_sum[0] / n, self.cal_gyro_sum[1] / n, self.cal_gyro_sum[2] / n];
-            let f = [self.cal_accel_sum[0] / n, self.cal_accel_sum[1] / n, self.cal_accel_sum[2] / n];
+            self.gyro_bias_frd_radps = [
+                self.cal_gyro_sum[0] / n,
+                self.cal_gyro_sum[1] / n,
+                self.cal_gyro_sum[2] / n,
+            ];
+            let f = [
+                self.cal_accel_sum[0] / n,
+                self.cal_accel_sum[1] / n,
+                self.cal_accel_sum[2] / n,
+            ];
             self.p0_pa = self.cal_baro_sum / self.cal_baro_n as f32;
             let (roll, pitch) = accel_tilt_rad(f);
             let yaw = match self.last_mag_frd {
-                Some(m) => mag_heading_rad(m, roll, pitch, self.params.declination_deg.to_radians()),
+                Some(m) => {
+                    mag_heading_rad(m, roll, pitch, self.params.declination_deg.to_radians())
+                }
                 None => 0.0,
             };
-            self.att.reset(Euler { roll_rad: roll, pitch_rad: pitch, yaw_rad: yaw });
+            self.att.reset(Euler {
+                roll_rad: roll,
+                pitch_rad: pitch,
+                yaw_rad: yaw,
+            });
             self.vert.reset(0.0, 0.0);
             // At rest the specific force must have magnitude g: the excess is the accelerometer
             // bias along gravity, i.e. the vertical channel's bias (NED down positive).

@@ -279,18 +279,34 @@ impl Params {
     pub fn validate(&self) -> Result<(), ParamError> {
         fn check(field: &'static str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
             if !v.is_finite() {
-                return Err(ParamError { field, reason: "not finite" });
+                return Err(ParamError {
+                    field,
+                    reason: "not finite",
+                });
             }
             if v < lo || v > hi {
-                return Err(ParamError { field, reason: "out of range" });
+                return Err(ParamError {
+                    field,
+                    reason: "out of range",
+                });
             }
             Ok(())
         }
         let a = &self.airframe;
         check("airframe.mass_kg", a.mass_kg, 0.2, 50.0)?;
         check("airframe.arm_m", a.arm_m, 0.05, 3.0)?;
-        check("airframe.torque_to_thrust_m", a.torque_to_thrust_m, 0.001, 0.2)?;
-        check("airframe.max_thrust_per_motor_n", a.max_thrust_per_motor_n, 0.5, 500.0)?;
+        check(
+            "airframe.torque_to_thrust_m",
+            a.torque_to_thrust_m,
+            0.001,
+            0.2,
+        )?;
+        check(
+            "airframe.max_thrust_per_motor_n",
+            a.max_thrust_per_motor_n,
+            0.5,
+            500.0,
+        )?;
         check("airframe.idle_cmd", a.idle_cmd, 0.0, 0.3)?;
         let n = &self.nav;
         check("nav.tilt_omega_radps", n.tilt_omega_radps, 0.001, 20.0)?;
@@ -307,7 +323,12 @@ impl Params {
         check("nav.tilt_accel_lpf_hz", n.tilt_accel_lpf_hz, 0.5, 100.0)?;
         check("nav.calibration_s", n.calibration_s, 0.1, 30.0)?;
         check("nav.vert_bias_pole_radps", n.vert_bias_pole_radps, 0.0, 1.0)?;
-        check("nav.horiz_bias_pole_radps", n.horiz_bias_pole_radps, 0.0, 1.0)?;
+        check(
+            "nav.horiz_bias_pole_radps",
+            n.horiz_bias_pole_radps,
+            0.0,
+            1.0,
+        )?;
         for v in n.accel_offset_frd_mps2 {
             check("nav.accel_offset_frd_mps2", v, -3.0, 3.0)?;
         }
@@ -315,21 +336,51 @@ impl Params {
             check("nav.mag_offset_frd_ut", v, -200.0, 200.0)?;
         }
         let l = &self.limits;
-        check("limits.max_horiz_speed_mps", l.max_horiz_speed_mps, 0.1, 30.0)?;
-        check("limits.hold_max_speed_mps", l.hold_max_speed_mps, 0.1, l.max_horiz_speed_mps)?;
+        check(
+            "limits.max_horiz_speed_mps",
+            l.max_horiz_speed_mps,
+            0.1,
+            30.0,
+        )?;
+        check(
+            "limits.hold_max_speed_mps",
+            l.hold_max_speed_mps,
+            0.1,
+            l.max_horiz_speed_mps,
+        )?;
         check("limits.max_climb_mps", l.max_climb_mps, 0.1, 10.0)?;
         check("limits.max_descent_mps", l.max_descent_mps, 0.1, 10.0)?;
         check("limits.max_tilt_deg", l.max_tilt_deg, 5.0, 60.0)?;
         check("limits.fence_radius_m", l.fence_radius_m, 5.0, 10_000.0)?;
         check("limits.fence_alt_m", l.fence_alt_m, 2.0, 1_000.0)?;
-        check("limits.setpoint_lost_land_s", l.setpoint_lost_land_s, 0.1, 60.0)?;
+        check(
+            "limits.setpoint_lost_land_s",
+            l.setpoint_lost_land_s,
+            0.1,
+            60.0,
+        )?;
         check("limits.land_speed_mps", l.land_speed_mps, 0.1, 3.0)?;
-        check("limits.land_final_speed_mps", l.land_final_speed_mps, 0.1, 1.0)?;
+        check(
+            "limits.land_final_speed_mps",
+            l.land_final_speed_mps,
+            0.1,
+            1.0,
+        )?;
         check("limits.touchdown_s", l.touchdown_s, 0.2, 10.0)?;
         let c = &self.control;
         check("control.accel_forgetting", c.accel_forgetting, 0.9, 1.0)?;
-        check("control.yaw_rate_forgetting", c.yaw_rate_forgetting, 0.9, 1.0)?;
-        check("control.model_k1_mps2_per_rad", c.model_k1_mps2_per_rad, 1.0, 30.0)?;
+        check(
+            "control.yaw_rate_forgetting",
+            c.yaw_rate_forgetting,
+            0.9,
+            1.0,
+        )?;
+        check(
+            "control.model_k1_mps2_per_rad",
+            c.model_k1_mps2_per_rad,
+            1.0,
+            30.0,
+        )?;
         check("control.model_k2_per_s", c.model_k2_per_s, 0.0, 5.0)?;
         Ok(())
     }

@@ -8,7 +8,12 @@ use crate::sensors::{MotorOutputs, SensorBoard, SensorInputs};
 pub const TICK_US: u64 = 2_000;
 
 /// One tick; returns the samples the core saw (the link's raw telemetry streams send them on).
-pub fn tick<B: SensorBoard, M: MotorOutputs>(core: &mut FlightCore, board: &mut B, motors: &mut M, now_us: u64) -> SensorInputs {
+pub fn tick<B: SensorBoard, M: MotorOutputs>(
+    core: &mut FlightCore,
+    board: &mut B,
+    motors: &mut M,
+    now_us: u64,
+) -> SensorInputs {
     let inputs = board.poll(now_us);
     let cmd = core.step(now_us, &inputs);
     motors.write(now_us, &cmd);

@@ -359,7 +359,8 @@ impl WaypointFollower {
                 let waited = *self.hold_entered.get_or_insert(self.clock);
                 if self.takeoff_braking {
                     self.speed = self.brake(h_rem, dt);
-                    let settled = horiz_err <= HOLD_SETTLE_M || self.clock - waited >= HOLD_SETTLE_TIMEOUT_S + 30.0;
+                    let settled = horiz_err <= HOLD_SETTLE_M
+                        || self.clock - waited >= HOLD_SETTLE_TIMEOUT_S + 30.0;
                     if self.speed == 0.0 && settled {
                         let next = self.after(None);
                         self.enter(next);
@@ -433,7 +434,10 @@ impl WaypointFollower {
         }
         let leg_budget = budget - step;
         if self.axis == prev_axis {
-            self.speed = self.speed.clamp(prev_speed - leg_budget, prev_speed + leg_budget).max(0.0);
+            self.speed = self
+                .speed
+                .clamp(prev_speed - leg_budget, prev_speed + leg_budget)
+                .max(0.0);
         } else {
             self.speed = self.speed.min(leg_budget);
         }
@@ -445,7 +449,8 @@ impl WaypointFollower {
             let (_, to) = self.leg_rel(i);
             let settled = norm(sub(to, rel)) <= HOLD_SETTLE_M;
             let entered = *self.hold_entered.get_or_insert(self.clock);
-            let timed_out = self.clock - entered >= f64::from(self.mission.hold_s) + HOLD_SETTLE_TIMEOUT_S;
+            let timed_out =
+                self.clock - entered >= f64::from(self.mission.hold_s) + HOLD_SETTLE_TIMEOUT_S;
             if self.speed == 0.0 && !settled && !timed_out {
                 // Drifted off the point: the hold restarts once back on it.
                 self.hold_since = None;
@@ -668,7 +673,10 @@ mod tests {
                 Phase::Takeoff => {
                     assert_eq!(g.request, Some(Request::Arm));
                     // Horizontal: only the bounded station-keeping over the take-off point.
-                    assert!(norm([g.vel_ned_mps[0], g.vel_ned_mps[1], 0.0]) <= STATION_KEEP_MAX_MPS + 1e-5);
+                    assert!(
+                        norm([g.vel_ned_mps[0], g.vel_ned_mps[1], 0.0])
+                            <= STATION_KEEP_MAX_MPS + 1e-5
+                    );
                     assert!(g.vel_ned_mps[2] <= 0.0);
                 }
                 Phase::Leg(i) | Phase::Hold(i) => {
@@ -683,7 +691,11 @@ mod tests {
                     let along = dot(g.vel_ned_mps, u);
                     assert!(along >= -STATION_KEEP_MAX_MPS - 1e-5);
                     let perp = norm(sub(g.vel_ned_mps, scale(u, along)));
-                    assert!(perp <= STATION_KEEP_MAX_MPS + 1e-5, "perp {perp} at t={}", r.t);
+                    assert!(
+                        perp <= STATION_KEEP_MAX_MPS + 1e-5,
+                        "perp {perp} at t={}",
+                        r.t
+                    );
                     // Cross-track error of the (lagged, uncompensated) vehicle.
                     let e = sub(r.pos, leg.from_ned_m);
                     let xt = norm(sub(e, scale(u, dot(e, u))));
@@ -695,8 +707,18 @@ mod tests {
                     if g.phase == Phase::Hold(i)
                         && recs.get(k + 1).map(|n| n.g.phase) != Some(Phase::Hold(i))
                     {
-                        assert!(norm(sub(r.pos, leg.to_ned_m)) <= HOLD_SETTLE_M + 0.05, "left hold at {:?}", r.pos);
-                        let entered = recs[..=k].iter().rev().take_while(|q| q.g.phase == Phase::Hold(i)).last().unwrap().t;
+                        assert!(
+                            norm(sub(r.pos, leg.to_ned_m)) <= HOLD_SETTLE_M + 0.05,
+                            "left hold at {:?}",
+                            r.pos
+                        );
+                        let entered = recs[..=k]
+                            .iter()
+                            .rev()
+                            .take_while(|q| q.g.phase == Phase::Hold(i))
+                            .last()
+                            .unwrap()
+                            .t;
                         let left_at = recs[k + 1].t;
                         assert!(left_at - entered >= f64::from(m.hold_s) - 1e-6);
                     }
@@ -755,7 +777,11 @@ mod tests {
         assert_eq!(last.g.phase, Phase::Done);
         assert_eq!(last.g.request, None);
         // Only the bounded station-keeping term remains, and it is small on the waypoint.
-        assert!(norm(last.g.vel_ned_mps) <= STATION_KEEP_MAX_MPS, "{:?}", last.g.vel_ned_mps);
+        assert!(
+            norm(last.g.vel_ned_mps) <= STATION_KEEP_MAX_MPS,
+            "{:?}",
+            last.g.vel_ned_mps
+        );
         assert!(
             norm(sub(last.pos, [10.0, 5.0, -8.0])) < 0.6,
             "{:?}",

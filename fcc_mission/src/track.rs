@@ -76,7 +76,12 @@ struct Row {
 fn parse(csv: &str) -> Result<Vec<Row>, String> {
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().ok_or("empty CSV")?.split(',').collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).ok_or(format!("CSV has no column '{n}'"));
+    let col = |n: &str| {
+        header
+            .iter()
+            .position(|h| *h == n)
+            .ok_or(format!("CSV has no column '{n}'"))
+    };
     let c = [
         col("t_s")?,
         col("armed")?,
@@ -95,7 +100,11 @@ fn parse(csv: &str) -> Result<Vec<Row>, String> {
         let g = |k: usize| -> Result<f64, String> {
             f.get(c[k])
                 .and_then(|s| s.trim().parse::<f64>().ok())
-                .ok_or(format!("CSV line {}: bad value in column {}", i + 2, header[c[k]]))
+                .ok_or(format!(
+                    "CSV line {}: bad value in column {}",
+                    i + 2,
+                    header[c[k]]
+                ))
         };
         rows.push(Row {
             t: g(0)?,
@@ -125,7 +134,10 @@ fn straightness(p: &[[f64; 2]]) -> f64 {
         return 0.0;
     }
     let n = p.len() as f64;
-    let m = [p.iter().map(|q| q[0]).sum::<f64>() / n, p.iter().map(|q| q[1]).sum::<f64>() / n];
+    let m = [
+        p.iter().map(|q| q[0]).sum::<f64>() / n,
+        p.iter().map(|q| q[1]).sum::<f64>() / n,
+    ];
     let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
     for q in p {
         let (x, y) = (q[0] - m[0], q[1] - m[1]);
@@ -151,12 +163,21 @@ pub fn report(csv: &str, mission: &Mission) -> Result<TrackReport, String> {
     let (home_est, home_true) = ([first.est[0], first.est[1]], [first.tru[0], first.tru[1]]);
     // Horizontal legs (relative to home): from the takeoff point (above home) to wp 0, ...
     let mut pts = vec![[0.0, 0.0]];
-    pts.extend(mission.waypoints.iter().map(|w| [w.north_m as f64, w.east_m as f64]));
+    pts.extend(
+        mission
+            .waypoints
+            .iter()
+            .map(|w| [w.north_m as f64, w.east_m as f64]),
+    );
     let mut legs: Vec<LegTrack> = Vec::new();
     let mut acc: Vec<(f64, f64, f64, f64)> = Vec::new(); // est sum_sq, est max, true sum_sq, true max
     for i in 0..mission.waypoints.len() {
         let length_m = (pts[i + 1][0] - pts[i][0]).hypot(pts[i + 1][1] - pts[i][1]);
-        legs.push(LegTrack { index: i, length_m, ..Default::default() });
+        legs.push(LegTrack {
+            index: i,
+            length_m,
+            ..Default::default()
+        });
         acc.push((0.0, 0.0, 0.0, 0.0));
     }
     let mut pts_true: Vec<Vec<[f64; 2]>> = vec![Vec::new(); legs.len()];

@@ -447,7 +447,11 @@ mod tests {
             let f = accel_at_rest(&truth);
             let m_ned = [M_NED[0], M_NED[1] + 15.0, M_NED[2]];
             est.update([0.0; 3], Some(f), Some(ned_to_body(&truth, m_ned)), DT);
-            assert!((est.euler().yaw_rad - 0.5).abs() < 2f32.to_radians(), "{:?}", est.euler());
+            assert!(
+                (est.euler().yaw_rad - 0.5).abs() < 2f32.to_radians(),
+                "{:?}",
+                est.euler()
+            );
         }
         assert!(est.mag_rejects() > 0 && est.mag_disturbed());
         sim(&mut est, truth, [0.0; 3], 1.0, &mut rng);

@@ -366,7 +366,9 @@ impl<const HIST: usize> PosVelCf<HIST> {
             self.pos += g1 * e;
             self.vel += g2 * e;
             if self.bias_k3 > 0.0 {
-                self.bias = (self.bias - self.bias_k3 * e * dt_s).max(-self.bias_limit).min(self.bias_limit);
+                self.bias = (self.bias - self.bias_k3 * e * dt_s)
+                    .max(-self.bias_limit)
+                    .min(self.bias_limit);
             }
             if dt_s > 0.0 {
                 self.innov_rate = g1 * e / dt_s;
@@ -685,7 +687,11 @@ mod tests {
             plain.update(0.3, 0.002);
             biased.update(0.3, 0.002);
         }
-        assert!((plain.pos() - 0.3 / 0.25).abs() < 0.02, "plain pos {}", plain.pos());
+        assert!(
+            (plain.pos() - 0.3 / 0.25).abs() < 0.02,
+            "plain pos {}",
+            plain.pos()
+        );
         assert!(biased.pos().abs() < 0.01, "pos {}", biased.pos());
         assert!(biased.vel().abs() < 0.01, "vel {}", biased.vel());
         assert!((biased.bias() - 0.3).abs() < 0.01, "bias {}", biased.bias());

@@ -44,7 +44,9 @@ impl LowPass2 {
         if !self.primed {
             self.reset(x);
         }
-        let y = self.b[0] * x + self.b[1] * self.x[0] + self.b[2] * self.x[1] - self.a[0] * self.y[0] - self.a[1] * self.y[1];
+        let y = self.b[0] * x + self.b[1] * self.x[0] + self.b[2] * self.x[1]
+            - self.a[0] * self.y[0]
+            - self.a[1] * self.y[1];
         self.x = [x, self.x[0]];
         self.y = [y, self.y[0]];
         y
@@ -86,6 +88,9 @@ mod tests {
                 peak = peak.max(y.abs());
             }
         }
-        assert!((peak - core::f32::consts::FRAC_1_SQRT_2).abs() < 0.02, "{peak}");
+        assert!(
+            (peak - core::f32::consts::FRAC_1_SQRT_2).abs() < 0.02,
+            "{peak}"
+        );
     }
 }

@@ -15,7 +15,9 @@ use std::time::{Duration, Instant};
 #[tokio::main]
 async fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let mission_path = args.get(1).expect("usage: fly_mission MISSION.yaml [--timeout S]");
+    let mission_path = args
+        .get(1)
+        .expect("usage: fly_mission MISSION.yaml [--timeout S]");
     let timeout = args
         .iter()
         .position(|a| a == "--timeout")
@@ -30,9 +32,17 @@ async fn main() -> anyhow::Result<()> {
     let rel = QosProfile::publisher_default()
         .reliability_reliable(WhenFull::Fail)
         .history(History::KeepLast { depth: 10 });
-    let t_odom = node.create_topic(&Name::parse("/fcc/state/odom")?, Odometry::type_name(), &rel)?;
+    let t_odom = node.create_topic(
+        &Name::parse("/fcc/state/odom")?,
+        Odometry::type_name(),
+        &rel,
+    )?;
     let t_status = node.create_topic(&Name::parse("/fcc/status")?, Status::type_name(), &rel)?;
-    let t_sp = node.create_topic(&Name::parse("/fcc/setpoint/velocity")?, TwistStamped::type_name(), &rel)?;
+    let t_sp = node.create_topic(
+        &Name::parse("/fcc/setpoint/velocity")?,
+        TwistStamped::type_name(),
+        &rel,
+    )?;
     let t_arm = node.create_topic(&Name::parse("/fcc/cmd/arm")?, Bool::type_name(), &rel)?;
     let t_mode = node.create_topic(&Name::parse("/fcc/cmd/mode")?, StringMsg::type_name(), &rel)?;
     let odom = node.create_subscription::<Odometry>(&t_odom, Some(rel.clone()))?;

@@ -1,8 +1,8 @@
 //! The flight's figures from a bag, computed like the flight core's metrics
 //! (`fcc_firmware::sitl::metrics`) but from the recorded ROS topics (ENU → NED).
 
-use fcc_bridge::report::bag::{euler, odom_ned, BagMsg};
 use fcc_bridge::record::from_cdr;
+use fcc_bridge::report::bag::{euler, odom_ned, BagMsg};
 use fcc_bridge::ros_types::*;
 use serde::Serialize;
 
@@ -115,10 +115,16 @@ pub struct Leg {
 /// The mission's legs with their time windows: the follower re-run on the recorded odometry
 /// from the odom at which the mission computer sent its first arm command (its first update).
 pub fn legs(s: &Series, mission: &fcc_mission::Mission) -> Vec<Leg> {
-    let Some(t_arm) = s.first_arm_cmd else { return Vec::new() };
+    let Some(t_arm) = s.first_arm_cmd else {
+        return Vec::new();
+    };
     // The odom the driver answered with the arm command: the last one at or before it (log
     // time ≥ stamp, so compare stamps to the receive time of the command).
-    let start = s.odom.iter().rposition(|o| o.0 <= t_arm + 1e-9).unwrap_or(0);
+    let start = s
+        .odom
+        .iter()
+        .rposition(|o| o.0 <= t_arm + 1e-9)
+        .unwrap_or(0);
     let mut f = fcc_mission::WaypointFollower::new(mission.clone());
     let mut cur: Option<(usize, f64, [f64; 3], [f64; 3], Vec<f64>)> = None;
     let mut out: Vec<Leg> = Vec::new();
@@ -126,18 +132,36 @@ pub fn legs(s: &Series, mission: &fcc_mission::Mission) -> Vec<Leg> {
         let (index, t0, a, b, e) = c;
         let length = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
         if e.len() > 10 && length > 1.0 {
-            out.push(Leg { index, t0_s: t0, t1_s: t1, from_ned_m: a, to_ned_m: b, length_m: length, samples: e.len(), est_rms_m: rms(&e), est_max_m: max_abs(&e) });
+            out.push(Leg {
+                index,
+                t0_s: t0,
+                t1_s: t1,
+                from_ned_m: a,
+                to_ned_m: b,
+                length_m: length,
+                samples: e.len(),
+                est_rms_m: rms(&e),
+                est_max_m: max_abs(&e),
+            });
         }
     };
     for o in &s.odom[start..] {
         let (t, p, v, _) = *o;
-        let g = f.update(t, [p[0] as f32, p[1] as f32, p[2] as f32], [v[0] as f32, v[1] as f32, v[2] as f32]);
+        let g = f.update(
+            t,
+            [p[0] as f32, p[1] as f32, p[2] as f32],
+            [v[0] as f32, v[1] as f32, v[2] as f32],
+        );
         let leg = match (g.phase, g.leg) {
             (fcc_mission::Phase::Leg(i), Some(l)) => Some((i, l)),
             _ => None,
         };
         match (leg, cur.as_mut()) {
-            (Some((i, _)), Some(c)) if c.0 == i => c.4.push(cross_track([p[0], p[1]], [c.2[0], c.2[1]], [c.3[0], c.3[1]])),
+            (Some((i, _)), Some(c)) if c.0 == i => c.4.push(cross_track(
+                [p[0], p[1]],
+                [c.2[0], c.2[1]],
+                [c.3[0], c.3[1]],
+            )),
             (l, _) => {
                 if let Some(c) = cur.take() {
                     close(c, t, &mut out);
@@ -145,7 +169,13 @@ pub fn legs(s: &Series, mission: &fcc_mission::Mission) -> Vec<Leg> {
                 if let Some((i, l)) = l {
                     let a = l.from_ned_m.map(|x| x as f64);
                     let b = l.to_ned_m.map(|x| x as f64);
-                    cur = Some((i, t, a, b, vec![cross_track([p[0], p[1]], [a[0], a[1]], [b[0], b[1]])]));
+                    cur = Some((
+                        i,
+                        t,
+                        a,
+                        b,
+                        vec![cross_track([p[0], p[1]], [a[0], a[1]], [b[0], b[1]])],
+                    ));
                 }
             }
         }
@@ -181,16 +211,31 @@ pub struct Figures {
 }
 
 pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
-    let mut f = Figures { topics: s.topics.clone(), messages: s.topics.values().sum(), ..Default::default() };
+    let mut f = Figures {
+        topics: s.topics.clone(),
+        messages: s.topics.values().sum(),
+        ..Default::default()
+    };
     if let (Some(a), Some(b)) = (s.odom.first(), s.odom.last()) {
         f.duration_s = b.0 - a.0;
     }
     let armed_at = |t: f64| -> (bool, u8) {
         let i = s.status.partition_point(|x| x.0 <= t);
-        if i == 0 { (false, 0) } else { (s.status[i - 1].1, s.status[i - 1].2) }
+        if i == 0 {
+            (false, 0)
+        } else {
+            (s.status[i - 1].1, s.status[i - 1].2)
+        }
     };
     // Hover box (HOLD mode while armed).
-    let hold: Vec<_> = s.odom.iter().filter(|o| { let (a, m) = armed_at(o.0); a && m == Status::MODE_HOLD }).collect();
+    let hold: Vec<_> = s
+        .odom
+        .iter()
+        .filter(|o| {
+            let (a, m) = armed_at(o.0);
+            a && m == Status::MODE_HOLD
+        })
+        .collect();
     if hold.len() > 2 && hold.last().unwrap().0 - hold[0].0 >= 10.0 {
         let h = hold[0].1;
         let mut b = [0.0f64; 3];
@@ -202,20 +247,25 @@ pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
         f.hover_box_m = Some(b);
         f.hover_s = hold.last().unwrap().0 - hold[0].0;
     } else {
-        f.missing.push("hover box: no HOLD-mode period ≥ 10 s in this flight".into());
+        f.missing
+            .push("hover box: no HOLD-mode period ≥ 10 s in this flight".into());
     }
     match mission {
         Some(m) => {
             f.legs = legs(s, m);
             if !f.legs.is_empty() {
                 let n = f.legs.len() as f64;
-                f.cross_track_rms_m = Some((f.legs.iter().map(|l| l.est_rms_m.powi(2)).sum::<f64>() / n).sqrt());
+                f.cross_track_rms_m =
+                    Some((f.legs.iter().map(|l| l.est_rms_m.powi(2)).sum::<f64>() / n).sqrt());
                 f.cross_track_max_m = Some(f.legs.iter().fold(0.0, |m, l| m.max(l.est_max_m)));
             } else {
-                f.missing.push("cross-track: no leg found (no cmd/arm in the bag?)".into());
+                f.missing
+                    .push("cross-track: no leg found (no cmd/arm in the bag?)".into());
             }
         }
-        None => f.missing.push("cross-track: pass --mission FILE (the bag has no mission path)".into()),
+        None => f
+            .missing
+            .push("cross-track: pass --mission FILE (the bag has no mission path)".into()),
     }
     // Velocity tracking: commanded vs estimated horizontal velocity at each command.
     let mut e = Vec::new();
@@ -229,7 +279,8 @@ pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
     if !e.is_empty() {
         f.velocity_tracking_rms_mps = Some(rms(&e));
     } else {
-        f.missing.push("velocity tracking: no setpoints received".into());
+        f.missing
+            .push("velocity tracking: no setpoints received".into());
     }
     // Attitude vs accelerometer angles (nearest odom), airborne.
     let (mut er, mut ep) = (Vec::new(), Vec::new());
@@ -248,11 +299,16 @@ pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
     if s.alt.len() > 200 {
         let hp = |v: Vec<f64>| -> f64 {
             let w = 25;
-            let d: Vec<f64> = (w..v.len() - w).map(|i| v[i] - v[i - w..i + w].iter().sum::<f64>() / (2 * w) as f64).collect();
+            let d: Vec<f64> = (w..v.len() - w)
+                .map(|i| v[i] - v[i - w..i + w].iter().sum::<f64>() / (2 * w) as f64)
+                .collect();
             let m = d.iter().sum::<f64>() / d.len() as f64;
             (d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (d.len() - 1) as f64).sqrt()
         };
-        f.vertical_noise_m = Some([hp(s.alt.iter().map(|a| a.2).collect()), hp(s.alt.iter().map(|a| a.1).collect())]);
+        f.vertical_noise_m = Some([
+            hp(s.alt.iter().map(|a| a.2).collect()),
+            hp(s.alt.iter().map(|a| a.1).collect()),
+        ]);
     }
     let (mut gl, mut gs) = (Vec::new(), Vec::new());
     for a in &s.alt {
@@ -286,7 +342,12 @@ pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
         fit.add(roll as f32, v[1] as f32, acc[1] as f32);
     }
     if let Some(r) = fit.solve() {
-        f.k1_k2_fit = Some((r.k1_mps2_per_rad as f64, r.k2_per_s as f64, r.r_squared as f64, fit.count()));
+        f.k1_k2_fit = Some((
+            r.k1_mps2_per_rad as f64,
+            r.k2_per_s as f64,
+            r.r_squared as f64,
+            fit.count(),
+        ));
     }
     f.missing.push("observer vs raw acceleration (Fig. 13): the link carries no observer acceleration, so the bag cannot show it (fcc-sitl's CSV has it)".into());
     f
@@ -294,15 +355,31 @@ pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
 
 impl std::fmt::Display for Figures {
     fn fmt(&self, w: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        writeln!(w, "flight: {:.1} s of odometry, {} messages on {} topics", self.duration_s, self.messages, self.topics.len())?;
+        writeln!(
+            w,
+            "flight: {:.1} s of odometry, {} messages on {} topics",
+            self.duration_s,
+            self.messages,
+            self.topics.len()
+        )?;
         if let Some(b) = self.hover_box_m {
             writeln!(w, "hover {:.0} s, estimated position max |dev| from hold point: N {:.3} m  E {:.3} m  alt {:.3} m", self.hover_s, b[0], b[1], b[2])?;
         }
         for l in &self.legs {
-            writeln!(w, "leg {} ({:.1} m, {:.1}–{:.1} s): cross-track est RMS {:.3} m max {:.3} m", l.index, l.length_m, l.t0_s, l.t1_s, l.est_rms_m, l.est_max_m)?;
+            writeln!(
+                w,
+                "leg {} ({:.1} m, {:.1}–{:.1} s): cross-track est RMS {:.3} m max {:.3} m",
+                l.index, l.length_m, l.t0_s, l.t1_s, l.est_rms_m, l.est_max_m
+            )?;
         }
         if let (Some(r), Some(m)) = (self.cross_track_rms_m, self.cross_track_max_m) {
-            writeln!(w, "all {} legs: cross-track est RMS {:.3} m max {:.3} m", self.legs.len(), r, m)?;
+            writeln!(
+                w,
+                "all {} legs: cross-track est RMS {:.3} m max {:.3} m",
+                self.legs.len(),
+                r,
+                m
+            )?;
         }
         if let Some(v) = self.velocity_tracking_rms_mps {
             writeln!(w, "velocity tracking: |v_est − v_cmd| RMS {v:.3} m/s")?;
@@ -311,10 +388,18 @@ impl std::fmt::Display for Figures {
             writeln!(w, "attitude estimate − accelerometer angles (armed): RMS roll {:.2}° pitch {:.2}° (the accelerometer alone is noisy and sees manoeuvres)", a[0], a[1])?;
         }
         if let Some(v) = self.vertical_noise_m {
-            writeln!(w, "vertical: noise (1 s high-pass σ) fused altitude {:.3} m vs barometer {:.3} m", v[0], v[1])?;
+            writeln!(
+                w,
+                "vertical: noise (1 s high-pass σ) fused altitude {:.3} m vs barometer {:.3} m",
+                v[0], v[1]
+            )?;
         }
         if let Some(g) = self.ground_vs_laser_sonar_rms_m {
-            writeln!(w, "ground altitude fusion − laser RMS {:.3} m, − sonar RMS {:.3} m", g[0], g[1])?;
+            writeln!(
+                w,
+                "ground altitude fusion − laser RMS {:.3} m, − sonar RMS {:.3} m",
+                g[0], g[1]
+            )?;
         }
         if let Some((k1, k2, r2, n)) = self.k1_k2_fit {
             writeln!(w, "k1/k2 fit (a = k1·tilt − k2·v, {n} samples): k1 = {k1:.3} m/s²/rad, k2 = {k2:.3} 1/s, R² = {r2:.3} → suggested params: k1_mps2_per_rad = {k1:.2}, k2_per_s = {k2:.3}")?;

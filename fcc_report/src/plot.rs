@@ -32,7 +32,14 @@ fn bounds(lines: &[Line]) -> ((f64, f64), (f64, f64)) {
 }
 
 /// One chart; `equal` makes both axes the same scale (paths).
-pub fn chart(path: &std::path::Path, title: &str, xl: &str, yl: &str, lines: Vec<Line>, equal: bool) -> Result<(), String> {
+pub fn chart(
+    path: &std::path::Path,
+    title: &str,
+    xl: &str,
+    yl: &str,
+    lines: Vec<Line>,
+    equal: bool,
+) -> Result<(), String> {
     let root = BitMapBackend::new(path, (1000, 700)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let ((mut x0, mut x1), (mut y0, mut y1)) = bounds(&lines);
@@ -48,21 +55,39 @@ pub fn chart(path: &std::path::Path, title: &str, xl: &str, yl: &str, lines: Vec
         .y_label_area_size(60)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| e.to_string())?;
-    c.configure_mesh().x_desc(xl).y_desc(yl).draw().map_err(|e| e.to_string())?;
+    c.configure_mesh()
+        .x_desc(xl)
+        .y_desc(yl)
+        .draw()
+        .map_err(|e| e.to_string())?;
     for l in lines {
         let col = l.color;
         if l.dots {
-            c.draw_series(l.pts.iter().filter(|p| p.0.is_finite() && p.1.is_finite()).map(|p| Circle::new(*p, 1, col.filled())))
-                .map_err(|e| e.to_string())?
-                .label(l.name)
-                .legend(move |(x, y)| Circle::new((x + 10, y), 3, col.filled()));
+            c.draw_series(
+                l.pts
+                    .iter()
+                    .filter(|p| p.0.is_finite() && p.1.is_finite())
+                    .map(|p| Circle::new(*p, 1, col.filled())),
+            )
+            .map_err(|e| e.to_string())?
+            .label(l.name)
+            .legend(move |(x, y)| Circle::new((x + 10, y), 3, col.filled()));
         } else {
-            c.draw_series(LineSeries::new(l.pts.into_iter().filter(|p| p.0.is_finite() && p.1.is_finite()), col))
-                .map_err(|e| e.to_string())?
-                .label(l.name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col));
+            c.draw_series(LineSeries::new(
+                l.pts
+                    .into_iter()
+                    .filter(|p| p.0.is_finite() && p.1.is_finite()),
+                col,
+            ))
+            .map_err(|e| e.to_string())?
+            .label(l.name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col));
         }
     }
-    c.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(|e| e.to_string())?;
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())?;
     root.present().map_err(|e| e.to_string())
 }

@@ -88,9 +88,16 @@ fn contains(hay: &[u8], needle: &[u8]) -> bool {
 
 #[test]
 fn mutated_frames_never_panic_and_corrupt_frames_are_never_accepted() {
-    let iters: u64 = std::env::var("FCC_FUZZ_ITERS").ok().and_then(|s| s.parse().ok()).unwrap_or(2_000_000);
+    let iters: u64 = std::env::var("FCC_FUZZ_ITERS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2_000_000);
     let msgs = samples();
-    let frames: Vec<Vec<u8>> = msgs.iter().enumerate().map(|(i, m)| enc(m, i as u16, 7_000 + i as u64)).collect();
+    let frames: Vec<Vec<u8>> = msgs
+        .iter()
+        .enumerate()
+        .map(|(i, m)| enc(m, i as u16, 7_000 + i as u64))
+        .collect();
     let mut rng = Rng(0x5EED_F022_1234_5678);
     let mut dec = FrameDecoder::new();
     let (mut accepted, mut rejected) = (0u64, 0u64);
@@ -110,8 +117,12 @@ fn mutated_frames_never_panic_and_corrupt_frames_are_never_accepted() {
                 match r {
                     Ok(f) => {
                         accepted += 1;
-                        let len = encode(&f.message, f.header.seq, f.header.t_us, &mut out).unwrap();
-                        assert!(contains(&input, &out[..len]), "accepted a frame that was not in the input intact: {f:?}");
+                        let len =
+                            encode(&f.message, f.header.seq, f.header.t_us, &mut out).unwrap();
+                        assert!(
+                            contains(&input, &out[..len]),
+                            "accepted a frame that was not in the input intact: {f:?}"
+                        );
                     }
                     Err(_) => rejected += 1,
                 }

@@ -667,10 +667,19 @@ mod tests {
     fn param_ids_in_schema() {
         let line = SCHEMA.lines().find(|l| l.starts_with("params ")).unwrap();
         let listed: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
-        let table: Vec<String> = param_id::ALL.iter().map(|(i, n)| std::format!("{i}={n}")).collect();
+        let table: Vec<String> = param_id::ALL
+            .iter()
+            .map(|(i, n)| std::format!("{i}={n}"))
+            .collect();
         assert_eq!(listed, table, "update the params line of SCHEMA");
-        assert_eq!(param_id::by_name("limits.max_tilt_deg"), Some(param_id::MAX_TILT_DEG));
-        assert_eq!(param_id::name(param_id::VEL_P_PER_S), Some("control.vel_p_per_s"));
+        assert_eq!(
+            param_id::by_name("limits.max_tilt_deg"),
+            Some(param_id::MAX_TILT_DEG)
+        );
+        assert_eq!(
+            param_id::name(param_id::VEL_P_PER_S),
+            Some("control.vel_p_per_s")
+        );
         assert_eq!(param_id::name(999), None);
     }
 }

@@ -10,10 +10,20 @@ use fcc_firmware::sitl::scenario::Fault;
 fn silent_mission_computer_hold_then_land() {
     let mut s = common::load("square");
     let silent_from_s = 12.0; // on the first leg, at cruise speed
-    s.faults.push(Fault::LinuxSilent { start_s: silent_from_s, end_s: 1e6 });
+    s.faults.push(Fault::LinuxSilent {
+        start_s: silent_from_s,
+        end_s: 1e6,
+    });
     let log = common::fly_scenario(s);
-    let after: Vec<_> = log.samples.iter().filter(|x| x.t_s >= silent_from_s).collect();
-    assert!(after[0].mode == Mode::Velocity, "flying the leg when the link goes silent");
+    let after: Vec<_> = log
+        .samples
+        .iter()
+        .filter(|x| x.t_s >= silent_from_s)
+        .collect();
+    assert!(
+        after[0].mode == Mode::Velocity,
+        "flying the leg when the link goes silent"
+    );
     let ttl_s = fcc_firmware::sitl::linux::SETPOINT_TTL_MS as f64 * 1e-3;
     let hold = after.iter().find(|x| x.mode == Mode::Hold).expect("holds");
     let land = after.iter().find(|x| x.mode == Mode::Land).expect("lands");
@@ -23,13 +33,25 @@ fn silent_mission_computer_hold_then_land() {
         hold.t_s, hold.failsafe, land.t_s, land.failsafe, disarm.t_s
     );
     assert_eq!(hold.failsafe, FailsafeCause::SetpointStale);
-    assert!(hold.t_s - silent_from_s <= ttl_s + 0.1, "held {:.2} s after the last setpoint", hold.t_s - silent_from_s);
+    assert!(
+        hold.t_s - silent_from_s <= ttl_s + 0.1,
+        "held {:.2} s after the last setpoint",
+        hold.t_s - silent_from_s
+    );
     assert_eq!(land.failsafe, FailsafeCause::SetpointLost);
     let lost_s = fcc_firmware::params::LimitParams::default().setpoint_lost_land_s as f64;
-    assert!((land.t_s - silent_from_s - lost_s).abs() <= 0.3, "land after {:.2} s", land.t_s - silent_from_s);
+    assert!(
+        (land.t_s - silent_from_s - lost_s).abs() <= 0.3,
+        "land after {:.2} s",
+        land.t_s - silent_from_s
+    );
     // Touchdown: on the ground, slow, then disarmed.
     let gear = fcc_firmware::sitl::physics::VehicleParams::default().gear_height_m;
-    assert!((disarm.true_agl_m - gear).abs() < 0.06, "on the ground: {:.3} m", disarm.true_agl_m);
+    assert!(
+        (disarm.true_agl_m - gear).abs() < 0.06,
+        "on the ground: {:.3} m",
+        disarm.true_agl_m
+    );
     let touchdown_speed = log
         .samples
         .iter()
@@ -44,7 +66,9 @@ fn silent_mission_computer_hold_then_land() {
     let excursion = after
         .iter()
         .filter(|x| x.t_s >= hold.t_s && x.t_s < land.t_s)
-        .map(|x| ((x.nav.pos_ned_m[0] - p0[0]).powi(2) + (x.nav.pos_ned_m[1] - p0[1]).powi(2)).sqrt())
+        .map(|x| {
+            ((x.nav.pos_ned_m[0] - p0[0]).powi(2) + (x.nav.pos_ned_m[1] - p0[1]).powi(2)).sqrt()
+        })
         .fold(0.0f32, f32::max);
     // It came to a stop while holding (braking from cruise, then settling on the point).
     let min_speed = after

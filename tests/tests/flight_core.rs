@@ -63,7 +63,11 @@ fn attitude_estimate_tracks_truth_during_the_square() {
         a.rms_deg[0], a.rms_deg[1], a.rms_deg[2], a.max_deg[0], a.max_deg[1], a.max_deg[2]
     );
     assert!(a.samples > 1000);
-    assert!(a.rms_deg[0] <= 1.0 && a.rms_deg[1] <= 1.0, "{:?}", a.rms_deg);
+    assert!(
+        a.rms_deg[0] <= 1.0 && a.rms_deg[1] <= 1.0,
+        "{:?}",
+        a.rms_deg
+    );
     assert!(a.rms_deg[2] <= 3.0, "{:?}", a.rms_deg);
 }
 
@@ -75,7 +79,11 @@ fn yaw_rides_through_a_magnetic_disturbance() {
         "square with 15 µT disturbance: attitude RMS roll {:.3}° pitch {:.3}° yaw {:.3}° (max yaw {:.2}°)",
         a.rms_deg[0], a.rms_deg[1], a.rms_deg[2], a.max_deg[2]
     );
-    assert!(a.rms_deg[0] <= 1.0 && a.rms_deg[1] <= 1.0, "{:?}", a.rms_deg);
+    assert!(
+        a.rms_deg[0] <= 1.0 && a.rms_deg[1] <= 1.0,
+        "{:?}",
+        a.rms_deg
+    );
     assert!(a.rms_deg[2] <= 3.0, "yaw RMS {:.3}°", a.rms_deg[2]);
     // The disturbance really was there and the legs were flown.
     assert_eq!(metrics::leg_tracks(log).len(), 4);
@@ -90,9 +98,18 @@ fn elevator_vertical_filter_beats_the_barometer() {
         v.est_rms_m, v.est_max_m, v.est_noise_m, v.baro_noise_m, v.baro_rms_m
     );
     assert!(v.est_rms_m <= 0.3, "vertical RMS {:.3} m", v.est_rms_m);
-    assert!(v.est_noise_m < 0.2 * v.baro_noise_m, "estimate noise {:.4} vs baro {:.4}", v.est_noise_m, v.baro_noise_m);
+    assert!(
+        v.est_noise_m < 0.2 * v.baro_noise_m,
+        "estimate noise {:.4} vs baro {:.4}",
+        v.est_noise_m,
+        v.baro_noise_m
+    );
     // The ride really went up three floors.
-    let top = log.samples.iter().map(|s| -s.true_pos_ned_m[2]).fold(f64::MIN, f64::max);
+    let top = log
+        .samples
+        .iter()
+        .map(|s| -s.true_pos_ned_m[2])
+        .fold(f64::MIN, f64::max);
     assert!((top - 10.5).abs() < 0.01, "top {top}");
 }
 
@@ -119,7 +136,12 @@ fn same_seed_same_flight_other_seed_other_flight() {
     let b = common::fly_scenario(s.clone());
     s.seed += 1;
     let c = common::fly_scenario(s);
-    let pos = |l: &fcc_firmware::sitl::log::FlightLog| l.samples.iter().map(|x| x.true_pos_ned_m).collect::<Vec<_>>();
+    let pos = |l: &fcc_firmware::sitl::log::FlightLog| {
+        l.samples
+            .iter()
+            .map(|x| x.true_pos_ned_m)
+            .collect::<Vec<_>>()
+    };
     assert_eq!(pos(&a), pos(&b));
     assert_ne!(pos(&a), pos(&c));
 }

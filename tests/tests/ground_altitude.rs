@@ -9,9 +9,15 @@ use fcc_firmware::sitl::metrics::{self, GroundStats};
 
 fn table(name: &str, rows: &[(&'static str, GroundStats)]) {
     println!("{name}: height above ground vs truth");
-    println!("  {:<28} {:>10} {:>10} {:>11}", "method", "RMS m", "max m", "diverged s");
+    println!(
+        "  {:<28} {:>10} {:>10} {:>11}",
+        "method", "RMS m", "max m", "diverged s"
+    );
     for (m, g) in rows {
-        println!("  {:<28} {:>10.3} {:>10.3} {:>11.1}", m, g.rms_m, g.max_m, g.diverged_s);
+        println!(
+            "  {:<28} {:>10.3} {:>10.3} {:>11.1}",
+            m, g.rms_m, g.max_m, g.diverged_s
+        );
     }
 }
 
@@ -38,9 +44,17 @@ fn ground_test_rides_through_the_dark_surface() {
     let rows = metrics::ground_comparison(&log);
     table("ground test (1 m, dark 105–184 s)", &rows);
     // The laser really reported 99999 m over the dark surface, and only there.
-    let dark: Vec<_> = log.ranges.iter().filter(|r| r.laser && r.t_s >= 105.2 && r.t_s < 183.8).collect();
+    let dark: Vec<_> = log
+        .ranges
+        .iter()
+        .filter(|r| r.laser && r.t_s >= 105.2 && r.t_s < 183.8)
+        .collect();
     assert!(dark.len() > 600 && dark.iter().all(|r| r.range_m == 99_999.0));
-    assert!(log.ranges.iter().filter(|r| r.laser && (r.t_s < 104.8 || r.t_s > 184.2) && r.t_s > 5.0).all(|r| r.range_m < 2.0));
+    assert!(log
+        .ranges
+        .iter()
+        .filter(|r| r.laser && (r.t_s < 104.8 || r.t_s > 184.2) && r.t_s > 5.0)
+        .all(|r| r.range_m < 2.0));
     let o = ours(&rows);
     assert!(o.rms_m <= 0.03, "RMS {:.3} m", o.rms_m);
     assert!(o.max_m <= 0.10, "max {:.3} m", o.max_m);
@@ -59,7 +73,10 @@ fn ground_test_rides_through_the_dark_surface() {
     let better = rms(&inside_laser).min(rms(&inside_sonar));
     let fused = rms(&fused_errors(&log, 10.0, 100.0));
     println!("before the dark patch: fused RMS {fused:.4} m vs better sensor alone {better:.4} m");
-    assert!(fused <= better, "fused {fused:.4} vs better sensor {better:.4}");
+    assert!(
+        fused <= better,
+        "fused {fused:.4} vs better sensor {better:.4}"
+    );
 }
 
 #[test]
@@ -77,17 +94,41 @@ fn roll_tests_at_30_and_45_degrees() {
 #[test]
 fn landing_over_a_step_onto_a_dark_patch() {
     let log = common::fly("landing_dark");
-    table("landing approach (1 m step, dark landing spot)", &metrics::ground_comparison(&log));
+    table(
+        "landing approach (1 m step, dark landing spot)",
+        &metrics::ground_comparison(&log),
+    );
     let gear = fcc_firmware::sitl::physics::VehicleParams::default().gear_height_m;
-    let disarm = log.samples.iter().find(|s| !s.armed && s.t_s > 10.0).expect("disarmed after landing");
-    let land = log.samples.iter().find(|s| s.mode == fcc_firmware::commands::Mode::Land).expect("landed");
+    let disarm = log
+        .samples
+        .iter()
+        .find(|s| !s.armed && s.t_s > 10.0)
+        .expect("disarmed after landing");
+    let land = log
+        .samples
+        .iter()
+        .find(|s| s.mode == fcc_firmware::commands::Mode::Land)
+        .expect("landed");
     // Touched down on the dark patch (centre N 25, E 0, radius 4 m) and stands on its gear.
     let p = disarm.true_pos_ned_m;
-    assert!(((p[0] - 25.0).powi(2) + p[1].powi(2)).sqrt() < 4.0, "landed at {p:?}");
-    assert!((disarm.true_agl_m - gear).abs() < 0.06, "on the gear: {:.3}", disarm.true_agl_m);
+    assert!(
+        ((p[0] - 25.0).powi(2) + p[1].powi(2)).sqrt() < 4.0,
+        "landed at {p:?}"
+    );
+    assert!(
+        (disarm.true_agl_m - gear).abs() < 0.06,
+        "on the gear: {:.3}",
+        disarm.true_agl_m
+    );
     // The laser was blind there: the descent rested on the sonar.
-    let final_descent: Vec<_> = log.samples.iter().filter(|s| s.t_s > land.t_s && s.t_s < disarm.t_s).collect();
-    assert!(final_descent.iter().any(|s| s.nav.laser_m == Some(99_999.0)));
+    let final_descent: Vec<_> = log
+        .samples
+        .iter()
+        .filter(|s| s.t_s > land.t_s && s.t_s < disarm.t_s)
+        .collect();
+    assert!(final_descent
+        .iter()
+        .any(|s| s.nav.laser_m == Some(99_999.0)));
     let contact_speed = final_descent
         .iter()
         .filter(|s| s.true_agl_m - gear < 0.1)

@@ -22,33 +22,55 @@ fn square_at(speed: f32) -> String {
 #[test]
 fn speed_and_tilt_limits_hold_for_a_too_fast_mission() {
     let mut s = common::load("square");
-    s.flight = fcc_firmware::sitl::scenario::FlightPlan::Mission { mission_file: mission_file("fast", &square_at(12.0)) };
+    s.flight = fcc_firmware::sitl::scenario::FlightPlan::Mission {
+        mission_file: mission_file("fast", &square_at(12.0)),
+    };
     s.params.limits.max_horiz_speed_mps = 5.0;
     s.params.limits.max_tilt_deg = 15.0;
     s.duration_s = 150.0;
     let log = common::fly_scenario(s);
-    let vmax = log.samples.iter().map(|x| x.true_vel_ned_mps[0].hypot(x.true_vel_ned_mps[1])).fold(0.0, f64::max);
+    let vmax = log
+        .samples
+        .iter()
+        .map(|x| x.true_vel_ned_mps[0].hypot(x.true_vel_ned_mps[1]))
+        .fold(0.0, f64::max);
     let tilt_cmd_max = log
         .samples
         .iter()
-        .map(|x| (x.tel.roll_cmd_rad.powi(2) + x.tel.pitch_cmd_rad.powi(2)).sqrt().to_degrees())
+        .map(|x| {
+            (x.tel.roll_cmd_rad.powi(2) + x.tel.pitch_cmd_rad.powi(2))
+                .sqrt()
+                .to_degrees()
+        })
         .fold(0.0f32, f32::max);
     println!("asked 12 m/s with a 5 m/s limit: fastest true ground speed {vmax:.2} m/s; largest tilt command {tilt_cmd_max:.1}° (limit 15°)");
     // 3 m/s of mean wind plus gusts can add to the airspeed-limited ground speed.
     assert!(vmax <= 5.0 + 1.0, "{vmax:.2} m/s");
     assert!(tilt_cmd_max <= 15.0 + 0.01);
-    assert!(!log.samples.last().unwrap().armed, "mission still completes and lands");
+    assert!(
+        !log.samples.last().unwrap().armed,
+        "mission still completes and lands"
+    );
 }
 
 #[test]
 fn geofence_stops_the_vehicle_at_the_fence() {
     let mut s = common::load("square");
-    s.flight = fcc_firmware::sitl::scenario::FlightPlan::Mission { mission_file: mission_file("fence", &square_at(3.0)) };
+    s.flight = fcc_firmware::sitl::scenario::FlightPlan::Mission {
+        mission_file: mission_file("fence", &square_at(3.0)),
+    };
     s.params.limits.fence_radius_m = 25.0;
     s.duration_s = 60.0;
     let log = common::fly_scenario(s);
-    let rmax = log.samples.iter().map(|x| x.nav.pos_ned_m[0].hypot(x.nav.pos_ned_m[1])).fold(0.0f32, f32::max);
-    let fenced = log.samples.iter().any(|x| x.failsafe == FailsafeCause::Geofence);
+    let rmax = log
+        .samples
+        .iter()
+        .map(|x| x.nav.pos_ned_m[0].hypot(x.nav.pos_ned_m[1]))
+        .fold(0.0f32, f32::max);
+    let fenced = log
+        .samples
+        .iter()
+        .any(|x| x.failsafe == FailsafeCause::Geofence);
     println!("waypoint 60 m out, fence 25 m: farthest estimated distance from home {rmax:.2} m, geofence reported: {fenced}");
     assert!(fenced);
     assert!(rmax <= 25.0 + 2.0, "{rmax:.2} m");
@@ -57,11 +79,25 @@ fn geofence_stops_the_vehicle_at_the_fence() {
 #[test]
 fn gps_loss_in_flight_lands_on_baro_and_accel() {
     let mut s = common::load("hover");
-    s.faults.push(Fault::GpsOutage { start_s: 40.0, end_s: 1e6 });
+    s.faults.push(Fault::GpsOutage {
+        start_s: 40.0,
+        end_s: 1e6,
+    });
     let log = common::fly_scenario(s);
-    let land = log.samples.iter().find(|x| x.t_s > 40.0 && x.mode == Mode::Land).expect("lands");
-    let disarm = log.samples.iter().find(|x| x.t_s > 40.0 && !x.armed).expect("disarms");
-    println!("GPS lost at 40.0 s: land at {:.2} s ({:?}), disarmed at {:.2} s", land.t_s, land.failsafe, disarm.t_s);
+    let land = log
+        .samples
+        .iter()
+        .find(|x| x.t_s > 40.0 && x.mode == Mode::Land)
+        .expect("lands");
+    let disarm = log
+        .samples
+        .iter()
+        .find(|x| x.t_s > 40.0 && !x.armed)
+        .expect("disarms");
+    println!(
+        "GPS lost at 40.0 s: land at {:.2} s ({:?}), disarmed at {:.2} s",
+        land.t_s, land.failsafe, disarm.t_s
+    );
     assert_eq!(land.failsafe, FailsafeCause::GpsLost);
     let timeout = fcc_firmware::params::NavParams::default().gps_timeout_s as f64;
     assert!(land.t_s - 40.0 <= timeout + 0.5);

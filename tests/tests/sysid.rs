@@ -18,7 +18,11 @@ fn fitted_k1_k2_match_the_defaults() {
     s.wind = Default::default();
     let log = common::fly_scenario(s);
     let mut fit = PlaneFit::new();
-    for x in log.samples.iter().filter(|x| x.armed && !x.landed && -x.nav.pos_ned_m[2] > 2.0) {
+    for x in log
+        .samples
+        .iter()
+        .filter(|x| x.armed && !x.landed && -x.nav.pos_ned_m[2] > 2.0)
+    {
         let (sy, cy) = (x.nav.euler.yaw_rad.sin(), x.nav.euler.yaw_rad.cos());
         let v = x.nav.vel_ned_mps;
         let v_fr = [cy * v[0] + sy * v[1], -sy * v[0] + cy * v[1]];
@@ -42,5 +46,9 @@ fn fitted_k1_k2_match_the_defaults() {
     );
     assert!(fit.count() > 5000);
     assert!((r.k1_mps2_per_rad - d.model_k1_mps2_per_rad).abs() <= 0.05 * d.model_k1_mps2_per_rad);
-    assert!((r.k2_per_s - d.model_k2_per_s).abs() <= 0.05, "k2 {}", r.k2_per_s);
+    assert!(
+        (r.k2_per_s - d.model_k2_per_s).abs() <= 0.05,
+        "k2 {}",
+        r.k2_per_s
+    );
 }

@@ -34,7 +34,12 @@ pub fn read_bag(
                 }
                 out.push(BagMsg {
                     topic: m.channel.topic.clone(),
-                    schema: m.channel.schema.as_ref().map(|s| s.name.clone()).unwrap_or_default(),
+                    schema: m
+                        .channel
+                        .schema
+                        .as_ref()
+                        .map(|s| s.name.clone())
+                        .unwrap_or_default(),
                     log_time: m.log_time,
                     data: m.data.into_owned(),
                 });

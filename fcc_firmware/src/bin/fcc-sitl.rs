@@ -6,13 +6,16 @@
 
 use clap::Parser;
 use fcc_firmware::sitl::{metrics, scenario::Scenario, sim::Sim};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::io::Write;
 use std::time::Instant;
 
 #[derive(Parser, Debug)]
-#[command(name = "fcc-sitl", about = "Software-in-the-loop flight of the fcc_firmware core")]
+#[command(
+    name = "fcc-sitl",
+    about = "Software-in-the-loop flight of the fcc_firmware core"
+)]
 struct Args {
     /// Scenario file (YAML), e.g. launch_configs/scenarios/hover.yaml
     #[arg(long)]
@@ -46,7 +49,16 @@ fn main() -> ExitCode {
             }
             // One line, as for every other bad input (clap's own text spans several).
             let text = e.to_string();
-            eprintln!("fcc-sitl: {} (see --help)", text.split("\n\nUsage").next().unwrap_or("").split_whitespace().collect::<Vec<_>>().join(" ").trim_start_matches("error: "));
+            eprintln!(
+                "fcc-sitl: {} (see --help)",
+                text.split("\n\nUsage")
+                    .next()
+                    .unwrap_or("")
+                    .split_whitespace()
+                    .collect::<Vec<_>>()
+                    .join(" ")
+                    .trim_start_matches("error: ")
+            );
             return ExitCode::from(2);
         }
     };
@@ -81,9 +93,17 @@ fn main() -> ExitCode {
                 return ExitCode::from(1);
             }
         };
-        let _ = writeln!(std::io::stdout().lock(), "fcc-sitl: serving the link on {}", pty.slave_path().display());
+        let _ = writeln!(
+            std::io::stdout().lock(),
+            "fcc-sitl: serving the link on {}",
+            pty.slave_path().display()
+        );
         if let Some(l) = pty.symlink() {
-            let _ = writeln!(std::io::stdout().lock(), "fcc-sitl: link symlink {}", l.display());
+            let _ = writeln!(
+                std::io::stdout().lock(),
+                "fcc-sitl: link symlink {}",
+                l.display()
+            );
         }
         sim.serve_link(pty, fcc_msgs::StreamRates::DEFAULT);
     }
@@ -117,7 +137,11 @@ fn main() -> ExitCode {
             eprintln!("fcc-sitl: {}: {e}", path.display());
             return ExitCode::from(1);
         }
-        let _ = writeln!(std::io::stdout().lock(), "log written to {}", path.display());
+        let _ = writeln!(
+            std::io::stdout().lock(),
+            "log written to {}",
+            path.display()
+        );
     }
     ExitCode::SUCCESS
 }

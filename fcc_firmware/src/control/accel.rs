@@ -15,8 +15,19 @@ pub struct AccelController {
 }
 
 impl AccelController {
-    pub fn new(k1_mps2_per_rad: f32, k2_per_s: f32, kp: f32, ki: f32, forgetting: f32, i_limit_rad: f32) -> Self {
-        Self { k1_mps2_per_rad, k2_per_s, pi: ForgettingPi::new(kp, ki, forgetting, i_limit_rad) }
+    pub fn new(
+        k1_mps2_per_rad: f32,
+        k2_per_s: f32,
+        kp: f32,
+        ki: f32,
+        forgetting: f32,
+        i_limit_rad: f32,
+    ) -> Self {
+        Self {
+            k1_mps2_per_rad,
+            k2_per_s,
+            pi: ForgettingPi::new(kp, ki, forgetting, i_limit_rad),
+        }
     }
 
     pub fn reset(&mut self) {
@@ -29,9 +40,18 @@ impl AccelController {
     }
 
     /// Tilt command (rad). `saturated_sign` is the side on which the tilt limit clipped last time.
-    pub fn update(&mut self, dt_s: f32, a_cmd_mps2: f32, a_est_mps2: f32, vel_mps: f32, saturated_sign: f32) -> f32 {
+    pub fn update(
+        &mut self,
+        dt_s: f32,
+        a_cmd_mps2: f32,
+        a_est_mps2: f32,
+        vel_mps: f32,
+        saturated_sign: f32,
+    ) -> f32 {
         let ff = self.feed_forward_rad(a_cmd_mps2, vel_mps);
-        let fb = self.pi.update(a_cmd_mps2 - a_est_mps2, dt_s, saturated_sign);
+        let fb = self
+            .pi
+            .update(a_cmd_mps2 - a_est_mps2, dt_s, saturated_sign);
         ff + fb
     }
 }

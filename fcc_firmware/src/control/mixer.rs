@@ -49,7 +49,11 @@ impl Mixer {
     }
 
     /// Per-motor thrusts (N) for a collective thrust (N) and body torques (N·m).
-    pub fn mix_thrust(&self, thrust_n: f32, torque_nm: [f32; 3]) -> ([f32; MOTOR_COUNT], MixerSaturation) {
+    pub fn mix_thrust(
+        &self,
+        thrust_n: f32,
+        torque_nm: [f32; 3],
+    ) -> ([f32; MOTOR_COUNT], MixerSaturation) {
         let n = MOTOR_COUNT as f32;
         let (lo, hi) = (self.min_thrust_n, self.max_thrust_n);
         let mut att = [0.0f32; MOTOR_COUNT];
@@ -59,7 +63,10 @@ impl Mixer {
             att[i] = -torque_nm[0] * y / self.sum_y2 + torque_nm[1] * x / self.sum_x2;
             yaw[i] = -torque_nm[2] * spin_cw(i) / (n * self.torque_to_thrust_m);
         }
-        let mut sat = MixerSaturation { yaw_scale: 1.0, ..Default::default() };
+        let mut sat = MixerSaturation {
+            yaw_scale: 1.0,
+            ..Default::default()
+        };
         // 1. Roll/pitch alone must fit in the range.
         let (amin, amax) = min_max(&att);
         let spread = amax - amin;
@@ -123,7 +130,8 @@ impl Mixer {
 }
 
 fn min_max(v: &[f32; MOTOR_COUNT]) -> (f32, f32) {
-    v.iter().fold((f32::MAX, f32::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)))
+    v.iter()
+        .fold((f32::MAX, f32::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)))
 }
 
 #[cfg(test)]

@@ -15,7 +15,13 @@ pub struct ForgettingPi {
 
 impl ForgettingPi {
     pub const fn new(kp: f32, ki: f32, forgetting: f32, i_limit: f32) -> Self {
-        Self { kp, ki, forgetting, i_limit, integral: 0.0 }
+        Self {
+            kp,
+            ki,
+            forgetting,
+            i_limit,
+            integral: 0.0,
+        }
     }
 
     pub fn reset(&mut self) {
@@ -65,7 +71,11 @@ mod tests {
             pi.update(1.0, 0.01, 0.0);
         }
         // Steady state of I = λI + e·dt is e·dt/(1−λ) = 1.
-        assert!((pi.integral_term() - 1.0).abs() < 1e-3, "{}", pi.integral_term());
+        assert!(
+            (pi.integral_term() - 1.0).abs() < 1e-3,
+            "{}",
+            pi.integral_term()
+        );
     }
 
     #[test]

@@ -23,7 +23,12 @@ pub struct CrossTrack {
 
 impl CrossTrack {
     pub const fn new(k_per_s: f32) -> Self {
-        Self { k_per_s, expected_ne_m: None, dir_ne: [1.0, 0.0], last_error_m: 0.0 }
+        Self {
+            k_per_s,
+            expected_ne_m: None,
+            dir_ne: [1.0, 0.0],
+            last_error_m: 0.0,
+        }
     }
 
     pub fn reset(&mut self) {
@@ -37,7 +42,13 @@ impl CrossTrack {
     }
 
     /// Returns the compensated command `v_cmd + K_ct·e_ct`.
-    pub fn update(&mut self, dt_s: f32, v_cmd_ne: [f32; 2], pos_ne_m: [f32; 2], vel_ne_mps: [f32; 2]) -> [f32; 2] {
+    pub fn update(
+        &mut self,
+        dt_s: f32,
+        v_cmd_ne: [f32; 2],
+        pos_ne_m: [f32; 2],
+        vel_ne_mps: [f32; 2],
+    ) -> [f32; 2] {
         let speed = libm::hypotf(v_cmd_ne[0], v_cmd_ne[1]);
         if speed < MIN_TRACK_SPEED_MPS {
             self.reset();
@@ -65,7 +76,10 @@ impl CrossTrack {
         let right = [-u[1], u[0]];
         self.last_error_m = -(e_ct[0] * right[0] + e_ct[1] * right[1]);
         // eq. 9
-        [v_cmd_ne[0] + self.k_per_s * e_ct[0], v_cmd_ne[1] + self.k_per_s * e_ct[1]]
+        [
+            v_cmd_ne[0] + self.k_per_s * e_ct[0],
+            v_cmd_ne[1] + self.k_per_s * e_ct[1],
+        ]
     }
 }
 
@@ -79,7 +93,10 @@ pub struct VelocityController {
 impl VelocityController {
     pub fn new(kp: f32, ki: f32, i_limit: f32, accel_limit_mps2: f32) -> Self {
         let pi = ForgettingPi::new(kp, ki, 1.0, i_limit);
-        Self { pi: [pi, pi], accel_limit_mps2 }
+        Self {
+            pi: [pi, pi],
+            accel_limit_mps2,
+        }
     }
 
     pub fn reset(&mut self) {
@@ -88,7 +105,13 @@ impl VelocityController {
     }
 
     /// `saturated`: per axis, the sign in which the downstream tilt limit is active.
-    pub fn update(&mut self, dt_s: f32, v_cmd_ne: [f32; 2], vel_ne_mps: [f32; 2], saturated: [f32; 2]) -> [f32; 2] {
+    pub fn update(
+        &mut self,
+        dt_s: f32,
+        v_cmd_ne: [f32; 2],
+        vel_ne_mps: [f32; 2],
+        saturated: [f32; 2],
+    ) -> [f32; 2] {
         let mut a = [0.0; 2];
         for i in 0..2 {
             a[i] = self.pi[i].update(v_cmd_ne[i] - vel_ne_mps[i], dt_s, saturated[i]);
@@ -122,7 +145,11 @@ mod tests {
         let v = ct.update(dt, [3.0, 0.0], p, [3.0, 0.5]);
         assert!(ct.error_m() > 0.45, "right-of-track error {}", ct.error_m());
         assert!(v[1] < -0.45, "command must push west: {:?}", v);
-        assert!((v[0] - 3.0).abs() < 1e-3, "along-track command unchanged: {:?}", v);
+        assert!(
+            (v[0] - 3.0).abs() < 1e-3,
+            "along-track command unchanged: {:?}",
+            v
+        );
     }
 
     #[test]

@@ -14,7 +14,10 @@ pub struct VerticalController {
 
 impl VerticalController {
     pub fn new(mass_kg: f32, kp: f32, ki: f32, i_limit_mps2: f32) -> Self {
-        Self { mass_kg, pi: ForgettingPi::new(kp, ki, 1.0, i_limit_mps2) }
+        Self {
+            mass_kg,
+            pi: ForgettingPi::new(kp, ki, 1.0, i_limit_mps2),
+        }
     }
 
     pub fn reset(&mut self) {
@@ -22,8 +25,17 @@ impl VerticalController {
     }
 
     /// Total thrust (N) for a climb-rate command. `tilt_cos` = cos φ·cos θ.
-    pub fn update(&mut self, dt_s: f32, vz_up_cmd_mps: f32, vz_up_mps: f32, tilt_cos: f32, saturated_sign: f32) -> f32 {
-        let a_up = self.pi.update(vz_up_cmd_mps - vz_up_mps, dt_s, saturated_sign);
+    pub fn update(
+        &mut self,
+        dt_s: f32,
+        vz_up_cmd_mps: f32,
+        vz_up_mps: f32,
+        tilt_cos: f32,
+        saturated_sign: f32,
+    ) -> f32 {
+        let a_up = self
+            .pi
+            .update(vz_up_cmd_mps - vz_up_mps, dt_s, saturated_sign);
         let c = tilt_cos.clamp(0.5, 1.0);
         self.mass_kg * (GRAVITY_MPS2 + a_up) / c
     }

@@ -19,13 +19,13 @@ use crate::flight::FlightCore;
 use crate::sensors::{
     BaroSample, BatterySample, GpsFix, ImuSample, MagSample, RangeSample, SensorInputs,
 };
-use fcc_nav::ground_altitude::GroundSource;
 use fcc_msgs::{
     period_us, AltitudeFusion, AltitudeSource, BaroRaw, Battery, CommandAck, CommandKind,
     CommandResult, EncodeError, Encoder, FailsafeCause, FlightMode, FrameDecoder, GpsRaw,
     HandshakeError, Hello, ImuRaw, LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult,
     RangeRaw, RangeSensor, Status, StreamRates, TimeSyncPong,
 };
+use fcc_nav::ground_altitude::GroundSource;
 
 #[cfg(test)]
 mod tests;

@@ -461,15 +461,26 @@ fn param_set_is_applied_refused_with_a_reason_and_acknowledged() {
     let mut linux = Linux::new();
     let tilt0 = core.params().limits.max_tilt_deg;
     let sets = [
-        (param_id::MAX_TILT_DEG, 30.0),           // accepted
-        (param_id::MAX_TILT_DEG, 80.0),           // out of range (validate: 5..=60)
-        (param_id::VEL_P_PER_S, f32::NAN),        // a read
-        (param_id::CROSS_TRACK_K_PER_S, -1.0),    // out of range (set_param's own range)
+        (param_id::MAX_TILT_DEG, 30.0),        // accepted
+        (param_id::MAX_TILT_DEG, 80.0),        // out of range (validate: 5..=60)
+        (param_id::VEL_P_PER_S, f32::NAN),     // a read
+        (param_id::CROSS_TRACK_K_PER_S, -1.0), // out of range (set_param's own range)
     ];
     for (id, value) in sets {
-        link.on_bytes(1_000, &linux.frame(Message::ParamSet(ParamSet { id, value })), &mut core);
+        link.on_bytes(
+            1_000,
+            &linux.frame(Message::ParamSet(ParamSet { id, value })),
+            &mut core,
+        );
     }
-    link.on_bytes(1_000, &linux.frame(Message::ParamSet(ParamSet { id: 999, value: 1.0 })), &mut core);
+    link.on_bytes(
+        1_000,
+        &linux.frame(Message::ParamSet(ParamSet {
+            id: 999,
+            value: 1.0,
+        })),
+        &mut core,
+    );
     assert_ne!(tilt0, 30.0);
     assert_eq!(core.params().limits.max_tilt_deg, 30.0);
     let acks: Vec<ParamAck> = linux
@@ -491,7 +502,13 @@ fn param_set_is_applied_refused_with_a_reason_and_acknowledged() {
             (999, ParamResult::UnknownId),
         ]
     );
-    assert_eq!(acks[0].value, 30.0, "a refused set reports the value in use");
+    assert_eq!(
+        acks[0].value, 30.0,
+        "a refused set reports the value in use"
+    );
     assert_eq!(acks[1].value, Params::default().control.vel_p_per_s);
-    assert_eq!(core.params().control.cross_track_k_per_s, Params::default().control.cross_track_k_per_s);
+    assert_eq!(
+        core.params().control.cross_track_k_per_s,
+        Params::default().control.cross_track_k_per_s
+    );
 }

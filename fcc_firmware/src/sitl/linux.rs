@@ -13,8 +13,17 @@ use fcc_mission::{Mission, Phase, Request, WaypointFollower};
 pub const SETPOINT_TTL_MS: u16 = 300;
 
 enum Plan {
-    Hover { alt_m: f32, hold_s: f32, hold_start_s: Option<f64>, settle_s: f64, landing: bool },
-    Mission { follower: WaypointFollower, land_sent: bool },
+    Hover {
+        alt_m: f32,
+        hold_s: f32,
+        hold_start_s: Option<f64>,
+        settle_s: f64,
+        landing: bool,
+    },
+    Mission {
+        follower: WaypointFollower,
+        land_sent: bool,
+    },
     Carried,
 }
 
@@ -29,19 +38,37 @@ pub struct LinuxSide {
 impl LinuxSide {
     pub fn new(s: &Scenario) -> Result<Self, String> {
         let plan = match &s.flight {
-            FlightPlan::Hover { alt_m, hold_s } => {
-                Plan::Hover { alt_m: *alt_m, hold_s: *hold_s, hold_start_s: None, settle_s: 0.0, landing: false }
-            }
+            FlightPlan::Hover { alt_m, hold_s } => Plan::Hover {
+                alt_m: *alt_m,
+                hold_s: *hold_s,
+                hold_start_s: None,
+                settle_s: 0.0,
+                landing: false,
+            },
             FlightPlan::Mission { mission_file } => {
-                let text = std::fs::read_to_string(mission_file).map_err(|e| format!("{}: {e}", mission_file.display()))?;
-                let m: Mission =
-                    fcc_mission::from_yaml_str(&text).map_err(|e| format!("{}: {e}", mission_file.display()))?;
-                Plan::Mission { follower: WaypointFollower::new(m), land_sent: false }
+                let text = std::fs::read_to_string(mission_file)
+                    .map_err(|e| format!("{}: {e}", mission_file.display()))?;
+                let m: Mission = fcc_mission::from_yaml_str(&text)
+                    .map_err(|e| format!("{}: {e}", mission_file.display()))?;
+                Plan::Mission {
+                    follower: WaypointFollower::new(m),
+                    land_sent: false,
+                }
             }
             FlightPlan::Elevator { .. } | FlightPlan::Rig { .. } => Plan::Carried,
         };
-        let phase = if matches!(plan, Plan::Carried) { PlanPhase::Carried } else { PlanPhase::Waiting };
-        Ok(Self { plan, phase, armed_once: false, done: false, events: Vec::new() })
+        let phase = if matches!(plan, Plan::Carried) {
+            PlanPhase::Carried
+        } else {
+            PlanPhase::Waiting
+        };
+        Ok(Self {
+            plan,
+            phase,
+            armed_once: false,
+            done: false,
+            events: Vec::new(),
+        })
     }
 
     pub fn status(&self) -> PlanPhase {
@@ -58,7 +85,12 @@ impl LinuxSide {
         self.events.push((t_s, what));
     }
 
-    fn try_arm(armed_once: &mut bool, events: &mut Vec<(f64, String)>, t_us: u64, core: &mut FlightCore) -> bool {
+    fn try_arm(
+        armed_once: &mut bool,
+        events: &mut Vec<(f64, String)>,
+        t_us: u64,
+        core: &mut FlightCore,
+    ) -> bool {
         if core.armed() {
             return true;
         }
@@ -84,10 +116,20 @@ impl LinuxSide {
             return;
         }
         let nav = *core.nav();
-        let sp = |v: [f32; 3], yaw: Option<f32>| VelocitySetpoint { vel_ned_mps: v, yaw_rad: yaw, ttl_ms: SETPOINT_TTL_MS };
+        let sp = |v: [f32; 3], yaw: Option<f32>| VelocitySetpoint {
+            vel_ned_mps: v,
+            yaw_rad: yaw,
+            ttl_ms: SETPOINT_TTL_MS,
+        };
         match &mut self.plan {
             Plan::Carried => {}
-            Plan::Hover { alt_m, hold_s, hold_start_s, settle_s, landing } => {
+            Plan::Hover {
+                alt_m,
+                hold_s,
+                hold_start_s,
+                settle_s,
+                landing,
+            } => {
                 let (alt_m, hold_s) = (*alt_m, *hold_s);
                 if *landing {
                     return;
@@ -118,11 +160,18 @@ impl LinuxSide {
                     *hold_start_s = Some(t_s);
                     let hold = [nav.pos_ned_m[0], nav.pos_ned_m[1], nav.pos_ned_m[2]];
                     self.phase = PlanPhase::Holding { hold_ned_m: hold };
-                    self.events.push((t_s, format!("holding at {:.2?} for {hold_s} s", hold)));
+                    self.events
+                        .push((t_s, format!("holding at {:.2?} for {hold_s} s", hold)));
                 }
             }
-            Plan::Mission { follower, land_sent } => {
-                if core.mode() == Mode::Disarmed && !self.armed_once && core.navigator().ready().is_err() {
+            Plan::Mission {
+                follower,
+                land_sent,
+            } => {
+                if core.mode() == Mode::Disarmed
+                    && !self.armed_once
+                    && core.navigator().ready().is_err()
+                {
                     return; // wait for calibration and a GPS home before starting the mission
                 }
                 let g = follower.update(t_s, nav.pos_ned_m, nav.vel_ned_mps);
@@ -145,7 +194,11 @@ impl LinuxSide {
                     return;
                 }
                 let phase = match (g.phase, g.leg) {
-                    (Phase::Leg(i), Some(leg)) => PlanPhase::Leg { index: i, from_ned_m: leg.from_ned_m, to_ned_m: leg.to_ned_m },
+                    (Phase::Leg(i), Some(leg)) => PlanPhase::Leg {
+                        index: i,
+                        from_ned_m: leg.from_ned_m,
+                        to_ned_m: leg.to_ned_m,
+                    },
                     (Phase::Hold(i), _) => PlanPhase::HoldAtWaypoint(i),
                     (Phase::Takeoff, _) => PlanPhase::Climbing,
                     (Phase::Landing, _) => PlanPhase::Landing,
@@ -169,7 +222,13 @@ impl LinuxSide {
 /// profile, dwelling `dwell_s` at each (and before the first move). Returns analytic
 /// [height m, vertical speed m/s, acceleration m/s²] every millisecond, heights relative to
 /// the first floor.
-pub fn elevator_profile(floors: &[i32], floor_height_m: f32, speed_mps: f32, accel_mps2: f32, dwell_s: f32) -> Vec<[f64; 3]> {
+pub fn elevator_profile(
+    floors: &[i32],
+    floor_height_m: f32,
+    speed_mps: f32,
+    accel_mps2: f32,
+    dwell_s: f32,
+) -> Vec<[f64; 3]> {
     let (vmax, a) = (speed_mps as f64, accel_mps2 as f64);
     let dt = 1e-3;
     let mut out = Vec::new();
@@ -200,7 +259,11 @@ pub fn elevator_profile(floors: &[i32], floor_height_m: f32, speed_mps: f32, acc
                 (d_acc + v * (t - t_acc), v, 0.0)
             } else {
                 let td = t - t_acc - t_cruise;
-                (d_acc + v * t_cruise + v * td - 0.5 * a * td * td, v - a * td, -a)
+                (
+                    d_acc + v * t_cruise + v * td - 0.5 * a * td * td,
+                    v - a * td,
+                    -a,
+                )
             };
             out.push([h + sgn * s, sgn * vel, sgn * acc]);
         }

@@ -3,8 +3,8 @@
 
 use crate::commands::{FailsafeCause, Mode};
 use crate::flight::StepTelemetry;
-use crate::nav::NavState;
 use crate::geometry::MOTOR_COUNT;
+use crate::nav::NavState;
 
 /// What the in-process Linux computer is doing.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -12,9 +12,15 @@ pub enum PlanPhase {
     Waiting,
     Climbing,
     /// Hover hold window (paper A Fig. 16): the hold point (estimated NED).
-    Holding { hold_ned_m: [f32; 3] },
+    Holding {
+        hold_ned_m: [f32; 3],
+    },
     /// Flying the straight leg from → to (estimated NED) towards waypoint `index`.
-    Leg { index: usize, from_ned_m: [f32; 3], to_ned_m: [f32; 3] },
+    Leg {
+        index: usize,
+        from_ned_m: [f32; 3],
+        to_ned_m: [f32; 3],
+    },
     HoldAtWaypoint(usize),
     Landing,
     Done,

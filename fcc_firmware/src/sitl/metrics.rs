@@ -55,9 +55,15 @@ pub fn hover_box(log: &FlightLog) -> Option<HoverBox> {
     if hold.len() < 10 {
         return None;
     }
-    let mut out = HoverBox { duration_s: hold.last()?.0.t_s - hold[0].0.t_s, ..Default::default() };
+    let mut out = HoverBox {
+        duration_s: hold.last()?.0.t_s - hold[0].0.t_s,
+        ..Default::default()
+    };
     for axis in 0..3 {
-        let est: Vec<f64> = hold.iter().map(|(s, h)| (s.nav.pos_ned_m[axis] - h[axis]) as f64).collect();
+        let est: Vec<f64> = hold
+            .iter()
+            .map(|(s, h)| (s.nav.pos_ned_m[axis] - h[axis]) as f64)
+            .collect();
         out.est_max_m[axis] = max_abs(&est);
         let tr: Vec<f64> = hold.iter().map(|(s, _)| s.true_pos_ned_m[axis]).collect();
         let mean = tr.iter().sum::<f64>() / tr.len() as f64;
@@ -70,7 +76,11 @@ pub fn hover_box(log: &FlightLog) -> Option<HoverBox> {
 
 impl fmt::Display for HoverBox {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "hover {:.0} s (paper A: N 0.7 m, E 1.1 m, alt 0.3 m box)", self.duration_s)?;
+        writeln!(
+            f,
+            "hover {:.0} s (paper A: N 0.7 m, E 1.1 m, alt 0.3 m box)",
+            self.duration_s
+        )?;
         writeln!(
             f,
             "  estimated position, max |dev| from hold point: N {:.3} m  E {:.3} m  alt {:.3} m",
@@ -116,7 +126,9 @@ fn line_fit_residuals(pts: &[[f64; 2]]) -> Vec<f64> {
     }
     let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
     let (c, s) = (theta.cos(), theta.sin());
-    pts.iter().map(|p| -(p[0] - mx) * s + (p[1] - my) * c).collect()
+    pts.iter()
+        .map(|p| -(p[0] - mx) * s + (p[1] - my) * c)
+        .collect()
 }
 
 pub fn leg_tracks(log: &FlightLog) -> Vec<LegTrack> {
@@ -124,12 +136,18 @@ pub fn leg_tracks(log: &FlightLog) -> Vec<LegTrack> {
     let mut i = 0;
     let s = &log.samples;
     while i < s.len() {
-        if let PlanPhase::Leg { index, from_ned_m, to_ned_m } = s[i].plan {
+        if let PlanPhase::Leg {
+            index,
+            from_ned_m,
+            to_ned_m,
+        } = s[i].plan
+        {
             let a = [from_ned_m[0] as f64, from_ned_m[1] as f64];
             let b = [to_ned_m[0] as f64, to_ned_m[1] as f64];
             let mut est = Vec::new();
             let mut tru = Vec::new();
-            while i < s.len() && matches!(s[i].plan, PlanPhase::Leg { index: j, .. } if j == index) {
+            while i < s.len() && matches!(s[i].plan, PlanPhase::Leg { index: j, .. } if j == index)
+            {
                 let p = s[i].nav.pos_ned_m;
                 est.push(cross_track([p[0] as f64, p[1] as f64], a, b));
                 tru.push([s[i].true_pos_ned_m[0], s[i].true_pos_ned_m[1]]);
@@ -189,7 +207,11 @@ pub fn attitude_error(log: &FlightLog, airborne_only: bool) -> AttitudeError {
         if airborne_only && (s.landed || !s.armed) {
             continue;
         }
-        let est = [s.nav.euler.roll_rad as f64, s.nav.euler.pitch_rad as f64, s.nav.euler.yaw_rad as f64];
+        let est = [
+            s.nav.euler.roll_rad as f64,
+            s.nav.euler.pitch_rad as f64,
+            s.nav.euler.yaw_rad as f64,
+        ];
         for k in 0..3 {
             e[k].push(wrap_pi(est[k] - s.true_euler_rad[k]).to_degrees());
         }
@@ -217,8 +239,14 @@ pub struct VerticalError {
 
 pub fn vertical_error(log: &FlightLog, after_s: f64) -> VerticalError {
     let s: Vec<&LogSample> = log.samples.iter().filter(|s| s.t_s >= after_s).collect();
-    let est: Vec<f64> = s.iter().map(|s| -(s.nav.pos_ned_m[2] as f64) - (-s.true_pos_ned_m[2])).collect();
-    let baro: Vec<f64> = s.iter().map(|s| s.nav.baro_alt_m as f64 - (-s.true_pos_ned_m[2])).collect();
+    let est: Vec<f64> = s
+        .iter()
+        .map(|s| -(s.nav.pos_ned_m[2] as f64) - (-s.true_pos_ned_m[2]))
+        .collect();
+    let baro: Vec<f64> = s
+        .iter()
+        .map(|s| s.nav.baro_alt_m as f64 - (-s.true_pos_ned_m[2]))
+        .collect();
     let hp = |v: &[f64]| -> Vec<f64> {
         // deviation from a centred 1 s moving average (50 samples at 50 Hz)
         let w = 25;
@@ -245,13 +273,21 @@ pub struct ObserverNoise {
 
 pub fn observer_noise(log: &FlightLog) -> ObserverNoise {
     let (mut o, mut r) = (Vec::new(), Vec::new());
-    for s in log.samples.iter().filter(|s| s.armed && !s.landed && -s.true_pos_ned_m[2] > 1.0) {
+    for s in log
+        .samples
+        .iter()
+        .filter(|s| s.armed && !s.landed && -s.true_pos_ned_m[2] > 1.0)
+    {
         for k in 0..2 {
             o.push((s.tel.accel_est_fr_mps2[k] - s.accel_true_fr_mps2[k]) as f64);
             r.push((s.tel.accel_meas_fr_mps2[k] - s.accel_true_fr_mps2[k]) as f64);
         }
     }
-    ObserverNoise { samples: o.len() / 2, observer_std_mps2: std_dev(&o), raw_std_mps2: std_dev(&r) }
+    ObserverNoise {
+        samples: o.len() / 2,
+        observer_std_mps2: std_dev(&o),
+        raw_std_mps2: std_dev(&r),
+    }
 }
 
 /// Everything at once, for the summary the binary prints.
@@ -290,9 +326,19 @@ pub fn summary(log: &FlightLog) -> String {
     }
     if !log.ranges.is_empty() {
         writeln!(out, "ground altitude (height above ground, vs truth):").ok();
-        writeln!(out, "  {:<28} {:>9} {:>9} {:>12}", "method", "RMS m", "max m", "diverged s").ok();
+        writeln!(
+            out,
+            "  {:<28} {:>9} {:>9} {:>12}",
+            "method", "RMS m", "max m", "diverged s"
+        )
+        .ok();
         for (name, g) in ground_comparison(log) {
-            writeln!(out, "  {:<28} {:>9.3} {:>9.3} {:>12.1}", name, g.rms_m, g.max_m, g.diverged_s).ok();
+            writeln!(
+                out,
+                "  {:<28} {:>9.3} {:>9.3} {:>12.1}",
+                name, g.rms_m, g.max_m, g.diverged_s
+            )
+            .ok();
         }
     }
     let a = attitude_error(log, true);
@@ -342,7 +388,12 @@ fn ground_stats(errs: &[(f64, f64)]) -> GroundStats {
             diverged += w[1].0 - w[0].0;
         }
     }
-    GroundStats { samples: e.len(), rms_m: rms(&e), max_m: max_abs(&e), diverged_s: diverged }
+    GroundStats {
+        samples: e.len(),
+        rms_m: rms(&e),
+        max_m: max_abs(&e),
+        diverged_s: diverged,
+    }
 }
 
 /// Paper B's comparison on the same data (after the navigation has calibrated, `from_s`):

@@ -583,7 +583,11 @@ mod tests {
         }
         assert!(o.on_ground());
         // A 2 m free fall (6.3 m/s) bottoms out the gear's stroke: resting within it, stopped.
-        assert!(o.state.pos_ned_m.z >= 0.0 && o.state.pos_ned_m.z <= GEAR_STROKE_M, "{:?}", o.state.pos_ned_m);
+        assert!(
+            o.state.pos_ned_m.z >= 0.0 && o.state.pos_ned_m.z <= GEAR_STROKE_M,
+            "{:?}",
+            o.state.pos_ned_m
+        );
         assert_eq!(o.state.vel_ned_mps.z, 0.0);
         // Full throttle → climbs.
         for _ in 0..2000 {
@@ -622,9 +626,17 @@ mod tests {
             o.step(&[h; MOTOR_COUNT], Vector3::zeros(), 0.0, DT);
             peak = peak.max(o.specific_force_frd_mps2().norm());
         }
-        assert!(o.on_ground() && o.state.vel_ned_mps.z.abs() < 1e-9, "{:?} {:?}", o.state.pos_ned_m, o.state.vel_ned_mps);
+        assert!(
+            o.on_ground() && o.state.vel_ned_mps.z.abs() < 1e-9,
+            "{:?} {:?}",
+            o.state.pos_ned_m,
+            o.state.vel_ned_mps
+        );
         // The accelerometer sees the touchdown, within its ±8 g range.
-        assert!(peak > 15.0 && peak <= 9.81 + GEAR_MAX_DECEL_MPS2 + 1.0, "peak {peak}");
+        assert!(
+            peak > 15.0 && peak <= 9.81 + GEAR_MAX_DECEL_MPS2 + 1.0,
+            "peak {peak}"
+        );
         assert!(o.state.pos_ned_m.z < GEAR_STROKE_M);
     }
 }

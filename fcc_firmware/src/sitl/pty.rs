@@ -31,9 +31,20 @@ impl PtyLink {
         let mut tio = tcgetattr(pty.slave.as_fd()).map_err(io::Error::from)?;
         cfmakeraw(&mut tio);
         tcsetattr(pty.slave.as_fd(), SetArg::TCSANOW, &tio).map_err(io::Error::from)?;
-        let flags = fcntl(std::os::fd::AsRawFd::as_raw_fd(&pty.master), FcntlArg::F_GETFL).map_err(io::Error::from)?;
-        fcntl(std::os::fd::AsRawFd::as_raw_fd(&pty.master), FcntlArg::F_SETFL(OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK)).map_err(io::Error::from)?;
-        let slave_path = std::fs::read_link(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(&pty.slave)))?;
+        let flags = fcntl(
+            std::os::fd::AsRawFd::as_raw_fd(&pty.master),
+            FcntlArg::F_GETFL,
+        )
+        .map_err(io::Error::from)?;
+        fcntl(
+            std::os::fd::AsRawFd::as_raw_fd(&pty.master),
+            FcntlArg::F_SETFL(OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK),
+        )
+        .map_err(io::Error::from)?;
+        let slave_path = std::fs::read_link(format!(
+            "/proc/self/fd/{}",
+            std::os::fd::AsRawFd::as_raw_fd(&pty.slave)
+        ))?;
         let symlink = match symlink {
             Some(l) => {
                 let _ = std::fs::remove_file(l);
@@ -42,7 +53,13 @@ impl PtyLink {
             }
             None => None,
         };
-        Ok(Self { master: File::from(pty.master), _slave: pty.slave, slave_path, symlink, tx_dropped_bytes: 0 })
+        Ok(Self {
+            master: File::from(pty.master),
+            _slave: pty.slave,
+            slave_path,
+            symlink,
+            tx_dropped_bytes: 0,
+        })
     }
 
     /// The device a client opens (`/dev/pts/N`).
@@ -89,7 +106,11 @@ mod tests {
     #[test]
     fn bytes_cross_the_pty_raw_both_ways() {
         let mut link = PtyLink::open(None).unwrap();
-        let mut client = std::fs::OpenOptions::new().read(true).write(true).open(link.slave_path()).unwrap();
+        let mut client = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(link.slave_path())
+            .unwrap();
         // Every byte value, including the ones a cooked tty would interpret (CR, ^C, ^D, 0).
         let all: Vec<u8> = (0..=255u8).collect();
         client.write_all(&all).unwrap();

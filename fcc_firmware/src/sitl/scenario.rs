@@ -3,8 +3,8 @@
 
 use super::physics::VehicleParams;
 use super::rangefinders::{LaserParams, SonarParams};
-use super::terrain::Terrain;
 use super::sensor_models::{BaroParams, GpsParams, ImuParams, MagParams};
+use super::terrain::Terrain;
 use super::wind::WindParams;
 use crate::params::Params;
 use serde::Deserialize;
@@ -75,7 +75,11 @@ pub struct CalibrationParams {
 
 impl Default for CalibrationParams {
     fn default() -> Self {
-        Self { enabled: true, accel_residual_mg: 5.0, mag_residual_ut: 0.3 }
+        Self {
+            enabled: true,
+            accel_residual_mg: 5.0,
+            mag_residual_ut: 0.3,
+        }
     }
 }
 
@@ -92,7 +96,11 @@ pub enum FlightPlan {
     /// paper A Figs. 8–9.
     /// A static test rig (paper B's ground and roll tests): the vehicle held at `height_m`
     /// above the ground with the given attitude, motors off.
-    Rig { height_m: f32, roll_deg: f32, pitch_deg: f32 },
+    Rig {
+        height_m: f32,
+        roll_deg: f32,
+        pitch_deg: f32,
+    },
     Elevator {
         floors: Vec<i32>,
         floor_height_m: f32,
@@ -106,7 +114,11 @@ pub enum FlightPlan {
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Fault {
     /// An extra magnetic field (e.g. a steel structure) between `start_s` and `end_s`.
-    MagDisturbance { start_s: f64, end_s: f64, field_ned_ut: [f64; 3] },
+    MagDisturbance {
+        start_s: f64,
+        end_s: f64,
+        field_ned_ut: [f64; 3],
+    },
     /// No GPS fixes between `start_s` and `end_s`.
     GpsOutage { start_s: f64, end_s: f64 },
     /// The mission computer falls silent (killed, link cut): no setpoints or commands reach the
@@ -137,7 +149,13 @@ impl fmt::Display for ScenarioError {
         if self.field.is_empty() {
             write!(f, "{}: {}", self.file.display(), self.reason)
         } else {
-            write!(f, "{}: {}: {}", self.file.display(), self.field, self.reason)
+            write!(
+                f,
+                "{}: {}: {}",
+                self.file.display(),
+                self.field,
+                self.reason
+            )
         }
     }
 }
@@ -146,7 +164,11 @@ impl std::error::Error for ScenarioError {}
 
 impl Scenario {
     pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
-        let err = |field: &str, reason: String| ScenarioError { file: path.to_path_buf(), field: field.into(), reason };
+        let err = |field: &str, reason: String| ScenarioError {
+            file: path.to_path_buf(),
+            field: field.into(),
+            reason,
+        };
         let text = std::fs::read_to_string(path).map_err(|e| err("", e.to_string()))?;
         let mut s = Self::from_yaml_str(&text).map_err(|(field, reason)| err(&field, reason))?;
         if let FlightPlan::Mission { mission_file } = &mut s.flight {
@@ -175,7 +197,9 @@ impl Scenario {
         if !(self.duration_s.is_finite() && self.duration_s > 0.0 && self.duration_s <= 7200.0) {
             return bad("duration_s", "must be in (0, 7200] s");
         }
-        if !(self.wind.mean_speed_mps.is_finite() && (0.0..=25.0).contains(&self.wind.mean_speed_mps)) {
+        if !(self.wind.mean_speed_mps.is_finite()
+            && (0.0..=25.0).contains(&self.wind.mean_speed_mps))
+        {
             return bad("wind.mean_speed_mps", "must be in [0, 25] m/s");
         }
         if !(self.wind.w20_kt.is_finite() && (0.0..=60.0).contains(&self.wind.w20_kt)) {
@@ -194,7 +218,11 @@ impl Scenario {
                 }
             }
             FlightPlan::Mission { .. } => {}
-            FlightPlan::Rig { height_m, roll_deg, pitch_deg } => {
+            FlightPlan::Rig {
+                height_m,
+                roll_deg,
+                pitch_deg,
+            } => {
                 if !(height_m.is_finite() && (0.1..=100.0).contains(height_m)) {
                     return bad("flight.height_m", "must be in [0.1, 100] m");
                 }
@@ -205,11 +233,18 @@ impl Scenario {
                     return bad("flight.pitch_deg", "must be within ±80°");
                 }
             }
-            FlightPlan::Elevator { floors, floor_height_m, speed_mps, accel_mps2, dwell_s } => {
+            FlightPlan::Elevator {
+                floors,
+                floor_height_m,
+                speed_mps,
+                accel_mps2,
+                dwell_s,
+            } => {
                 if floors.is_empty() {
                     return bad("flight.floors", "needs at least one floor");
                 }
-                if !(floor_height_m.is_finite() && *floor_height_m > 0.5 && *floor_height_m < 20.0) {
+                if !(floor_height_m.is_finite() && *floor_height_m > 0.5 && *floor_height_m < 20.0)
+                {
                     return bad("flight.floor_height_m", "must be in (0.5, 20) m");
                 }
                 if !(speed_mps.is_finite() && *speed_mps > 0.0 && *speed_mps < 20.0) {
@@ -232,7 +267,9 @@ impl Scenario {
                 return Err((format!("faults[{i}]"), "needs 0 ≤ start_s < end_s".into()));
             }
         }
-        self.params.validate().map_err(|e| (format!("params.{}", e.field), e.reason.to_string()))?;
+        self.params
+            .validate()
+            .map_err(|e| (format!("params.{}", e.field), e.reason.to_string()))?;
         Ok(())
     }
 }
@@ -254,7 +291,10 @@ mod tests {
         let y = "name: x\nduration_s: 10\nflight: {kind: hover, alt_m: 500, hold_s: 10}\n";
         assert_eq!(Scenario::from_yaml_str(y).unwrap_err().0, "flight.alt_m");
         let y = "name: x\nduration_s: 10\nflight: {kind: hover, alt_m: 5, hold_s: 10}\nparams: {limits: {max_tilt_deg: 90}}\n";
-        assert_eq!(Scenario::from_yaml_str(y).unwrap_err().0, "params.limits.max_tilt_deg");
+        assert_eq!(
+            Scenario::from_yaml_str(y).unwrap_err().0,
+            "params.limits.max_tilt_deg"
+        );
         let y = "name: x\nduration_s: ten\nflight: {kind: hover, alt_m: 5, hold_s: 10}\n";
         assert_eq!(Scenario::from_yaml_str(y).unwrap_err().0, "duration_s");
     }

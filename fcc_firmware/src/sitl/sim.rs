@@ -9,9 +9,9 @@ use super::linux::LinuxSide;
 use super::log::{FlightLog, LogSample};
 use super::physics::Octorotor;
 use super::rangefinders::{LaserModel, SonarModel};
-use super::terrain::Terrain;
 use super::scenario::{Fault, FlightPlan, Scenario};
 use super::sensor_models::{BaroModel, BatteryModel, GpsModel, ImuModel, MagModel};
+use super::terrain::Terrain;
 use super::wind::Wind;
 use crate::flight::FlightCore;
 use crate::geometry::MOTOR_COUNT;
@@ -57,13 +57,32 @@ impl SensorBoard for SimBoard {
     fn poll(&mut self, now_us: u64) -> SensorInputs {
         let t = self.truth;
         let out = SensorInputs {
-            imu: Some(self.imu.sample(now_us, t.omega_frd_radps, t.specific_force_frd_mps2, t.rotor_speed_mean)),
+            imu: Some(self.imu.sample(
+                now_us,
+                t.omega_frd_radps,
+                t.specific_force_frd_mps2,
+                t.rotor_speed_mean,
+            )),
             mag: self.mag.sample(now_us, &t.q_body_to_ned),
             baro: self.baro.sample(now_us, -t.pos_ned_m.z, t.in_flight),
             gps: self.gps.sample(now_us, t.pos_ned_m, t.vel_ned_mps),
-            laser: self.laser.sample(now_us, t.pos_ned_m, &t.q_body_to_ned, &self.terrain, self.air_temp_c),
-            sonar: self.sonar.sample(now_us, t.pos_ned_m, &t.q_body_to_ned, &self.terrain, self.air_temp_c),
-            battery: self.battery.sample(now_us, t.current_a, TICK_US as f64 * 1e-6),
+            laser: self.laser.sample(
+                now_us,
+                t.pos_ned_m,
+                &t.q_body_to_ned,
+                &self.terrain,
+                self.air_temp_c,
+            ),
+            sonar: self.sonar.sample(
+                now_us,
+                t.pos_ned_m,
+                &t.q_body_to_ned,
+                &self.terrain,
+                self.air_temp_c,
+            ),
+            battery: self
+                .battery
+                .sample(now_us, t.current_a, TICK_US as f64 * 1e-6),
         };
         if let Some(l) = out.laser {
             self.polled_ranges.push((true, l));
@@ -115,7 +134,11 @@ impl Sim {
         let seed = scenario.seed;
         let gear = scenario.vehicle.gear_height_m;
         let start_down = scenario.terrain.ground_down_at(0.0, 0.0) - gear;
-        let body = Octorotor::new(scenario.vehicle.clone(), Vector3::new(0.0, 0.0, start_down), 0.0);
+        let body = Octorotor::new(
+            scenario.vehicle.clone(),
+            Vector3::new(0.0, 0.0, start_down),
+            0.0,
+        );
         let s = &scenario.sensors;
         let board = SimBoard {
             imu: ImuModel::new(s.imu.clone(), seed),
@@ -142,7 +165,11 @@ impl Sim {
         };
         let linux = LinuxSide::new(&scenario)?;
         let carried = match &scenario.flight {
-            FlightPlan::Rig { height_m, roll_deg, pitch_deg } => Some(Carried {
+            FlightPlan::Rig {
+                height_m,
+                roll_deg,
+                pitch_deg,
+            } => Some(Carried {
                 profile: vec![[*height_m as f64, 0.0, 0.0]],
                 attitude: Some(UnitQuaternion::from_euler_angles(
                     (*roll_deg as f64).to_radians(),
@@ -150,8 +177,20 @@ impl Sim {
                     0.0,
                 )),
             }),
-            FlightPlan::Elevator { floors, floor_height_m, speed_mps, accel_mps2, dwell_s } => Some(Carried {
-                profile: super::linux::elevator_profile(floors, *floor_height_m, *speed_mps, *accel_mps2, *dwell_s),
+            FlightPlan::Elevator {
+                floors,
+                floor_height_m,
+                speed_mps,
+                accel_mps2,
+                dwell_s,
+            } => Some(Carried {
+                profile: super::linux::elevator_profile(
+                    floors,
+                    *floor_height_m,
+                    *speed_mps,
+                    *accel_mps2,
+                    *dwell_s,
+                ),
                 attitude: None,
             }),
             _ => None,
@@ -250,7 +289,11 @@ impl Sim {
             let g = fcc_nav::GRAVITY_MPS2 as f64;
             let a_ned = Vector3::new(0.0, 0.0, -a);
             let f_ned = a_ned - Vector3::new(0.0, 0.0, g);
-            let f_body = self.body.state.q_body_to_ned.inverse_transform_vector(&f_ned);
+            let f_body = self
+                .body
+                .state
+                .q_body_to_ned
+                .inverse_transform_vector(&f_ned);
             self.board.truth.specific_force_frd_mps2 = f_body;
             self.board.truth.accel_ned_mps2 = a_ned;
             self.board.truth.in_flight = false;
@@ -261,9 +304,11 @@ impl Sim {
             self.wind_ned = self.wind.step(height, air, dt);
             let sub = dt / PHYSICS_SUBSTEPS as f64;
             let p = self.body.state.pos_ned_m;
-            let ground_down = self.board.terrain.ground_down_at(p.x, p.y) - self.body.params.gear_height_m;
+            let ground_down =
+                self.board.terrain.ground_down_at(p.x, p.y) - self.body.params.gear_height_m;
             for _ in 0..PHYSICS_SUBSTEPS {
-                self.body.step(&self.motors.0, self.wind_ned, ground_down, sub);
+                self.body
+                    .step(&self.motors.0, self.wind_ned, ground_down, sub);
             }
             self.board.truth.specific_force_frd_mps2 = self.body.specific_force_frd_mps2();
             self.board.truth.accel_ned_mps2 = (self.body.state.vel_ned_mps - prev_vel) / dt;
@@ -280,7 +325,6 @@ impl Sim {
         self.board.truth.rotor_speed_mean = mean_speed;
         self.board.truth.current_a = self.body.electrical_power_w() / 18.5;
 
-
         let t0 = std::time::Instant::now();
         if let Some((ep, pty)) = self.link.as_mut() {
             // The UART: whatever the Linux side wrote since the last tick (unless the wire is cut).
@@ -294,7 +338,8 @@ impl Sim {
                     ep.on_bytes(self.t_us, &rx[..n], &mut self.core);
                 }
             }
-            let inputs = scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
+            let inputs =
+                scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
             let mut tx = [0u8; 1024];
             let n = ep.poll_tx(self.t_us, &self.core, &inputs, &mut tx);
             if linux_on {
@@ -311,7 +356,12 @@ impl Sim {
         let p = self.body.state.pos_ned_m;
         let agl = self.board.terrain.ground_down_at(p.x, p.y) - p.z;
         for (laser, r) in self.board.polled_ranges.drain(..) {
-            self.log.ranges.push(super::log::RangeRecord { t_s: r.t_us as f64 * 1e-6, laser, range_m: r.range_m, true_agl_m: agl });
+            self.log.ranges.push(super::log::RangeRecord {
+                t_s: r.t_us as f64 * 1e-6,
+                laser,
+                range_m: r.range_m,
+                true_agl_m: agl,
+            });
         }
         if self.ticks % LOG_EVERY_TICKS == 0 {
             self.record();
@@ -324,7 +374,10 @@ impl Sim {
         let nav = *self.core.nav();
         let tel = *self.core.telemetry();
         let a = self.board.truth.accel_ned_mps2;
-        let (sy, cy) = (nav.euler.yaw_rad.sin() as f64, nav.euler.yaw_rad.cos() as f64);
+        let (sy, cy) = (
+            nav.euler.yaw_rad.sin() as f64,
+            nav.euler.yaw_rad.cos() as f64,
+        );
         let accel_true_fr = [(cy * a.x + sy * a.y) as f32, (-sy * a.x + cy * a.y) as f32];
         self.log.samples.push(LogSample {
             t_s: self.t_s(),
@@ -341,7 +394,11 @@ impl Sim {
             nav,
             tel,
             accel_true_fr_mps2: accel_true_fr,
-            true_agl_m: self.board.terrain.ground_down_at(st.pos_ned_m.x, st.pos_ned_m.y) - st.pos_ned_m.z,
+            true_agl_m: self
+                .board
+                .terrain
+                .ground_down_at(st.pos_ned_m.x, st.pos_ned_m.y)
+                - st.pos_ned_m.z,
             motors: *self.core.motors(),
         });
     }
@@ -363,7 +420,12 @@ impl Sim {
 
 /// The operator's pre-flight calibrations: offsets measured with a residual error (see
 /// [`super::scenario::CalibrationParams`]).
-fn calibrate(params: &mut crate::params::Params, board: &SimBoard, s: &super::scenario::SensorParams, seed: u64) {
+fn calibrate(
+    params: &mut crate::params::Params,
+    board: &SimBoard,
+    s: &super::scenario::SensorParams,
+    seed: u64,
+) {
     use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0xCA11_B8A7);
     let (_, accel_bias) = board.imu.biases();

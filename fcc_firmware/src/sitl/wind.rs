@@ -71,7 +71,6 @@ pub fn dryden_low_altitude(height_m: f64, w20_kt: f64) -> ([f64; 3], [f64; 3]) {
     ([sigma_uv, sigma_uv, sigma_w], [l_uv, l_uv, l_w])
 }
 
-
 #[derive(Clone, Debug)]
 struct Coeffs {
     key: (f64, f64, f64), // (V, h, dt) they were computed for
@@ -127,8 +126,16 @@ impl Wind {
             }
         }
         let (sigma, l) = dryden_low_altitude(h, self.params.w20_kt);
-        let phi = [(-v / l[0] * dt).exp(), (-v / l[1] * dt).exp(), (-v / l[2] * dt).exp()];
-        let c = Coeffs { key: (v, h, dt), sigma, phi };
+        let phi = [
+            (-v / l[0] * dt).exp(),
+            (-v / l[1] * dt).exp(),
+            (-v / l[2] * dt).exp(),
+        ];
+        let c = Coeffs {
+            key: (v, h, dt),
+            sigma,
+            phi,
+        };
         self.coeffs = Some(c.clone());
         c
     }

@@ -118,7 +118,10 @@ fn expand_once(s: &str, vars: &BTreeMap<String, String>) -> Result<String, Strin
     let mut rest = s;
     while let Some(i) = rest.find("${") {
         out.push_str(&rest[..i]);
-        let j = rest[i..].find('}').ok_or(format!("unclosed ${{ in '{s}'"))? + i;
+        let j = rest[i..]
+            .find('}')
+            .ok_or(format!("unclosed ${{ in '{s}'"))?
+            + i;
         let name = &rest[i + 2..j];
         let v = vars
             .get(name)
@@ -173,7 +176,11 @@ fn stop_all(procs: &mut [Running], timeout: Duration) {
                     break;
                 }
                 if t0.elapsed() > timeout {
-                    eprintln!("fcc-launch: {} did not stop in {:.0} s; SIGKILL", p.name, timeout.as_secs_f64());
+                    eprintln!(
+                        "fcc-launch: {} did not stop in {:.0} s; SIGKILL",
+                        p.name,
+                        timeout.as_secs_f64()
+                    );
                     let _ = p.child.kill();
                     p.status = p.child.wait().ok();
                     break;
@@ -191,11 +198,16 @@ fn main() {
         std::process::exit(if args.is_empty() { 2 } else { 0 });
     }
     let cfg_path = PathBuf::from(&args[0]);
-    let text = std::fs::read_to_string(&cfg_path).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
-    let cfg: Config = serde_yaml::from_str(&text).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
+    let text = std::fs::read_to_string(&cfg_path)
+        .unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
+    let cfg: Config =
+        serde_yaml::from_str(&text).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
     let secs = |field: String, v: f64| {
         if !(v.is_finite() && (0.0..=86_400.0).contains(&v)) {
-            die(format!("{}: {field}: must be a number of seconds in [0, 86400], got {v}", cfg_path.display()));
+            die(format!(
+                "{}: {field}: must be a number of seconds in [0, 86400], got {v}",
+                cfg_path.display()
+            ));
         }
     };
     secs("stop_timeout_s".into(), cfg.stop_timeout_s);
@@ -205,7 +217,9 @@ fn main() {
     }
     let mut vars = cfg.vars.clone();
     for a in &args[1..] {
-        let (k, v) = a.split_once(":=").unwrap_or_else(|| die(format!("argument '{a}': expected name:=value")));
+        let (k, v) = a
+            .split_once(":=")
+            .unwrap_or_else(|| die(format!("argument '{a}': expected name:=value")));
         vars.insert(k.to_string(), v.to_string());
     }
     let exe_dir = std::env::current_exe()
@@ -218,13 +232,19 @@ fn main() {
         .and_then(|p| p.parent().map(Path::to_path_buf))
         .unwrap_or_else(|| PathBuf::from("."));
     let run_dir = std::env::temp_dir().join(format!("fcc-launch.{}", std::process::id()));
-    std::fs::create_dir_all(&run_dir).unwrap_or_else(|e| die(format!("{}: {e}", run_dir.display())));
-    vars.entry("BIN".into()).or_insert_with(|| exe_dir.display().to_string());
+    std::fs::create_dir_all(&run_dir)
+        .unwrap_or_else(|e| die(format!("{}: {e}", run_dir.display())));
+    vars.entry("BIN".into())
+        .or_insert_with(|| exe_dir.display().to_string());
     vars.insert("CONFIG_DIR".into(), cfg_dir.display().to_string());
     vars.insert("RUN".into(), run_dir.display().to_string());
-    let x = |s: &str| expand(s, &vars).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
+    let x =
+        |s: &str| expand(s, &vars).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
     if cfg.processes.iter().filter(|p| p.main).count() != 1 {
-        die(format!("{}: exactly one process must have main: true", cfg_path.display()));
+        die(format!(
+            "{}: exactly one process must have main: true",
+            cfg_path.display()
+        ));
     }
 
     let handler = SigHandler::Handler(on_signal);
@@ -269,7 +289,11 @@ fn main() {
         if p.main {
             main_idx = running.len();
         }
-        running.push(Running { name: p.name.clone(), child, status: None });
+        running.push(Running {
+            name: p.name.clone(),
+            child,
+            status: None,
+        });
         if let Some(w) = &p.wait_for {
             let path = PathBuf::from(x(w));
             let t0 = Instant::now();
@@ -277,11 +301,20 @@ fn main() {
                 let r = running.last_mut().unwrap();
                 if let Ok(Some(s)) = r.child.try_wait() {
                     r.status = Some(s);
-                    fail_early = Some(format!("{} exited ({}) before {} appeared", p.name, code_of(&s), path.display()));
+                    fail_early = Some(format!(
+                        "{} exited ({}) before {} appeared",
+                        p.name,
+                        code_of(&s),
+                        path.display()
+                    ));
                     break 'start;
                 }
                 if t0.elapsed().as_secs_f64() > p.wait_timeout_s || STOP.load(Ordering::SeqCst) {
-                    fail_early = Some(format!("{} did not appear within {:.0} s", path.display(), p.wait_timeout_s));
+                    fail_early = Some(format!(
+                        "{} did not appear within {:.0} s",
+                        path.display(),
+                        p.wait_timeout_s
+                    ));
                     break 'start;
                 }
                 std::thread::sleep(Duration::from_millis(20));
@@ -345,14 +378,23 @@ fn main() {
             let rep = std::fs::read_to_string(&csv)
                 .map_err(|e| format!("{csv}: {e}"))
                 .and_then(|c| {
-                    let m = std::fs::read_to_string(&mission).map_err(|e| format!("{mission}: {e}"))?;
-                    let m = fcc_mission::from_yaml_str(&m).map_err(|e| format!("{mission}: {e}"))?;
+                    let m =
+                        std::fs::read_to_string(&mission).map_err(|e| format!("{mission}: {e}"))?;
+                    let m =
+                        fcc_mission::from_yaml_str(&m).map_err(|e| format!("{mission}: {e}"))?;
                     fcc_mission::track::report(&c, &m)
                 });
             match rep {
                 Ok(rep) => {
-                    let title = r.title.clone().map(|t| x(&t)).unwrap_or_else(|| "full-stack flight".into());
-                    let text = format!("== {title} ({:.1} s wall)\n{rep}\n", t_start.elapsed().as_secs_f64());
+                    let title = r
+                        .title
+                        .clone()
+                        .map(|t| x(&t))
+                        .unwrap_or_else(|| "full-stack flight".into());
+                    let text = format!(
+                        "== {title} ({:.1} s wall)\n{rep}\n",
+                        t_start.elapsed().as_secs_f64()
+                    );
                     print!("{text}");
                     if let Some(a) = &r.append_to {
                         let a = x(a);

@@ -13,7 +13,9 @@ use clap::Parser;
 use fcc_bridge::frames;
 use fcc_bridge::params::{self, parse_bool};
 use fcc_bridge::ros_node::{self, DdsEnv, RosClock};
-use fcc_bridge::ros_types::{Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3};
+use fcc_bridge::ros_types::{
+    Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
+};
 use fcc_mission::{Mission, Phase, Request, WaypointFollower};
 use futures::StreamExt;
 use std::time::{Duration, Instant};
@@ -61,10 +63,29 @@ fn options() -> Options {
         }
         // One line, as for every other bad input (clap's own text spans several).
         let text = e.to_string();
-        fail(2, format!("{} (see --help)", text.split("\n\nUsage").next().unwrap_or("").split_whitespace().collect::<Vec<_>>().join(" ").trim_start_matches("error: ")))
+        fail(
+            2,
+            format!(
+                "{} (see --help)",
+                text.split("\n\nUsage")
+                    .next()
+                    .unwrap_or("")
+                    .split_whitespace()
+                    .collect::<Vec<_>>()
+                    .join(" ")
+                    .trim_start_matches("error: ")
+            ),
+        )
     });
     let p = &ros.params;
-    let known = ["mission", "rate_hz", "use_sim_time", "timeout_s", "arm_timeout_s", "localhost_only"];
+    let known = [
+        "mission",
+        "rate_hz",
+        "use_sim_time",
+        "timeout_s",
+        "arm_timeout_s",
+        "localhost_only",
+    ];
     if let Some(k) = p.keys().find(|k| !known.contains(&k.as_str())) {
         fail(2, format!("unknown parameter '{k}'"));
     }
@@ -83,9 +104,16 @@ fn options() -> Options {
     let mission_file = cli
         .mission
         .or_else(|| p.get("mission").cloned())
-        .unwrap_or_else(|| fail(2, "no mission: use --mission FILE or -p mission:=FILE".into()));
-    let text = std::fs::read_to_string(&mission_file).unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
-    let mission = fcc_mission::from_yaml_str(&text).unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
+        .unwrap_or_else(|| {
+            fail(
+                2,
+                "no mission: use --mission FILE or -p mission:=FILE".into(),
+            )
+        });
+    let text = std::fs::read_to_string(&mission_file)
+        .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
+    let mission = fcc_mission::from_yaml_str(&text)
+        .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
     let use_sim_time = p
         .get("use_sim_time")
         .map(|v| parse_bool(v).unwrap_or_else(|e| fail(2, format!("parameter use_sim_time: {e}"))))
@@ -98,7 +126,10 @@ fn options() -> Options {
         mission_file,
         mission,
         namespace: ros.namespace.clone().unwrap_or_else(|| "/fcc".into()),
-        node_name: ros.node_name.clone().unwrap_or_else(|| "fcc_mission".into()),
+        node_name: ros
+            .node_name
+            .clone()
+            .unwrap_or_else(|| "fcc_mission".into()),
         dds: DdsEnv::from_env(&ros).unwrap_or_else(|e| fail(2, e)),
         rate_hz,
         use_sim_time,
@@ -184,17 +215,34 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
     let e1 = |e: String| (1, e);
     let ctx = ros_node::context(o.dds).map_err(e1)?;
     let mut node = ros_node::node(&ctx, &o.namespace, &o.node_name).map_err(e1)?;
-    let odom_sub = ros_node::subscription::<Odometry>(&mut node, "state/odom", &ros_node::best_effort_qos(1)).map_err(e1)?;
-    let status_sub = ros_node::subscription::<Status>(&mut node, "status", &ros_node::best_effort_qos(5)).map_err(e1)?;
+    let odom_sub =
+        ros_node::subscription::<Odometry>(&mut node, "state/odom", &ros_node::best_effort_qos(1))
+            .map_err(e1)?;
+    let status_sub =
+        ros_node::subscription::<Status>(&mut node, "status", &ros_node::best_effort_qos(5))
+            .map_err(e1)?;
     let clock_sub = if o.use_sim_time {
-        Some(ros_node::subscription::<Clock>(&mut node, "/clock", &ros_node::best_effort_qos(1)).map_err(e1)?)
+        Some(
+            ros_node::subscription::<Clock>(&mut node, "/clock", &ros_node::best_effort_qos(1))
+                .map_err(e1)?,
+        )
     } else {
         None
     };
-    let sp_pub = ros_node::publisher::<TwistStamped>(&mut node, "setpoint/velocity", &ros_node::reliable_qos(10)).map_err(e1)?;
-    let arm_pub = ros_node::publisher::<Bool>(&mut node, "cmd/arm", &ros_node::reliable_qos(10)).map_err(e1)?;
-    let mode_pub = ros_node::publisher::<StringMsg>(&mut node, "cmd/mode", &ros_node::reliable_qos(10)).map_err(e1)?;
-    let status_pub = ros_node::publisher::<StringMsg>(&mut node, "mission/status", &ros_node::reliable_qos(10)).map_err(e1)?;
+    let sp_pub = ros_node::publisher::<TwistStamped>(
+        &mut node,
+        "setpoint/velocity",
+        &ros_node::reliable_qos(10),
+    )
+    .map_err(e1)?;
+    let arm_pub = ros_node::publisher::<Bool>(&mut node, "cmd/arm", &ros_node::reliable_qos(10))
+        .map_err(e1)?;
+    let mode_pub =
+        ros_node::publisher::<StringMsg>(&mut node, "cmd/mode", &ros_node::reliable_qos(10))
+            .map_err(e1)?;
+    let status_pub =
+        ros_node::publisher::<StringMsg>(&mut node, "mission/status", &ros_node::reliable_qos(10))
+            .map_err(e1)?;
 
     let n_wp = o.mission.waypoints.len();
     println!(
@@ -253,15 +301,26 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
         }
         let elapsed = started.elapsed().as_secs_f64();
         if elapsed > o.timeout_s {
-            return Err((1, format!("timeout: mission not finished after {:.0} s (phase {:?})", o.timeout_s, last_phase)));
+            return Err((
+                1,
+                format!(
+                    "timeout: mission not finished after {:.0} s (phase {:?})",
+                    o.timeout_s, last_phase
+                ),
+            ));
         }
-        let (Some(od), Some(st), Some(now_ns)) = (odom.as_ref(), status.as_ref(), clock.now_ns()) else {
+        let (Some(od), Some(st), Some(now_ns)) = (odom.as_ref(), status.as_ref(), clock.now_ns())
+        else {
             if !waiting_note && elapsed > 5.0 {
                 println!(
                     "fcc-mission: waiting for the bridge: state/odom {}, status {}, clock {}",
                     if odom.is_some() { "ok" } else { "none yet" },
                     if status.is_some() { "ok" } else { "none yet" },
-                    if clock.now_ns().is_some() { "ok" } else { "no /clock yet" }
+                    if clock.now_ns().is_some() {
+                        "ok"
+                    } else {
+                        "no /clock yet"
+                    }
                 );
                 waiting_note = true;
             }
@@ -286,19 +345,40 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
                 let mut f = WaypointFollower::new(o.mission.clone());
                 let _ = f.update(t_s, pos, vel);
                 follower = Some(f);
-                println!("fcc-mission: armed at t={tr:.2} s, home NED [{:.2}, {:.2}, {:.2}] m", pos[0], pos[1], pos[2]);
+                println!(
+                    "fcc-mission: armed at t={tr:.2} s, home NED [{:.2}, {:.2}, {:.2}] m",
+                    pos[0], pos[1], pos[2]
+                );
             } else {
                 let mut probe = WaypointFollower::new(o.mission.clone());
                 let g = probe.update(t_s, pos, vel);
-                if g.request == Some(Request::Arm) && arm_sent_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1)) {
+                if g.request == Some(Request::Arm)
+                    && arm_sent_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
+                {
                     if arm_attempts as f64 > o.arm_timeout_s {
-                        return Err((1, format!("could not arm within {:.0} s (last reject: '{}')", o.arm_timeout_s, st.last_reject)));
+                        return Err((
+                            1,
+                            format!(
+                                "could not arm within {:.0} s (last reject: '{}')",
+                                o.arm_timeout_s, st.last_reject
+                            ),
+                        ));
                     }
                     let _ = arm_pub.publish(Bool { data: true });
                     arm_sent_at = Some(Instant::now());
                     arm_attempts += 1;
                 }
-                report(&status_pub, &mut last_report, "arming", None, n_wp, None, st, t_s, false);
+                report(
+                    &status_pub,
+                    &mut last_report,
+                    "arming",
+                    None,
+                    n_wp,
+                    None,
+                    st,
+                    t_s,
+                    false,
+                );
                 continue;
             }
         }
@@ -326,14 +406,21 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
         let g = f.update(t_s, pos, vel);
         let (name, idx) = phase_name(g.phase);
         if last_phase != Some((name, idx)) {
-            println!("fcc-mission: t={tr:.2} s {name}{}", idx.map(|i| format!(" {i}")).unwrap_or_default());
+            println!(
+                "fcc-mission: t={tr:.2} s {name}{}",
+                idx.map(|i| format!(" {i}")).unwrap_or_default()
+            );
             last_phase = Some((name, idx));
         }
         if let (Phase::Leg(_), Some(leg)) = (g.phase, g.leg) {
             track.add(leg.from_ned_m, leg.to_ned_m, pos);
         }
         let dist = g.leg.map(|l| {
-            let d = [l.to_ned_m[0] - pos[0], l.to_ned_m[1] - pos[1], l.to_ned_m[2] - pos[2]];
+            let d = [
+                l.to_ned_m[0] - pos[0],
+                l.to_ned_m[1] - pos[1],
+                l.to_ned_m[2] - pos[2],
+            ];
             (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
         });
         if g.request == Some(Request::Land) || land_requested_ns.is_some() {
@@ -342,22 +429,53 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
                 println!("fcc-mission: t={tr:.2} s mission done, landing");
             }
             // Resend until the MCU reports land mode (commands travel best-effort).
-            if st.mode_name != "land" && land_sent_at.is_none_or(|t| t.elapsed() >= Duration::from_millis(500)) {
-                let _ = mode_pub.publish(StringMsg { data: "land".into() });
+            if st.mode_name != "land"
+                && land_sent_at.is_none_or(|t| t.elapsed() >= Duration::from_millis(500))
+            {
+                let _ = mode_pub.publish(StringMsg {
+                    data: "land".into(),
+                });
                 land_sent_at = Some(Instant::now());
             }
-            report(&status_pub, &mut last_report, "landing", None, n_wp, None, st, t_s, true);
+            report(
+                &status_pub,
+                &mut last_report,
+                "landing",
+                None,
+                n_wp,
+                None,
+                st,
+                t_s,
+                true,
+            );
             continue;
         }
-        let v_enu = frames::ned_to_enu([g.vel_ned_mps[0] as f64, g.vel_ned_mps[1] as f64, g.vel_ned_mps[2] as f64]);
+        let v_enu = frames::ned_to_enu([
+            g.vel_ned_mps[0] as f64,
+            g.vel_ned_mps[1] as f64,
+            g.vel_ned_mps[2] as f64,
+        ]);
         let msg = TwistStamped {
             header: Header::new(stamp(now_ns), "map"),
-            twist: Twist { linear: Vector3::new(v_enu), angular: Vector3::default() },
+            twist: Twist {
+                linear: Vector3::new(v_enu),
+                angular: Vector3::default(),
+            },
         };
         if sp_pub.publish(msg).is_ok() {
             setpoints += 1;
         }
-        report(&status_pub, &mut last_report, name, idx, n_wp, dist, st, t_s, false);
+        report(
+            &status_pub,
+            &mut last_report,
+            name,
+            idx,
+            n_wp,
+            dist,
+            st,
+            t_s,
+            false,
+        );
     }
 }
 
@@ -380,7 +498,9 @@ fn report(
     }
     *last = Instant::now();
     let wp = idx.map(|i| i.to_string()).unwrap_or_else(|| "null".into());
-    let d = dist.map(|d| format!("{d:.2}")).unwrap_or_else(|| "null".into());
+    let d = dist
+        .map(|d| format!("{d:.2}"))
+        .unwrap_or_else(|| "null".into());
     let _ = p.publish(StringMsg {
         data: format!(
             "{{\"t_s\":{t_s:.2},\"phase\":\"{phase}\",\"waypoint\":{wp},\"of\":{n},\"dist_to_go_m\":{d},\"armed\":{},\"mode\":\"{}\"}}",

@@ -23,7 +23,10 @@ fn msgs(n: usize) -> Vec<Imu> {
 }
 
 fn main() {
-    let n: usize = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(200_000);
+    let n: usize = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(200_000);
     let dir = std::env::temp_dir().join(format!("fcc-record-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let data = msgs(n);
@@ -40,15 +43,32 @@ fn main() {
         assert_eq!(rep.recorded.values().sum::<u64>(), n as u64);
         // Bare mcap writer.
         let t = Instant::now();
-        let f = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(dir.join("bare.mcap")).unwrap());
+        let f = std::io::BufWriter::with_capacity(
+            1 << 20,
+            std::fs::File::create(dir.join("bare.mcap")).unwrap(),
+        );
         let mut w = write_options(true, 4 << 20).create(f).unwrap();
-        let s = w.add_schema(&Imu::schema_name(), "ros2msg", full_definition::<Imu>().as_bytes()).unwrap();
+        let s = w
+            .add_schema(
+                &Imu::schema_name(),
+                "ros2msg",
+                full_definition::<Imu>().as_bytes(),
+            )
+            .unwrap();
         let mut md = BTreeMap::new();
-        md.insert("offered_qos_profiles".to_string(), QosInfo::TELEMETRY.yaml());
+        md.insert(
+            "offered_qos_profiles".to_string(),
+            QosInfo::TELEMETRY.yaml(),
+        );
         let c = w.add_channel(s, "/fcc/imu/data_raw", "cdr", &md).unwrap();
         for (i, m) in data.iter().enumerate() {
             let t = i as u64 * 5_000_000;
-            let h = mcap::records::MessageHeader { channel_id: c, sequence: i as u32, log_time: t, publish_time: t };
+            let h = mcap::records::MessageHeader {
+                channel_id: c,
+                sequence: i as u32,
+                log_time: t,
+                publish_time: t,
+            };
             w.write_to_known_channel(&h, &cdr_bytes(m)).unwrap();
         }
         w.finish().unwrap();

@@ -12,7 +12,10 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 #[derive(Parser)]
-#[command(name = "fcc-replay", about = "Republish a flight bag, or re-decode its raw link frames")]
+#[command(
+    name = "fcc-replay",
+    about = "Republish a flight bag, or re-decode its raw link frames"
+)]
 struct Cli {
     bag: PathBuf,
     /// Playback rate (1 = original timing).
@@ -28,11 +31,17 @@ fn decode_raw(msgs: &[BagMsg]) {
     let mut dec = fcc_msgs::FrameDecoder::new();
     let mut frames = [0u64; 2];
     for m in msgs.iter().filter(|m| m.schema == "fcc_msgs/msg/LinkFrame") {
-        let Some(f) = from_cdr::<LinkFrame>(&m.data) else { continue };
+        let Some(f) = from_cdr::<LinkFrame>(&m.data) else {
+            continue;
+        };
         frames[(f.direction & 1) as usize] += 1;
         dec.reset();
         for r in dec.push_slice(&f.data) {
-            let dir = if f.direction == LinkFrame::DIRECTION_MCU_TO_LINUX { "mcu→linux" } else { "linux→mcu" };
+            let dir = if f.direction == LinkFrame::DIRECTION_MCU_TO_LINUX {
+                "mcu→linux"
+            } else {
+                "linux→mcu"
+            };
             let k = match r {
                 Ok(fr) => format!("{dir} {}", fr.message.name()),
                 Err(e) => format!("{dir} error {e:?}"),
@@ -40,7 +49,10 @@ fn decode_raw(msgs: &[BagMsg]) {
             *counts.entry(k).or_default() += 1;
         }
     }
-    println!("raw frames: {} mcu→linux, {} linux→mcu", frames[0], frames[1]);
+    println!(
+        "raw frames: {} mcu→linux, {} linux→mcu",
+        frames[0], frames[1]
+    );
     for (k, n) in counts {
         println!("  {k:36} {n}");
     }
@@ -51,7 +63,10 @@ fn main() -> anyhow::Result<()> {
     anyhow::ensure!(cli.rate > 0.0 && cli.rate.is_finite(), "--rate must be > 0");
     let (mut msgs, err) = read_bag(&cli.bag, |_, _| {})?;
     if let Some(e) = err {
-        eprintln!("fcc-replay: the bag is cut short ({e}); using the {} messages before it", msgs.len());
+        eprintln!(
+            "fcc-replay: the bag is cut short ({e}); using the {} messages before it",
+            msgs.len()
+        );
     }
     if cli.decode_raw {
         decode_raw(&msgs);
@@ -78,10 +93,19 @@ async fn play(msgs: Vec<BagMsg>, rate: f64) -> anyhow::Result<()> {
             Some(x) => x,
             None => continue,
         };
-        let topic = node.create_topic(&Name::parse(&m.topic).map_err(|e| anyhow::anyhow!("{e:?}"))?, MessageTypeName::new(pkg, name), &qos)?;
-        pubs.insert(m.topic.clone(), node.create_publisher::<RawCdr>(&topic, None)?);
+        let topic = node.create_topic(
+            &Name::parse(&m.topic).map_err(|e| anyhow::anyhow!("{e:?}"))?,
+            MessageTypeName::new(pkg, name),
+            &qos,
+        )?;
+        pubs.insert(
+            m.topic.clone(),
+            node.create_publisher::<RawCdr>(&topic, None)?,
+        );
     }
-    let Some(t0) = msgs.first().map(|m| m.log_time) else { return Ok(()) };
+    let Some(t0) = msgs.first().map(|m| m.log_time) else {
+        return Ok(());
+    };
     // Let subscribers match before the first message.
     tokio::time::sleep(Duration::from_millis(500)).await;
     let start = Instant::now();
@@ -92,12 +116,18 @@ async fn play(msgs: Vec<BagMsg>, rate: f64) -> anyhow::Result<()> {
             tokio::time::sleep(w).await;
         }
         if let Some(p) = pubs.get(&m.topic) {
-            if p.publish(RawCdr(m.data[4.min(m.data.len())..].to_vec())).is_ok() {
+            if p.publish(RawCdr(m.data[4.min(m.data.len())..].to_vec()))
+                .is_ok()
+            {
                 sent += 1;
             }
         }
     }
-    eprintln!("fcc-replay: {sent} messages on {} topics in {:.1} s", pubs.len(), start.elapsed().as_secs_f64());
+    eprintln!(
+        "fcc-replay: {sent} messages on {} topics in {:.1} s",
+        pubs.len(),
+        start.elapsed().as_secs_f64()
+    );
     std::process::exit(0)
 }
 

@@ -3,12 +3,18 @@
 
 use clap::Parser;
 use fcc_bridge::report::bag;
-use fcc_report::{figures, plot::{chart, Line}};
+use fcc_report::{
+    figures,
+    plot::{chart, Line},
+};
 use plotters::style::{RGBColor, BLUE, GREEN, MAGENTA, RED};
 use std::path::PathBuf;
 
 #[derive(Parser)]
-#[command(name = "fcc-report", about = "Figures and plots of a flight from its MCAP bag")]
+#[command(
+    name = "fcc-report",
+    about = "Figures and plots of a flight from its MCAP bag"
+)]
 struct Cli {
     bag: PathBuf,
     /// Output directory (default: BAG's name without .mcap + _report).
@@ -21,13 +27,17 @@ struct Cli {
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    let out = cli.out.clone().unwrap_or_else(|| cli.bag.with_extension("").with_file_name(format!(
-        "{}_report",
-        cli.bag.file_stem().unwrap_or_default().to_string_lossy()
-    )));
+    let out = cli.out.clone().unwrap_or_else(|| {
+        cli.bag.with_extension("").with_file_name(format!(
+            "{}_report",
+            cli.bag.file_stem().unwrap_or_default().to_string_lossy()
+        ))
+    });
     std::fs::create_dir_all(&out)?;
     let pb = indicatif::ProgressBar::new(1);
-    pb.set_style(indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {bytes}/{total_bytes}").unwrap());
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {bytes}/{total_bytes}").unwrap(),
+    );
     pb.set_message("reading bag");
     let (msgs, err) = bag::read_bag(&cli.bag, |d, t| {
         pb.set_length(t);
@@ -35,10 +45,16 @@ fn main() -> anyhow::Result<()> {
     })?;
     pb.finish_and_clear();
     if let Some(e) = &err {
-        eprintln!("fcc-report: the bag is cut short ({e}); using the {} messages before the cut", msgs.len());
+        eprintln!(
+            "fcc-report: the bag is cut short ({e}); using the {} messages before the cut",
+            msgs.len()
+        );
     }
     let mission = match &cli.mission {
-        Some(p) => Some(fcc_mission::from_yaml_str(&std::fs::read_to_string(p)?).map_err(|e| anyhow::anyhow!("{}: {e:?}", p.display()))?),
+        Some(p) => Some(
+            fcc_mission::from_yaml_str(&std::fs::read_to_string(p)?)
+                .map_err(|e| anyhow::anyhow!("{}: {e:?}", p.display()))?,
+        ),
         None => None,
     };
     let s = figures::decode(&msgs);
@@ -53,42 +69,217 @@ fn main() -> anyhow::Result<()> {
     let mut plots: Vec<(&str, &str, Result<(), String>)> = Vec::new();
     let p = |name: &str| out.join(name);
     // Fig. 17: path, with the mission's legs.
-    let mut lines = vec![Line { name: "estimated path", pts: s.odom.iter().map(|o| (o.1[1], o.1[0])).collect(), color: BLUE, dots: false }];
+    let mut lines = vec![Line {
+        name: "estimated path",
+        pts: s.odom.iter().map(|o| (o.1[1], o.1[0])).collect(),
+        color: BLUE,
+        dots: false,
+    }];
     for l in &f.legs {
-        lines.push(Line { name: if l.index == 0 { "legs" } else { "" }, pts: vec![(l.from_ned_m[1], l.from_ned_m[0]), (l.to_ned_m[1], l.to_ned_m[0])], color: RED, dots: false });
+        lines.push(Line {
+            name: if l.index == 0 { "legs" } else { "" },
+            pts: vec![
+                (l.from_ned_m[1], l.from_ned_m[0]),
+                (l.to_ned_m[1], l.to_ned_m[0]),
+            ],
+            color: RED,
+            dots: false,
+        });
     }
-    plots.push(("path.png", "Waypoint path (paper A Fig. 17)", chart(&p("path.png"), "Waypoint path (N vs E)", "east m", "north m", lines, true)));
+    plots.push((
+        "path.png",
+        "Waypoint path (paper A Fig. 17)",
+        chart(
+            &p("path.png"),
+            "Waypoint path (N vs E)",
+            "east m",
+            "north m",
+            lines,
+            true,
+        ),
+    ));
     // Fig. 16: hover (estimated horizontal position while in HOLD, else the whole flight).
-    plots.push(("hover.png", "Position over time (paper A Fig. 16)", chart(&p("hover.png"), "Estimated position", "t s", "m", vec![
-        Line { name: "north", pts: s.odom.iter().map(|o| (o.0 - t0, o.1[0])).collect(), color: BLUE, dots: false },
-        Line { name: "east", pts: s.odom.iter().map(|o| (o.0 - t0, o.1[1])).collect(), color: RED, dots: false },
-        Line { name: "altitude", pts: s.odom.iter().map(|o| (o.0 - t0, -o.1[2])).collect(), color: GREEN, dots: false },
-    ], false)));
+    plots.push((
+        "hover.png",
+        "Position over time (paper A Fig. 16)",
+        chart(
+            &p("hover.png"),
+            "Estimated position",
+            "t s",
+            "m",
+            vec![
+                Line {
+                    name: "north",
+                    pts: s.odom.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
+                    color: BLUE,
+                    dots: false,
+                },
+                Line {
+                    name: "east",
+                    pts: s.odom.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
+                    color: RED,
+                    dots: false,
+                },
+                Line {
+                    name: "altitude",
+                    pts: s.odom.iter().map(|o| (o.0 - t0, -o.1[2])).collect(),
+                    color: GREEN,
+                    dots: false,
+                },
+            ],
+            false,
+        ),
+    ));
     // Fig. 18: velocity tracking.
-    plots.push(("velocity.png", "Velocity tracking (paper A Fig. 18)", chart(&p("velocity.png"), "Velocity: command vs estimate (NED)", "t s", "m/s", vec![
-        Line { name: "v_N est", pts: s.odom.iter().map(|o| (o.0 - t0, o.2[0])).collect(), color: BLUE, dots: false },
-        Line { name: "v_N cmd", pts: s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[0])).collect(), color: c(120, 120, 255), dots: true },
-        Line { name: "v_E est", pts: s.odom.iter().map(|o| (o.0 - t0, o.2[1])).collect(), color: RED, dots: false },
-        Line { name: "v_E cmd", pts: s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[1])).collect(), color: c(255, 140, 140), dots: true },
-    ], false)));
+    plots.push((
+        "velocity.png",
+        "Velocity tracking (paper A Fig. 18)",
+        chart(
+            &p("velocity.png"),
+            "Velocity: command vs estimate (NED)",
+            "t s",
+            "m/s",
+            vec![
+                Line {
+                    name: "v_N est",
+                    pts: s.odom.iter().map(|o| (o.0 - t0, o.2[0])).collect(),
+                    color: BLUE,
+                    dots: false,
+                },
+                Line {
+                    name: "v_N cmd",
+                    pts: s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
+                    color: c(120, 120, 255),
+                    dots: true,
+                },
+                Line {
+                    name: "v_E est",
+                    pts: s.odom.iter().map(|o| (o.0 - t0, o.2[1])).collect(),
+                    color: RED,
+                    dots: false,
+                },
+                Line {
+                    name: "v_E cmd",
+                    pts: s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
+                    color: c(255, 140, 140),
+                    dots: true,
+                },
+            ],
+            false,
+        ),
+    ));
     // Fig. 5: attitude estimate vs accelerometer angles.
-    plots.push(("attitude.png", "Attitude estimate vs accelerometer angles (paper A Fig. 5)", chart(&p("attitude.png"), "Roll/pitch: estimate vs accelerometer", "t s", "deg", vec![
-        Line { name: "roll (accel)", pts: s.acc_angles.iter().map(|a| (a.0 - t0, a.1.to_degrees())).collect(), color: c(255, 180, 180), dots: true },
-        Line { name: "pitch (accel)", pts: s.acc_angles.iter().map(|a| (a.0 - t0, a.2.to_degrees())).collect(), color: c(180, 180, 255), dots: true },
-        Line { name: "roll (estimate)", pts: s.odom.iter().map(|o| (o.0 - t0, o.3[0].to_degrees())).collect(), color: RED, dots: false },
-        Line { name: "pitch (estimate)", pts: s.odom.iter().map(|o| (o.0 - t0, o.3[1].to_degrees())).collect(), color: BLUE, dots: false },
-    ], false)));
+    plots.push((
+        "attitude.png",
+        "Attitude estimate vs accelerometer angles (paper A Fig. 5)",
+        chart(
+            &p("attitude.png"),
+            "Roll/pitch: estimate vs accelerometer",
+            "t s",
+            "deg",
+            vec![
+                Line {
+                    name: "roll (accel)",
+                    pts: s
+                        .acc_angles
+                        .iter()
+                        .map(|a| (a.0 - t0, a.1.to_degrees()))
+                        .collect(),
+                    color: c(255, 180, 180),
+                    dots: true,
+                },
+                Line {
+                    name: "pitch (accel)",
+                    pts: s
+                        .acc_angles
+                        .iter()
+                        .map(|a| (a.0 - t0, a.2.to_degrees()))
+                        .collect(),
+                    color: c(180, 180, 255),
+                    dots: true,
+                },
+                Line {
+                    name: "roll (estimate)",
+                    pts: s
+                        .odom
+                        .iter()
+                        .map(|o| (o.0 - t0, o.3[0].to_degrees()))
+                        .collect(),
+                    color: RED,
+                    dots: false,
+                },
+                Line {
+                    name: "pitch (estimate)",
+                    pts: s
+                        .odom
+                        .iter()
+                        .map(|o| (o.0 - t0, o.3[1].to_degrees()))
+                        .collect(),
+                    color: BLUE,
+                    dots: false,
+                },
+            ],
+            false,
+        ),
+    ));
     // Fig. 9: vertical estimate vs barometer.
-    plots.push(("vertical.png", "Vertical estimate vs barometer (paper A Fig. 9)", chart(&p("vertical.png"), "Altitude: fused vs barometer", "t s", "m", vec![
-        Line { name: "barometer", pts: s.alt.iter().map(|a| (a.0 - t0, a.1)).collect(), color: c(160, 160, 160), dots: false },
-        Line { name: "fused", pts: s.alt.iter().map(|a| (a.0 - t0, a.2)).collect(), color: BLUE, dots: false },
-    ], false)));
+    plots.push((
+        "vertical.png",
+        "Vertical estimate vs barometer (paper A Fig. 9)",
+        chart(
+            &p("vertical.png"),
+            "Altitude: fused vs barometer",
+            "t s",
+            "m",
+            vec![
+                Line {
+                    name: "barometer",
+                    pts: s.alt.iter().map(|a| (a.0 - t0, a.1)).collect(),
+                    color: c(160, 160, 160),
+                    dots: false,
+                },
+                Line {
+                    name: "fused",
+                    pts: s.alt.iter().map(|a| (a.0 - t0, a.2)).collect(),
+                    color: BLUE,
+                    dots: false,
+                },
+            ],
+            false,
+        ),
+    ));
     // Paper B Fig. 13: ground altitude fusion vs laser and sonar.
-    plots.push(("ground.png", "Ground-altitude fusion vs laser and sonar (paper B Fig. 13)", chart(&p("ground.png"), "Height above ground", "t s", "m", vec![
-        Line { name: "laser", pts: s.alt.iter().map(|a| (a.0 - t0, a.4)).collect(), color: RED, dots: true },
-        Line { name: "sonar", pts: s.alt.iter().map(|a| (a.0 - t0, a.5)).collect(), color: GREEN, dots: true },
-        Line { name: "fusion", pts: s.alt.iter().map(|a| (a.0 - t0, a.3)).collect(), color: BLUE, dots: false },
-    ], false)));
+    plots.push((
+        "ground.png",
+        "Ground-altitude fusion vs laser and sonar (paper B Fig. 13)",
+        chart(
+            &p("ground.png"),
+            "Height above ground",
+            "t s",
+            "m",
+            vec![
+                Line {
+                    name: "laser",
+                    pts: s.alt.iter().map(|a| (a.0 - t0, a.4)).collect(),
+                    color: RED,
+                    dots: true,
+                },
+                Line {
+                    name: "sonar",
+                    pts: s.alt.iter().map(|a| (a.0 - t0, a.5)).collect(),
+                    color: GREEN,
+                    dots: true,
+                },
+                Line {
+                    name: "fusion",
+                    pts: s.alt.iter().map(|a| (a.0 - t0, a.3)).collect(),
+                    color: BLUE,
+                    dots: false,
+                },
+            ],
+            false,
+        ),
+    ));
     // Fig. 12: k1/k2 fit — measured acceleration vs the fitted model along the flight.
     if let Some((k1, k2, _, _)) = f.k1_k2_fit {
         let mut meas = Vec::new();
@@ -96,22 +287,49 @@ fn main() -> anyhow::Result<()> {
         let o = &s.odom;
         for i in 5..o.len().saturating_sub(5) {
             let dt = o[i + 5].0 - o[i - 5].0;
-            if dt <= 0.0 || -o[i].1[2] < 1.0 { continue; }
+            if dt <= 0.0 || -o[i].1[2] < 1.0 {
+                continue;
+            }
             let yaw = o[i].3[2];
             let v = yaw.cos() * o[i].2[0] + yaw.sin() * o[i].2[1];
-            let a = (yaw.cos() * (o[i + 5].2[0] - o[i - 5].2[0]) + yaw.sin() * (o[i + 5].2[1] - o[i - 5].2[1])) / dt;
+            let a = (yaw.cos() * (o[i + 5].2[0] - o[i - 5].2[0])
+                + yaw.sin() * (o[i + 5].2[1] - o[i - 5].2[1]))
+                / dt;
             meas.push((o[i].0 - t0, a));
             model.push((o[i].0 - t0, k1 * -o[i].3[1] - k2 * v));
         }
-        plots.push(("k_fit.png", "k1/k2 fit (paper A Fig. 12)", chart(&p("k_fit.png"), &format!("Forward acceleration: measured vs k1·θ − k2·v (k1 {k1:.2}, k2 {k2:.3})"), "t s", "m/s²", vec![
-            Line { name: "measured (d v/dt)", pts: meas, color: c(150, 150, 150), dots: true },
-            Line { name: "fit", pts: model, color: MAGENTA, dots: false },
-        ], false)));
+        plots.push((
+            "k_fit.png",
+            "k1/k2 fit (paper A Fig. 12)",
+            chart(
+                &p("k_fit.png"),
+                &format!("Forward acceleration: measured vs k1·θ − k2·v (k1 {k1:.2}, k2 {k2:.3})"),
+                "t s",
+                "m/s²",
+                vec![
+                    Line {
+                        name: "measured (d v/dt)",
+                        pts: meas,
+                        color: c(150, 150, 150),
+                        dots: true,
+                    },
+                    Line {
+                        name: "fit",
+                        pts: model,
+                        color: MAGENTA,
+                        dots: false,
+                    },
+                ],
+                false,
+            ),
+        ));
     }
     let mut html = format!("<html><head><meta charset=\"utf-8\"><title>fcc flight report</title></head><body><h1>Flight report: {}</h1><pre>{}</pre>\n", cli.bag.display(), text);
     for (file, title, r) in &plots {
         match r {
-            Ok(()) => html.push_str(&format!("<h2>{title}</h2><img src=\"{file}\" width=\"900\">\n")),
+            Ok(()) => html.push_str(&format!(
+                "<h2>{title}</h2><img src=\"{file}\" width=\"900\">\n"
+            )),
             Err(e) => {
                 eprintln!("fcc-report: {file}: {e}");
                 html.push_str(&format!("<h2>{title}</h2><p>plot failed: {e}</p>\n"));
@@ -121,6 +339,9 @@ fn main() -> anyhow::Result<()> {
     html.push_str("</body></html>\n");
     std::fs::write(out.join("report.html"), html)?;
     let ok = plots.iter().filter(|p| p.2.is_ok()).count();
-    eprintln!("fcc-report: {ok} plots, summary.txt, summary.json and report.html in {}", out.display());
+    eprintln!(
+        "fcc-report: {ok} plots, summary.txt, summary.json and report.html in {}",
+        out.display()
+    );
     Ok(())
 }

@@ -22,7 +22,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 #[derive(Parser, Debug)]
-#[command(name = "fcc-wire-fault", about = "Fault-injecting serial relay (bit flips, drops, duplicates)")]
+#[command(
+    name = "fcc-wire-fault",
+    about = "Fault-injecting serial relay (bit flips, drops, duplicates)"
+)]
 struct Args {
     /// The MCU side: a serial device or pty path.
     #[arg(long)]
@@ -104,7 +107,16 @@ fn main() -> ExitCode {
                 return ExitCode::SUCCESS;
             }
             let text = e.to_string();
-            eprintln!("fcc-wire-fault: {} (see --help)", text.split("\n\nUsage").next().unwrap_or("").split_whitespace().collect::<Vec<_>>().join(" ").trim_start_matches("error: "));
+            eprintln!(
+                "fcc-wire-fault: {} (see --help)",
+                text.split("\n\nUsage")
+                    .next()
+                    .unwrap_or("")
+                    .split_whitespace()
+                    .collect::<Vec<_>>()
+                    .join(" ")
+                    .trim_start_matches("error: ")
+            );
             return ExitCode::from(2);
         }
     };
@@ -127,7 +139,10 @@ fn main() -> ExitCode {
         tcsetattr(fd, SetArg::TCSANOW, &t)
     };
     if let Err(e) = raw(mcu.as_fd()) {
-        eprintln!("fcc-wire-fault: {}: cannot set raw mode: {e}", a.mcu.display());
+        eprintln!(
+            "fcc-wire-fault: {}: cannot set raw mode: {e}",
+            a.mcu.display()
+        );
         return ExitCode::from(2);
     }
     let pty = match openpty(None, None) {
@@ -138,7 +153,8 @@ fn main() -> ExitCode {
         }
     };
     let _ = raw(pty.slave.as_fd());
-    let slave = std::fs::read_link(format!("/proc/self/fd/{}", pty.slave.as_raw_fd())).unwrap_or_default();
+    let slave =
+        std::fs::read_link(format!("/proc/self/fd/{}", pty.slave.as_raw_fd())).unwrap_or_default();
     if let Some(l) = &a.link {
         let _ = std::fs::remove_file(l);
         if let Err(e) = std::os::unix::fs::symlink(&slave, l) {
@@ -153,7 +169,10 @@ fn main() -> ExitCode {
     for fd in [mcu.as_raw_fd(), linux.as_raw_fd()] {
         use nix::fcntl::{fcntl, FcntlArg, OFlag};
         if let Ok(fl) = fcntl(fd, FcntlArg::F_GETFL) {
-            let _ = fcntl(fd, FcntlArg::F_SETFL(OFlag::from_bits_truncate(fl) | OFlag::O_NONBLOCK));
+            let _ = fcntl(
+                fd,
+                FcntlArg::F_SETFL(OFlag::from_bits_truncate(fl) | OFlag::O_NONBLOCK),
+            );
         }
     }
     let stop = Arc::new(AtomicBool::new(false));
@@ -165,7 +184,10 @@ fn main() -> ExitCode {
     let mut buf = [0u8; 4096];
     let mut out = Vec::with_capacity(8192);
     while !stop.load(Ordering::Relaxed) {
-        let mut fds = [PollFd::new(mcu.as_fd(), PollFlags::POLLIN), PollFd::new(linux.as_fd(), PollFlags::POLLIN)];
+        let mut fds = [
+            PollFd::new(mcu.as_fd(), PollFlags::POLLIN),
+            PollFd::new(linux.as_fd(), PollFlags::POLLIN),
+        ];
         if poll(&mut fds, PollTimeout::from(100u16)).is_err() {
             continue;
         }

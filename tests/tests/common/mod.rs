@@ -9,7 +9,9 @@ use fcc_firmware::sitl::sim::Sim;
 use std::path::PathBuf;
 
 pub fn scenario_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../launch_configs/scenarios").join(format!("{name}.yaml"))
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../launch_configs/scenarios")
+        .join(format!("{name}.yaml"))
 }
 
 pub fn load(name: &str) -> Scenario {
