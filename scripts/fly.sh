@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The main job: fly paper A's flights in the software-in-the-loop simulator and leave a summary
+# The main job: fly paper A's and paper B's flights in the software-in-the-loop simulator and leave a summary
 # and 50 Hz flight logs in out/:
 #   1. the lockstep scenario runs (faster than real time, in-process mission computer);
 #   2. the 20 m square through the full stack — simulated MCU serving its UART on a pty ⇄
@@ -21,7 +21,7 @@ cargo build --release --locked -p fcc_mission --features ros --bin fcc-mission -
 cargo build --release --locked -p fcc_report --bin fcc-report
 summary="$out/summary.txt"
 : > "$summary"
-for s in hover square elevator yaw_disturbance; do
+for s in hover square elevator yaw_disturbance ground_test roll_30 roll_45 landing_dark; do
   echo "== $s" | tee -a "$summary"
   ./target/release/fcc-sitl --scenario "launch_configs/scenarios/$s.yaml" --csv "$out/$s.csv" | tee -a "$summary"
 done
