@@ -5,35 +5,12 @@
 //! Python: `FCC_DDS_PYTHON` (default `python3`) must import `cyclonedds`. Without it the test
 //! is skipped with a message, unless `FCC_REQUIRE_DDS_PEER=1` (CI), where it fails.
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
 #[test]
 fn bridge_against_cyclone_peer() {
-    let py = std::env::var("FCC_DDS_PYTHON").unwrap_or_else(|_| "python3".into());
-    let required = std::env::var("FCC_REQUIRE_DDS_PEER").is_ok_and(|v| v == "1");
-    let has_cyclone = Command::new(&py)
-        .args(["-c", "import cyclonedds.domain"])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has_cyclone {
-        assert!(
-            !required,
-            "{py} cannot import cyclonedds (pip install cyclonedds)"
-        );
-        eprintln!("SKIPPED: {py} has no cyclonedds; set FCC_DDS_PYTHON to a python with it");
+    let Some(stdout) = common::run_peer_script("run_e2e.sh") else {
         return;
-    }
-    let bin = PathBuf::from(env!("CARGO_BIN_EXE_fcc-bridge"));
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let out = Command::new(root.join("tests/dds/run_e2e.sh"))
-        .arg(&py)
-        .env("FCC_BIN_DIR", bin.parent().unwrap())
-        .output()
-        .expect("run tests/dds/run_e2e.sh");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    println!("{stdout}");
-    eprintln!("{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success(), "DDS peer test failed");
+    };
     assert!(stdout.contains(" passed, 0 failed"));
 }
