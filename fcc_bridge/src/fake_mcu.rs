@@ -405,6 +405,7 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                 pos_ned_m: s.pos_ned_m,
                 vel_ned_mps: s.vel_ned_mps,
                 accel_ned_mps2: [0.0; 3],
+                accel_obs_ne_mps2: [0.0; 2],
                 home_lat_deg: s.lat_deg,
                 home_lon_deg: s.lon_deg,
                 home_alt_m: s.gps_alt_m,

@@ -43,6 +43,8 @@ pub struct StepTelemetry {
     pub accel_cmd_ne_mps2: [f32; 2],
     /// Observer estimates in the heading frame (forward, right), m/s².
     pub accel_est_fr_mps2: [f32; 2],
+    /// The same observer estimates rotated to NED (north, east), m/s².
+    pub accel_est_ne_mps2: [f32; 2],
     /// Raw gravity-compensated accelerometer in the heading frame (forward, right), m/s².
     pub accel_meas_fr_mps2: [f32; 2],
     pub roll_cmd_rad: f32,
@@ -659,6 +661,7 @@ impl FlightCore {
             vel_cmd_ned_mps: [v_cmd[0], v_cmd[1], vz_cmd_down],
             accel_cmd_ne_mps2: a_cmd_ne,
             accel_est_fr_mps2: a_est,
+            accel_est_ne_mps2: [cy * a_est[0] - sy * a_est[1], sy * a_est[0] + cy * a_est[1]],
             accel_meas_fr_mps2: a_meas_fr,
             roll_cmd_rad: roll_cmd,
             pitch_cmd_rad: pitch_cmd,

@@ -135,6 +135,12 @@ impl Navigator {
         &self.state
     }
 
+    /// Magnetometer health: whether readings are currently rejected by the attitude filter's
+    /// innovation gate (a magnetic disturbance is suspected), and how many were rejected so far.
+    pub fn mag_disturbance(&self) -> (bool, u32) {
+        (self.att.mag_disturbed(), self.att.mag_rejects())
+    }
+
     pub fn home(&self) -> Option<Lla> {
         self.home.as_ref().map(|h| h.origin())
     }

@@ -210,6 +210,9 @@ pub struct NavState {
     pub vel_ned_mps: [f32; 3],
     /// Gravity-compensated acceleration, NED.
     pub accel_ned_mps2: [f32; 3],
+    /// Horizontal acceleration estimated by the Luenberger observer (paper A eqs. 15-17) that
+    /// the acceleration controller feeds back on, NED (north, east).
+    pub accel_obs_ne_mps2: [f32; 2],
     /// Home = NED origin (valid when `home_set`).
     pub home_lat_deg: f64,
     pub home_lon_deg: f64,
@@ -243,6 +246,22 @@ pub struct AltitudeFusion {
     pub source: AltitudeSource,
 }
 
+/// Health of the navigation sensors as the MCU's filters see them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
+pub struct SensorHealth {
+    /// GPS feeds the horizontal filter (a fix, fresh).
+    pub gps_ok: bool,
+    /// The magnetometer is being rejected by the attitude filter's innovation gate (a magnetic
+    /// disturbance is suspected; yaw runs on the gyro).
+    pub mag_disturbed: bool,
+    /// Magnetometer readings rejected since boot.
+    pub mag_rejects: u32,
+    /// The laser altimeter gave a plausible reading recently.
+    pub laser_ok: bool,
+    /// The ultrasonic rangefinder gave a plausible reading recently.
+    pub sonar_ok: bool,
+}
+
 /// Vehicle and link status.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
 pub struct Status {
@@ -250,6 +269,8 @@ pub struct Status {
     pub armed: bool,
     pub landed: bool,
     pub failsafe: FailsafeCause,
+    /// Navigation sensor health.
+    pub sensors: SensorHealth,
     /// Longest and mean control-loop execution time since the previous `Status`.
     pub loop_time_max_us: u32,
     pub loop_time_avg_us: u32,
@@ -544,6 +565,7 @@ enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, Inval
 enum ParamResult { Accepted, UnknownId, NotFinite, OutOfRange, Incompatible }
 params 1=limits.max_horiz_speed_mps 2=limits.max_tilt_deg 3=control.cross_track_k_per_s 4=control.vel_p_per_s 5=limits.max_climb_mps 6=limits.max_descent_mps
 struct LinkCounters max=60 { rx_bytes: u32, rx_frames: u32, crc_errors: u32, framing_errors: u32, overruns: u32, resyncs: u32, decode_errors: u32, unknown_ids: u32, version_errors: u32, seq_gaps: u32, frames_lost: u32, seq_resets: u32 }
+struct SensorHealth max=9 { gps_ok: bool, mag_disturbed: bool, mag_rejects: u32, laser_ok: bool, sonar_ok: bool }
 msg 0x01 Hello max=9 { protocol_version: u8, schema_hash: u32, firmware_version: [u8; 3] }
 msg 0x02 ImuRaw max=24 { gyro_frd_radps: [f32; 3], accel_frd_mps2: [f32; 3] }
 msg 0x03 MagRaw max=12 { mag_frd_ut: [f32; 3] }
@@ -551,9 +573,9 @@ msg 0x04 BaroRaw max=8 { pressure_pa: f32, temperature_c: f32 }
 msg 0x05 GpsRaw max=38 { lat_deg: f64, lon_deg: f64, alt_m: f32, vel_ned_mps: [f32; 3], h_acc_m: f32, num_sats: u8, fix_ok: bool }
 msg 0x06 RangeRaw max=5 { sensor: RangeSensor, range_m: f32 }
 msg 0x07 Battery max=8 { voltage_v: f32, current_a: f32 }
-msg 0x08 NavState max=87 { q_body_to_ned: [f32; 4], rate_frd_radps: [f32; 3], pos_ned_m: [f32; 3], vel_ned_mps: [f32; 3], accel_ned_mps2: [f32; 3], home_lat_deg: f64, home_lon_deg: f64, home_alt_m: f32, gps_ok: bool, home_set: bool, calibrated: bool }
+msg 0x08 NavState max=95 { q_body_to_ned: [f32; 4], rate_frd_radps: [f32; 3], pos_ned_m: [f32; 3], vel_ned_mps: [f32; 3], accel_ned_mps2: [f32; 3], accel_obs_ne_mps2: [f32; 2], home_lat_deg: f64, home_lon_deg: f64, home_alt_m: f32, gps_ok: bool, home_set: bool, calibrated: bool }
 msg 0x09 AltitudeFusion max=29 { baro_alt_m: f32, alt_m: f32, vel_down_mps: f32, ground_height_m: f32, ground_var_m2: f32, laser_m: f32, sonar_m: f32, source: AltitudeSource }
-msg 0x0A Status max=95 { mode: FlightMode, armed: bool, landed: bool, failsafe: FailsafeCause, loop_time_max_us: u32, loop_time_avg_us: u32, link_rx: LinkCounters, tx_frames: u32, tx_dropped: u32, setpoint_rejects: u32, command_rejects: u32, last_reject: CommandResult }
+msg 0x0A Status max=104 { mode: FlightMode, armed: bool, landed: bool, failsafe: FailsafeCause, sensors: SensorHealth, loop_time_max_us: u32, loop_time_avg_us: u32, link_rx: LinkCounters, tx_frames: u32, tx_dropped: u32, setpoint_rejects: u32, command_rejects: u32, last_reject: CommandResult }
 msg 0x0B TimeSyncPong max=30 { linux_time_ns: u64, mcu_rx_time_us: u64, mcu_tx_time_us: u64 }
 msg 0x0C CommandAck max=2 { command: CommandKind, result: CommandResult }
 msg 0x0D ParamAck max=8 { id: u16, value: f32, result: ParamResult }
@@ -592,6 +614,7 @@ mod tests {
                 match name {
                     $(stringify!($variant) => <$ty as MaxSize>::POSTCARD_MAX_SIZE,)*
                     "LinkCounters" => LinkCounters::POSTCARD_MAX_SIZE,
+                    "SensorHealth" => SensorHealth::POSTCARD_MAX_SIZE,
                     _ => panic!("no type {name}"),
                 }
             };

@@ -23,7 +23,7 @@ use fcc_msgs::{
     period_us, AltitudeFusion, AltitudeSource, BaroRaw, Battery, CommandAck, CommandKind,
     CommandResult, EncodeError, Encoder, FailsafeCause, FlightMode, FrameDecoder, GpsRaw,
     HandshakeError, Hello, ImuRaw, LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult,
-    RangeRaw, RangeSensor, Status, StreamRates, TimeSyncPong,
+    RangeRaw, RangeSensor, SensorHealth, Status, StreamRates, TimeSyncPong,
 };
 use fcc_nav::ground_altitude::GroundSource;
 
@@ -536,6 +536,15 @@ fn core_status(core: &FlightCore, mut s: Status) -> Status {
     };
     s.armed = core.armed();
     s.landed = core.landed();
+    let n = core.nav();
+    let (mag_disturbed, mag_rejects) = core.navigator().mag_disturbance();
+    s.sensors = SensorHealth {
+        gps_ok: n.gps_ok,
+        mag_disturbed,
+        mag_rejects,
+        laser_ok: n.ground.laser_valid,
+        sonar_ok: n.ground.sonar_valid,
+    };
     s.failsafe = match core.failsafe() {
         commands::FailsafeCause::None => FailsafeCause::None,
         commands::FailsafeCause::SetpointStale => FailsafeCause::SetpointStale,
@@ -555,6 +564,7 @@ fn nav_state(core: &FlightCore) -> NavState {
         pos_ned_m: n.pos_ned_m,
         vel_ned_mps: n.vel_ned_mps,
         accel_ned_mps2: n.accel_ned_mps2,
+        accel_obs_ne_mps2: core.telemetry().accel_est_ne_mps2,
         home_lat_deg: home.map_or(f64::NAN, |h| h.lat_deg),
         home_lon_deg: home.map_or(f64::NAN, |h| h.lon_deg),
         home_alt_m: home.map_or(f32::NAN, |h| h.alt_m as f32),
