@@ -119,6 +119,8 @@ pub struct Publishers {
     altitude: Publisher<Altitude>,
     ground: Publisher<Range>,
     status: Publisher<Status>,
+    accel_observer: Publisher<AccelStamped>,
+    accel_measured: Publisher<AccelStamped>,
     diagnostics: Publisher<DiagnosticArray>,
     clock: Option<Publisher<Clock>>,
 }
@@ -169,6 +171,8 @@ impl Publishers {
             altitude: publisher(node, &o.name("altitude"), &q)?,
             ground: publisher(node, &o.name("altitude/ground"), &q)?,
             status: publisher(node, &o.name("status"), &q)?,
+            accel_observer: publisher(node, &o.name("accel/observer"), &q)?,
+            accel_measured: publisher(node, &o.name("accel/measured"), &q)?,
             diagnostics: publisher(node, &o.name("/diagnostics"), &q)?,
             clock: if clock == ClockSource::Mcu {
                 Some(publisher(node, &o.name("/clock"), &telemetry_qos(1))?)
@@ -204,6 +208,8 @@ impl Publishers {
                 tap.armed(m.armed);
                 pb!(self.status, "status", q, m)
             }
+            Out::AccelObserver(m) => pb!(self.accel_observer, "accel/observer", q, m),
+            Out::AccelMeasured(m) => pb!(self.accel_measured, "accel/measured", q, m),
             Out::Clock(m) => match &self.clock {
                 Some(c) => pb!(c, "/clock", QosInfo { depth: 1, ..q }, m),
                 None => true,

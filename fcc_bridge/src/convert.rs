@@ -271,6 +271,23 @@ pub fn nav_state(m: &link::NavState, stamp: Time, cfg: &Config) -> (Odometry, Im
     (odom, imu, tf)
 }
 
+/// Navigation state → (`accel/observer`, `accel/measured`), both `AccelStamped` in the map
+/// frame (ENU): the Luenberger observer's horizontal acceleration estimate that the acceleration
+/// controller feeds back on (z = 0: the observer is horizontal only), and the gravity-compensated
+/// accelerometer (the kinematic acceleration, NED → ENU). Paper A Fig. 13.
+pub fn accels(m: &link::NavState, stamp: Time, cfg: &Config) -> (AccelStamped, AccelStamped) {
+    let obs = frames::ne_to_enu([m.accel_obs_ne_mps2[0] as f64, m.accel_obs_ne_mps2[1] as f64]);
+    let meas = ned_to_enu(f64x3(m.accel_ned_mps2));
+    let mk = |v| AccelStamped {
+        header: Header::new(stamp, &cfg.map_frame),
+        accel: Accel {
+            linear: v3(v),
+            angular: Vector3::default(),
+        },
+    };
+    (mk(obs), mk(meas))
+}
+
 /// Static transforms from `base_link` to the sensor frames (sensors aligned with the body; the
 /// rangefinder frames' x axis points down the beam, REP-117/`sensor_msgs/Range`).
 pub fn static_transforms(stamp: Time, cfg: &Config) -> TFMessage {
@@ -399,6 +416,11 @@ pub fn status(m: &link::Status, stamp: Time, cfg: &Config) -> Status {
         landed: m.landed,
         failsafe,
         failsafe_name: failsafe_name.into(),
+        gps_ok: m.sensors.gps_ok,
+        mag_disturbed: m.sensors.mag_disturbed,
+        mag_rejects: m.sensors.mag_rejects,
+        laser_ok: m.sensors.laser_ok,
+        sonar_ok: m.sensors.sonar_ok,
         loop_time_max_us: m.loop_time_max_us,
         loop_time_avg_us: m.loop_time_avg_us,
         last_reject: reject_name(m.last_reject).into(),

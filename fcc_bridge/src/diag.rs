@@ -1,8 +1,163 @@
 //! `/diagnostics` (diagnostic_msgs/DiagnosticArray) from the bridge's state.
 
+use crate::convert::Config;
 use crate::ros_types::*;
 use crate::state::{Handshake, LinkState};
+use fcc_msgs as link;
 use std::collections::BTreeMap;
+
+/// The sensors whose health the MCU reports on `Status`.
+pub const SENSORS: [&str; 4] = ["gps", "mag", "laser", "sonar"];
+
+/// After a sensor was reported unhealthy, it is reported healthy again only once it stayed
+/// healthy this long (MCU time): a flag that flickers (a magnetometer near the innovation gate)
+/// gives one WARN, not one per status frame.
+pub const SENSOR_RECOVERY_HOLD_US: u64 = 2_000_000;
+
+/// Which sensors are unhealthy in an MCU status, in [`SENSORS`] order. GPS: no fresh fix;
+/// magnetometer: rejected by the attitude filter (disturbance). A rangefinder counts only while
+/// it should see the ground: armed, in the air, and the estimated height above ground within its
+/// range (0.5 m margin; a NaN height counts as in range) — a laser below its minimum range on
+/// the ground, or a sonar above its 10 m, is no fault.
+pub fn unhealthy(s: &link::Status, ground_height_m: Option<f32>, cfg: &Config) -> [bool; 4] {
+    let flying = s.armed && !s.landed;
+    let in_range = |min: f32, max: f32| match ground_height_m {
+        Some(h) if h.is_finite() => h >= min + 0.5 && h <= max - 0.5,
+        _ => true,
+    };
+    [
+        !s.sensors.gps_ok,
+        s.sensors.mag_disturbed,
+        flying && in_range(cfg.laser.min_m, cfg.laser.max_m) && !s.sensors.laser_ok,
+        flying && in_range(cfg.sonar.min_m, cfg.sonar.max_m) && !s.sensors.sonar_ok,
+    ]
+}
+
+fn problem_text(i: usize, s: &link::Status, ground_height_m: Option<f32>) -> String {
+    let agl = ground_height_m
+        .filter(|h| h.is_finite())
+        .map_or(String::new(), |h| format!(" at {h:.1} m above ground"));
+    match i {
+        0 => "GPS lost (no fresh fix: the MCU navigates on baro/accel; in flight it lands)".into(),
+        1 => format!(
+            "magnetometer disturbed (rejected by the attitude filter, {} readings so far): yaw on the gyro",
+            s.sensors.mag_rejects
+        ),
+        2 => format!("laser altimeter gives no valid reading{agl} (dark surface or failure): ground altitude on the sonar"),
+        _ => format!("ultrasonic rangefinder gives no valid reading{agl}: ground altitude on the laser"),
+    }
+}
+
+fn recovery_text(i: usize, s: &link::Status) -> String {
+    match i {
+        0 => "GPS ok again".into(),
+        1 => format!(
+            "magnetometer ok again ({} readings rejected since start)",
+            s.sensors.mag_rejects
+        ),
+        2 if s.sensors.laser_ok => "laser altimeter ok again".into(),
+        2 => {
+            "laser altimeter: no longer expected to see the ground (landed or out of range)".into()
+        }
+        _ if s.sensors.sonar_ok => "ultrasonic rangefinder ok again".into(),
+        _ => {
+            "ultrasonic rangefinder: no longer expected to see the ground (landed or out of range)"
+                .into()
+        }
+    }
+}
+
+/// Sensor-health transitions for `/rosout`: a WARN once when a sensor becomes unhealthy, an
+/// INFO when it has been healthy for [`SENSOR_RECOVERY_HOLD_US`].
+#[derive(Clone, Debug, Default)]
+pub struct SensorWatch {
+    /// Per sensor: reported unhealthy (WARN sent, no INFO yet).
+    pub reported: [bool; 4],
+    /// Per sensor: MCU time it was last seen unhealthy.
+    last_bad_us: [u64; 4],
+    /// WARNs and INFOs sent so far.
+    pub warnings: u64,
+    pub recoveries: u64,
+}
+
+/// A log line to send: (is a warning, text).
+pub type HealthEvent = (bool, String);
+
+impl SensorWatch {
+    /// A new MCU status at MCU time `t_us`: the transitions to log.
+    pub fn update(
+        &mut self,
+        s: &link::Status,
+        ground_height_m: Option<f32>,
+        cfg: &Config,
+        t_us: u64,
+    ) -> Vec<HealthEvent> {
+        let bad = unhealthy(s, ground_height_m, cfg);
+        let mut out = Vec::new();
+        for i in 0..SENSORS.len() {
+            if bad[i] {
+                self.last_bad_us[i] = t_us;
+                if !self.reported[i] {
+                    self.reported[i] = true;
+                    self.warnings += 1;
+                    out.push((
+                        true,
+                        format!("sensor health: {}", problem_text(i, s, ground_height_m)),
+                    ));
+                }
+            } else if self.reported[i]
+                && t_us.saturating_sub(self.last_bad_us[i]) >= SENSOR_RECOVERY_HOLD_US
+            {
+                self.reported[i] = false;
+                self.recoveries += 1;
+                out.push((false, format!("sensor health: {}", recovery_text(i, s))));
+            }
+        }
+        out
+    }
+}
+
+/// The `fcc: sensors` diagnostic status: WARN while a sensor is unhealthy (see [`unhealthy`]).
+pub fn sensors_status(
+    s: &link::Status,
+    ground_height_m: Option<f32>,
+    cfg: &Config,
+    hw: &str,
+) -> DiagnosticStatus {
+    let bad = unhealthy(s, ground_height_m, cfg);
+    let names = [
+        "GPS lost",
+        "magnetometer disturbed",
+        "laser not ok",
+        "sonar not ok",
+    ];
+    let problems: Vec<&str> = (0..4).filter(|&i| bad[i]).map(|i| names[i]).collect();
+    DiagnosticStatus {
+        level: if problems.is_empty() {
+            DiagnosticStatus::OK
+        } else {
+            DiagnosticStatus::WARN
+        },
+        name: "fcc: sensors".into(),
+        message: if problems.is_empty() {
+            "ok".into()
+        } else {
+            problems.join(", ")
+        },
+        hardware_id: hw.into(),
+        values: vec![
+            kv("gps_ok", s.sensors.gps_ok),
+            kv("mag_disturbed", s.sensors.mag_disturbed),
+            kv("mag_rejects", s.sensors.mag_rejects),
+            kv("laser_ok", s.sensors.laser_ok),
+            kv("sonar_ok", s.sensors.sonar_ok),
+            kv(
+                "ground_height_m",
+                ground_height_m.map_or(String::new(), |h| format!("{h:.2}")),
+            ),
+        ],
+    }
+}
 
 /// Rates over the interval between two calls.
 #[derive(Clone, Debug, Default)]
@@ -211,7 +366,7 @@ pub fn diagnostics(
             },
             name: "fcc: vehicle".into(),
             message: format!("{mode}, {}", if m.armed { "armed" } else { "disarmed" }),
-            hardware_id: hw,
+            hardware_id: hw.clone(),
             values: vec![
                 kv("mode", mode),
                 kv("armed", m.armed),
@@ -221,6 +376,7 @@ pub fn diagnostics(
                 kv("loop_time_avg_us", m.loop_time_avg_us),
             ],
         });
+        status.push(sensors_status(m, st.ground_height_m, &st.cfg, device));
     }
     DiagnosticArray {
         header: Header::new(stamp, ""),

@@ -405,7 +405,8 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                 pos_ned_m: s.pos_ned_m,
                 vel_ned_mps: s.vel_ned_mps,
                 accel_ned_mps2: [0.0; 3],
-                accel_obs_ne_mps2: [0.0; 2],
+                // A fixed observer estimate (north 0.5, east −0.25 m/s²): peers check the ENU map.
+                accel_obs_ne_mps2: [0.5, -0.25],
                 home_lat_deg: s.lat_deg,
                 home_lon_deg: s.lon_deg,
                 home_alt_m: s.gps_alt_m,
@@ -501,6 +502,14 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                     loop_time_avg_us: 95,
                     link_rx: *dec.counters(),
                     tx_frames: sent as u32,
+                    // A healthy vehicle: fix, undisturbed compass, both rangefinders reading.
+                    sensors: link::SensorHealth {
+                        gps_ok: true,
+                        mag_disturbed: false,
+                        mag_rejects: 0,
+                        laser_ok: true,
+                        sonar_ok: true,
+                    },
                     ..Default::default()
                 }),
                 t,

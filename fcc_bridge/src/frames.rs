@@ -33,6 +33,11 @@ pub fn enu_to_ned(v: Vec3) -> Vec3 {
     [v[1], v[0], -v[2]]
 }
 
+/// Horizontal NED vector (north, east) → ENU with z = 0.
+pub fn ne_to_enu(v: [f64; 2]) -> Vec3 {
+    [v[1], v[0], 0.0]
+}
+
 /// Body FRD vector → FLU.
 pub fn frd_to_flu(v: Vec3) -> Vec3 {
     [v[0], -v[1], -v[2]]
@@ -283,6 +288,14 @@ mod tests {
         // Nose down in ENU/FLU is a positive pitch about body y (left): forward tilts to −z.
         let fwd = quat_rotate(q_enu, [1.0, 0.0, 0.0]);
         assert!(fwd[2] < 0.0 && fwd[1] > 0.9);
+    }
+
+    #[test]
+    fn horizontal_ne_to_enu() {
+        // North 1, east 2 → east 2, north 1, no vertical part.
+        assert_eq!(ne_to_enu([1.0, 2.0]), [2.0, 1.0, 0.0]);
+        // Consistent with the 3-D map of a horizontal vector.
+        assert_eq!(ne_to_enu([-0.5, 0.25]), ned_to_enu([-0.5, 0.25, 0.0]));
     }
 
     #[test]

@@ -35,6 +35,10 @@ pub enum Out {
     Ground(Range),
     Status(Status),
     Clock(Clock),
+    /// `accel/observer`: the Luenberger observer's horizontal acceleration (ENU, map).
+    AccelObserver(AccelStamped),
+    /// `accel/measured`: the gravity-compensated accelerometer (ENU, map).
+    AccelMeasured(AccelStamped),
 }
 
 /// Handshake progress.
@@ -128,6 +132,10 @@ pub struct LinkState {
     pub sim_offset_ns: Option<i64>,
     /// `CommandAck`s and `ParamAck`s received, for the IO layer to answer services with.
     pub acks: Vec<link::Message>,
+    /// Height above ground of the latest altitude fusion (for the sensor-health rules).
+    pub ground_height_m: Option<f32>,
+    /// Sensor-health transitions (WARN / INFO on `/rosout`).
+    pub sensors: crate::diag::SensorWatch,
 }
 
 impl LinkState {
@@ -146,6 +154,8 @@ impl LinkState {
             last_mcu_us: None,
             sim_offset_ns: None,
             acks: Vec::new(),
+            ground_height_m: None,
+            sensors: Default::default(),
         }
     }
 
@@ -290,17 +300,31 @@ impl LinkState {
                         out.push(Out::Odom(odom));
                         out.push(Out::StateImu(imu));
                         out.push(Out::Tf(tf));
+                        let (obs, meas) = convert::accels(&m, st, cfg);
+                        out.push(Out::AccelObserver(obs));
+                        out.push(Out::AccelMeasured(meas));
                         if self.clock == ClockSource::Mcu {
                             out.push(Out::Clock(Clock { clock: st }));
                         }
                     }
                     link::Message::AltitudeFusion(m) => {
+                        self.ground_height_m = Some(m.ground_height_m);
                         let (a, g) = convert::altitude(&m, st, cfg);
                         out.push(Out::Altitude(a));
                         out.push(Out::Ground(g));
                     }
                     link::Message::Status(m) => {
                         self.mcu_status = Some(m);
+                        for (warn, text) in
+                            self.sensors
+                                .update(&m, self.ground_height_m, &self.cfg, t_us)
+                        {
+                            if warn {
+                                tracing::warn!("{text}");
+                            } else {
+                                tracing::info!("{text}");
+                            }
+                        }
                         let s = self.fill_status(convert::status(&m, st, cfg));
                         out.push(Out::Status(s));
                     }

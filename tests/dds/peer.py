@@ -74,6 +74,8 @@ TOPICS = {
     "altitude": (rt.Altitude, 15),
     "altitude/ground": (rt.Range, 15),
     "status": (rt.Status, 7),
+    "accel/observer": (rt.AccelStamped, 40),
+    "accel/measured": (rt.AccelStamped, 40),
     "/diagnostics": (rt.DiagnosticArray, 0.5),
 }
 
@@ -258,10 +260,22 @@ def main():
     c.check("status bridge refused 4 setpoints", st.setpoint_rejects_bridge == 4 and st.setpoints_forwarded == 2,
             (st.setpoint_rejects_bridge, st.setpoints_forwarded))
 
+    c.check("status sensor health (fake MCU: all healthy)",
+            st.gps_ok and not st.mag_disturbed and st.laser_ok and st.sonar_ok and st.mag_rejects == 0,
+            (st.gps_ok, st.mag_disturbed, st.mag_rejects, st.laser_ok, st.sonar_ok))
+    ao = got["accel/observer"][-1]
+    c.check("accel/observer ENU in map (MCU north 0.5, east -0.25 → x -0.25, y 0.5, z 0)",
+            ao.header.frame_id == "map" and close(vec(ao.accel.linear), (-0.25, 0.5, 0.0), 1e-6), vec(ao.accel.linear))
+    am = got["accel/measured"][-1]
+    c.check("accel/measured in map", am.header.frame_id == "map" and close(vec(am.accel.linear), (0.0, 0.0, 0.0), 1e-6),
+            vec(am.accel.linear))
     diag = got["/diagnostics"][-1]
     link = [s for s in diag.status if s.name == "fcc_bridge: link"]
     kv = {k.key: k.value for k in link[0].values} if link else {}
     c.check("diagnostics link status", bool(link) and float(kv.get("rx_frames_per_s", 0)) > 100, kv.get("rx_frames_per_s"))
+    sens = [s for s in diag.status if s.name == "fcc: sensors"]
+    c.check("diagnostics fcc: sensors OK", bool(sens) and sens[0].level == 0 and sens[0].message == "ok",
+            (sens[0].level, sens[0].message) if sens else None)
     c.check("diagnostics per-type rate", float(kv.get("rate_hz.ImuRaw", 0)) > 150, kv.get("rate_hz.ImuRaw"))
 
     c.check("node in ros_discovery_info", (ns, "fcc_bridge") in nodes, sorted(nodes))

@@ -86,6 +86,18 @@ class TwistStamped(IdlStruct, typename=_t("geometry_msgs", "TwistStamped")):
 
 
 @dataclass
+class Accel(IdlStruct, typename=_t("geometry_msgs", "Accel")):
+    linear: Vector3 = field(default_factory=Vector3)
+    angular: Vector3 = field(default_factory=Vector3)
+
+
+@dataclass
+class AccelStamped(IdlStruct, typename=_t("geometry_msgs", "AccelStamped")):
+    header: Header = field(default_factory=Header)
+    accel: Accel = field(default_factory=Accel)
+
+
+@dataclass
 class Transform(IdlStruct, typename=_t("geometry_msgs", "Transform")):
     translation: Vector3 = field(default_factory=Vector3)
     rotation: Quaternion = field(default_factory=Quaternion)
@@ -230,6 +242,11 @@ class Status(IdlStruct, typename=_t("fcc_msgs", "Status")):
     landed: bool
     failsafe: uint8
     failsafe_name: str
+    gps_ok: bool
+    mag_disturbed: bool
+    mag_rejects: uint32
+    laser_ok: bool
+    sonar_ok: bool
     loop_time_max_us: uint32
     loop_time_avg_us: uint32
     last_reject: str

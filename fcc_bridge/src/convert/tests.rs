@@ -265,3 +265,109 @@ fn state_handshake_and_publish() {
     );
     assert!(matches!(s.on_bytes(&bad, 0), Err(Fatal::Handshake(_))));
 }
+
+/// Paper A Fig. 13 topics: observer (horizontal) and measured acceleration, NED → ENU in `map`.
+#[test]
+fn accels_enu_in_map() {
+    let m = link::NavState {
+        q_body_to_ned: [1.0, 0.0, 0.0, 0.0],
+        accel_ned_mps2: [1.0, -2.0, 0.5],
+        accel_obs_ne_mps2: [0.25, -0.75],
+        ..Default::default()
+    };
+    let (obs, meas) = accels(&m, st(), &cfg());
+    assert_eq!(obs.header.frame_id, "map");
+    assert_eq!(meas.header.frame_id, "map");
+    assert_eq!(obs.header.stamp, st());
+    // Observer: x = east, y = north, z = 0.
+    assert_eq!(obs.accel.linear.to_array(), [-0.75, 0.25, 0.0]);
+    // Measured: east −2, north 1, up −0.5 (NED down +0.5).
+    assert_eq!(meas.accel.linear.to_array(), [-2.0, 1.0, -0.5]);
+    assert_eq!(meas.accel.angular.to_array(), [0.0; 3]);
+}
+
+/// The MCU's sensor health reaches `fcc_msgs/Status`.
+#[test]
+fn status_carries_sensor_health() {
+    let m = link::Status {
+        sensors: link::SensorHealth {
+            gps_ok: false,
+            mag_disturbed: true,
+            mag_rejects: 42,
+            laser_ok: false,
+            sonar_ok: true,
+        },
+        ..Default::default()
+    };
+    let s = status(&m, st(), &cfg());
+    assert!(!s.gps_ok && s.mag_disturbed && !s.laser_ok && s.sonar_ok);
+    assert_eq!(s.mag_rejects, 42);
+}
+
+/// Sensor-health rules and `/rosout` transitions: one WARN per episode (a flickering flag does
+/// not repeat it), an INFO after 2 s healthy; rangefinders only count in the air within range.
+#[test]
+fn sensor_watch_transitions() {
+    use crate::diag::{sensors_status, unhealthy, SensorWatch};
+    let c = cfg();
+    let mut s = link::Status {
+        armed: true,
+        landed: false,
+        sensors: link::SensorHealth {
+            gps_ok: true,
+            mag_disturbed: false,
+            mag_rejects: 0,
+            laser_ok: true,
+            sonar_ok: true,
+        },
+        ..Default::default()
+    };
+    let mut w = SensorWatch::default();
+    assert!(w.update(&s, Some(5.0), &c, 1_000_000).is_empty());
+    // GPS lost → one WARN.
+    s.sensors.gps_ok = false;
+    let e = w.update(&s, Some(5.0), &c, 1_100_000);
+    assert_eq!(e.len(), 1);
+    assert!(e[0].0 && e[0].1.contains("GPS lost"), "{e:?}");
+    assert!(w.update(&s, Some(5.0), &c, 1_200_000).is_empty());
+    let d = sensors_status(&s, Some(5.0), &c, "dev");
+    assert_eq!(d.level, DiagnosticStatus::WARN);
+    assert!(d.message.contains("GPS lost"));
+    // Back: INFO only after 2 s healthy.
+    s.sensors.gps_ok = true;
+    assert!(w.update(&s, Some(5.0), &c, 2_000_000).is_empty());
+    let e = w.update(&s, Some(5.0), &c, 3_300_000);
+    assert_eq!(e.len(), 1);
+    assert!(!e[0].0 && e[0].1.contains("GPS ok"), "{e:?}");
+    assert_eq!(
+        sensors_status(&s, Some(5.0), &c, "dev").level,
+        DiagnosticStatus::OK
+    );
+    // A flickering magnetometer flag: one WARN.
+    let mut warns = 0;
+    for k in 0..40u64 {
+        s.sensors.mag_disturbed = k % 3 != 0;
+        warns += w
+            .update(&s, Some(5.0), &c, 4_000_000 + k * 100_000)
+            .iter()
+            .filter(|e| e.0)
+            .count();
+    }
+    assert_eq!(warns, 1);
+    s.sensors.mag_disturbed = false;
+    // Laser: not a fault on the ground or below its minimum range; a fault at 5 m in the air.
+    s.sensors.laser_ok = false;
+    s.landed = true;
+    assert_eq!(unhealthy(&s, Some(0.3), &c), [false; 4]);
+    s.landed = false;
+    assert_eq!(unhealthy(&s, Some(0.3), &c), [false; 4]);
+    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, true, false]);
+    // Sonar above its range (10.68 m): no fault; below: a fault.
+    s.sensors.laser_ok = true;
+    s.sensors.sonar_ok = false;
+    assert_eq!(unhealthy(&s, Some(20.0), &c), [false; 4]);
+    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, false, true]);
+    // Disarmed: rangefinders are not checked.
+    s.armed = false;
+    assert_eq!(unhealthy(&s, Some(5.0), &c), [false; 4]);
+}

@@ -255,6 +255,33 @@ ros_msg!(
     [Header, Twist]
 );
 
+/// geometry_msgs/Accel: linear (m/s²) and angular (rad/s²) acceleration.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Accel {
+    pub linear: Vector3,
+    pub angular: Vector3,
+}
+ros_msg!(
+    Accel,
+    "geometry_msgs",
+    "Accel",
+    "Vector3  linear\nVector3  angular\n",
+    [Vector3]
+);
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AccelStamped {
+    pub header: Header,
+    pub accel: Accel,
+}
+ros_msg!(
+    AccelStamped,
+    "geometry_msgs",
+    "AccelStamped",
+    "std_msgs/Header header\nAccel accel\n",
+    [Header, Accel]
+);
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Transform {
     pub translation: Vector3,
