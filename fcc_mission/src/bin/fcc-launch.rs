@@ -6,6 +6,14 @@
 //! and exits with the main process's code. If another process exits first, everything is
 //! stopped and the exit code is 1. SIGINT/SIGTERM to the launcher stop everything (exit 130).
 //!
+//! Several processes may have `main: true` (e.g. one mission node per vehicle, see
+//! `launch_configs/four_uav_flight.yaml`): the launcher then runs until ALL of them have exited
+//! and exits with the worst (highest) of their codes. Processes may carry a `group:` (e.g. the
+//! vehicle): when every main process of a group has exited, the rest of that group is stopped
+//! (so a vehicle's simulator writes its CSV and its bridge ends while the other vehicles fly
+//! on); a non-main process that exits on its own while a main process of its group (or, without
+//! a group, any main process) still runs is an early exit: everything is stopped, exit code 1.
+//!
 //! Config (see `launch_configs/square_flight.yaml`):
 //! ```yaml
 //! vars: { speed: "1", out: out }        # defaults; override with speed:=2 on the command line
@@ -23,6 +31,8 @@
 //! report: { csv: "${out}/square_stack.csv", mission: "${CONFIG_DIR}/missions/square.yaml",
 //!           append_to: "${out}/summary.txt" }
 //! ```
+//! `report:` may also be a list of such entries (one per vehicle); they are written when every
+//! main process exited with 0.
 //! Variables: `${BIN}` (the directory of this executable), `${CONFIG_DIR}`, `${RUN}` (a fresh
 //! temporary directory, removed at the end), `vars`, command-line `name:=value`, and the
 //! environment. `env:` per process adds environment variables.
@@ -47,7 +57,24 @@ struct Config {
     stop_timeout_s: f64,
     processes: Vec<Proc>,
     #[serde(default)]
-    report: Option<Report>,
+    report: Option<Reports>,
+}
+
+/// `report:` is one entry or a list of them.
+#[derive(Deserialize, Debug)]
+#[serde(untagged)]
+enum Reports {
+    One(Report),
+    Many(Vec<Report>),
+}
+
+impl Reports {
+    fn list(&self) -> Vec<&Report> {
+        match self {
+            Reports::One(r) => vec![r],
+            Reports::Many(v) => v.iter().collect(),
+        }
+    }
 }
 
 fn default_stop() -> f64 {
@@ -66,9 +93,14 @@ struct Proc {
     wait_for: Option<String>,
     #[serde(default = "default_wait")]
     wait_timeout_s: f64,
-    /// The launcher exits when this process exits, with its code.
+    /// The launcher exits when this process exits, with its code (with several main
+    /// processes: when all have exited, with the worst code).
     #[serde(default)]
     main: bool,
+    /// Processes of a group (e.g. one vehicle) are stopped when all the group's main processes
+    /// have exited.
+    #[serde(default)]
+    group: Option<String>,
     /// Wait this long after starting it before starting the next one.
     #[serde(default)]
     delay_s: f64,
@@ -152,6 +184,80 @@ struct Running {
     name: String,
     child: Child,
     status: Option<ExitStatus>,
+    main: bool,
+    group: Option<String>,
+    /// Set when the launcher sent SIGTERM (its group is done): SIGKILL after the stop timeout.
+    stopping_since: Option<Instant>,
+}
+
+/// A started process as the supervision rules see it.
+#[derive(Clone, Debug, PartialEq)]
+struct Slot {
+    main: bool,
+    group: Option<String>,
+    /// Exit code once exited.
+    code: Option<i32>,
+    /// The launcher is stopping it (its group is done).
+    stopping: bool,
+}
+
+/// What to do after process `i` of `slots` exited (its `code` is already set).
+#[derive(Debug, PartialEq)]
+enum Next {
+    /// Keep supervising.
+    Continue,
+    /// Stop these still-running processes (a group whose main processes all exited).
+    Stop(Vec<usize>),
+    /// Every main process has exited: stop everything and exit with this code (the worst).
+    Done(i32),
+    /// A non-main process exited on its own while it was still needed: stop everything, exit 1.
+    Early,
+}
+
+fn next_after_exit(slots: &[Slot], i: usize) -> Next {
+    let s = &slots[i];
+    if s.stopping {
+        return Next::Continue;
+    }
+    let mains_running = |g: Option<&String>| {
+        slots
+            .iter()
+            .any(|x| x.main && x.code.is_none() && (g.is_none() || x.group.as_ref() == g))
+    };
+    if !s.main {
+        // Without a group (or in a group without a main process), a process is needed while
+        // any main process runs.
+        let g = s
+            .group
+            .as_ref()
+            .filter(|g| slots.iter().any(|x| x.main && x.group.as_ref() == Some(*g)));
+        return if mains_running(g) {
+            Next::Early
+        } else {
+            Next::Continue
+        };
+    }
+    if !mains_running(None) {
+        let worst = slots
+            .iter()
+            .filter(|x| x.main)
+            .filter_map(|x| x.code)
+            .max()
+            .unwrap_or(1);
+        return Next::Done(worst);
+    }
+    match &s.group {
+        Some(g) if !mains_running(Some(g)) => Next::Stop(
+            (0..slots.len())
+                .rev()
+                .filter(|&k| {
+                    let x = &slots[k];
+                    x.group.as_ref() == Some(g) && x.code.is_none() && !x.stopping
+                })
+                .collect(),
+        ),
+        _ => Next::Continue,
+    }
 }
 
 fn code_of(s: &ExitStatus) -> i32 {
@@ -240,9 +346,9 @@ fn main() {
     vars.insert("RUN".into(), run_dir.display().to_string());
     let x =
         |s: &str| expand(s, &vars).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
-    if cfg.processes.iter().filter(|p| p.main).count() != 1 {
+    if !cfg.processes.iter().any(|p| p.main) {
         die(format!(
-            "{}: exactly one process must have main: true",
+            "{}: at least one process must have main: true",
             cfg_path.display()
         ));
     }
@@ -257,7 +363,6 @@ fn main() {
 
     let stop_timeout = Duration::from_secs_f64(cfg.stop_timeout_s);
     let mut running: Vec<Running> = Vec::new();
-    let mut main_idx = 0;
     let t_start = Instant::now();
     let mut fail_early: Option<String> = None;
     'start: for p in &cfg.processes {
@@ -286,13 +391,13 @@ fn main() {
         };
         pipe_lines(p.name.clone(), child.stdout.take().unwrap(), false);
         pipe_lines(p.name.clone(), child.stderr.take().unwrap(), true);
-        if p.main {
-            main_idx = running.len();
-        }
         running.push(Running {
             name: p.name.clone(),
             child,
             status: None,
+            main: p.main,
+            group: p.group.clone(),
+            stopping_since: None,
         });
         if let Some(w) = &p.wait_for {
             let path = PathBuf::from(x(w));
@@ -335,6 +440,20 @@ fn main() {
                 code = 130;
                 break;
             }
+            // Processes of a finished group that ignore SIGTERM: SIGKILL after the timeout.
+            for r in running.iter_mut() {
+                if let (None, Some(t0)) = (r.status, r.stopping_since) {
+                    if t0.elapsed() > stop_timeout {
+                        eprintln!(
+                            "fcc-launch: {} did not stop in {:.0} s; SIGKILL",
+                            r.name,
+                            stop_timeout.as_secs_f64()
+                        );
+                        let _ = r.child.kill();
+                        r.status = r.child.wait().ok();
+                    }
+                }
+            }
             let mut ended = None;
             for (i, r) in running.iter_mut().enumerate() {
                 if r.status.is_none() {
@@ -346,23 +465,74 @@ fn main() {
                 }
             }
             if let Some(i) = ended {
-                let s = running[i].status.unwrap();
-                if i == main_idx {
-                    code = code_of(&s);
-                    println!(
-                        "fcc-launch: {} exited with code {code} after {:.1} s; stopping the others",
-                        running[i].name,
-                        t_start.elapsed().as_secs_f64()
-                    );
-                } else {
-                    eprintln!(
-                        "fcc-launch: {} exited early with code {}; stopping everything",
-                        running[i].name,
-                        code_of(&s)
-                    );
-                    code = 1;
+                let slots: Vec<Slot> = running
+                    .iter()
+                    .map(|r| Slot {
+                        main: r.main,
+                        group: r.group.clone(),
+                        code: r.status.as_ref().map(code_of),
+                        stopping: r.stopping_since.is_some(),
+                    })
+                    .collect();
+                let c = code_of(&running[i].status.unwrap());
+                let el = t_start.elapsed().as_secs_f64();
+                match next_after_exit(&slots, i) {
+                    Next::Continue if running[i].stopping_since.is_some() => {}
+                    Next::Continue => println!(
+                        "fcc-launch: {} exited with code {c} after {el:.1} s",
+                        running[i].name
+                    ),
+                    Next::Stop(list) => {
+                        println!(
+                            "fcc-launch: {} exited with code {c} after {el:.1} s; stopping group {}",
+                            running[i].name,
+                            running[i].group.as_deref().unwrap_or("")
+                        );
+                        for k in list {
+                            let r = &mut running[k];
+                            println!("fcc-launch: stopping {} (SIGTERM)", r.name);
+                            let _ =
+                                signal::kill(Pid::from_raw(r.child.id() as i32), Signal::SIGTERM);
+                            r.stopping_since = Some(Instant::now());
+                        }
+                    }
+                    Next::Done(worst) => {
+                        code = worst;
+                        let mains: Vec<String> = running
+                            .iter()
+                            .filter(|r| r.main)
+                            .map(|r| {
+                                format!(
+                                    "{} {}",
+                                    r.name,
+                                    r.status.as_ref().map(code_of).unwrap_or(-1)
+                                )
+                            })
+                            .collect();
+                        if mains.len() == 1 {
+                            println!(
+                                "fcc-launch: {} exited with code {code} after {el:.1} s; stopping the others",
+                                running[i].name
+                            );
+                        } else {
+                            println!(
+                                "fcc-launch: all {} main processes exited after {el:.1} s ({}); exit code {code}; stopping the others",
+                                mains.len(),
+                                mains.join(", ")
+                            );
+                        }
+                        break;
+                    }
+                    Next::Early => {
+                        eprintln!(
+                            "fcc-launch: {} exited early with code {c}; stopping everything",
+                            running[i].name
+                        );
+                        code = 1;
+                        break;
+                    }
                 }
-                break;
+                continue;
             }
             std::thread::sleep(Duration::from_millis(50));
         }
@@ -373,7 +543,7 @@ fn main() {
     let _ = std::fs::remove_dir_all(&run_dir);
 
     if code == 0 {
-        if let Some(r) = &cfg.report {
+        for r in cfg.report.iter().flat_map(Reports::list) {
             let (csv, mission) = (x(&r.csv), x(&r.mission));
             let rep = std::fs::read_to_string(&csv)
                 .map_err(|e| format!("{csv}: {e}"))
@@ -418,4 +588,96 @@ fn main() {
     }
     let _ = std::io::stdout().flush();
     std::process::exit(code)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn slot(main: bool, group: Option<&str>) -> Slot {
+        Slot {
+            main,
+            group: group.map(str::to_string),
+            code: None,
+            stopping: false,
+        }
+    }
+
+    #[test]
+    fn one_main_as_before() {
+        // sitl, bridge, mission (main): the mission's exit ends the run with its code.
+        let mut s = vec![slot(false, None), slot(false, None), slot(true, None)];
+        s[2].code = Some(3);
+        assert_eq!(next_after_exit(&s, 2), Next::Done(3));
+        // Another process first: early exit.
+        let mut s = vec![slot(false, None), slot(false, None), slot(true, None)];
+        s[0].code = Some(0);
+        assert_eq!(next_after_exit(&s, 0), Next::Early);
+    }
+
+    #[test]
+    fn several_mains_with_groups() {
+        // Two vehicles: [sitl, bridge, mission] × 2.
+        let g = |n| Some(if n == 1 { "uav1" } else { "uav2" });
+        let mut s = vec![
+            slot(false, g(1)),
+            slot(false, g(1)),
+            slot(true, g(1)),
+            slot(false, g(2)),
+            slot(false, g(2)),
+            slot(true, g(2)),
+        ];
+        // uav1's mission ends: its bridge and sitl are stopped (reverse order), uav2 flies on.
+        s[2].code = Some(0);
+        assert_eq!(next_after_exit(&s, 2), Next::Stop(vec![1, 0]));
+        s[0].stopping = true;
+        s[1].stopping = true;
+        s[0].code = Some(0);
+        assert_eq!(next_after_exit(&s, 0), Next::Continue);
+        // uav2's bridge dying while its mission runs is an early exit.
+        let mut e = s.clone();
+        e[4].code = Some(1);
+        assert_eq!(next_after_exit(&e, 4), Next::Early);
+        // uav2's mission fails: all mains done, the worst code wins.
+        s[5].code = Some(1);
+        assert_eq!(next_after_exit(&s, 5), Next::Done(1));
+        s[5].code = Some(0);
+        assert_eq!(next_after_exit(&s, 5), Next::Done(0));
+    }
+
+    #[test]
+    fn several_mains_without_groups_wait_for_all() {
+        let mut s = vec![slot(false, None), slot(true, None), slot(true, None)];
+        s[1].code = Some(2);
+        assert_eq!(next_after_exit(&s, 1), Next::Continue);
+        s[2].code = Some(0);
+        assert_eq!(next_after_exit(&s, 2), Next::Done(2));
+        // A shared process that exits while a main runs: early.
+        let mut s = vec![slot(false, None), slot(true, None), slot(true, None)];
+        s[1].code = Some(0);
+        s[0].code = Some(0);
+        assert_eq!(next_after_exit(&s, 0), Next::Early);
+        // Same for a process in a group that has no main process.
+        let mut s = vec![slot(false, Some("tools")), slot(true, Some("uav1"))];
+        s[0].code = Some(0);
+        assert_eq!(next_after_exit(&s, 0), Next::Early);
+    }
+
+    #[test]
+    fn report_one_or_many() {
+        let one: Config = serde_yaml::from_str(
+            "processes: [{name: a, cmd: [x], main: true}]\nreport: {csv: a.csv, mission: m.yaml}\n",
+        )
+        .unwrap();
+        assert_eq!(one.report.unwrap().list().len(), 1);
+        let many: Config = serde_yaml::from_str(
+            "processes: [{name: a, cmd: [x], main: true, group: g}]\nreport:\n  - {csv: a.csv, mission: m.yaml}\n  - {csv: b.csv, mission: m.yaml}\n",
+        )
+        .unwrap();
+        assert_eq!(many.report.unwrap().list().len(), 2);
+        assert!(serde_yaml::from_str::<Config>(
+            "processes: [{name: a, cmd: [x], main: true}]\nreport: {csv: a.csv, bogus: 1}\n"
+        )
+        .is_err());
+    }
 }

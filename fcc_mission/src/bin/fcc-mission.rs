@@ -24,7 +24,8 @@ use std::time::{Duration, Instant};
 #[command(
     name = "fcc-mission",
     about = "ROS 2 mission node: flies a waypoint mission through fcc-bridge",
-    after_help = "ROS arguments: --ros-args [-r __ns:=/fcc] [-r __node:=fcc_mission] [-p name:=value ...]\n\
+    after_help = "ROS arguments: --ros-args [-r __ns:=/fcc] [-r __node:=fcc_mission] [-r topic:=new_name ...]\n\
+  [-p name:=value ...] (remaps as the bridge's, e.g. -r /clock:=clock for a per-vehicle clock)\n\
 Parameters: mission (file; or --mission), rate_hz (50), use_sim_time (false: stamp with the\n\
   Linux clock; true: with /clock, e.g. from fcc-bridge -p clock_source:=mcu),\n\
   timeout_s (600, from start), arm_timeout_s (60), localhost_only (true).\n\
@@ -46,6 +47,15 @@ struct Options {
     use_sim_time: bool,
     timeout_s: f64,
     arm_timeout_s: f64,
+    /// `-r from:=to` topic remaps (e.g. `-r /clock:=clock`: a per-vehicle simulated clock).
+    remaps: Vec<(String, String)>,
+}
+
+impl Options {
+    /// A topic name after the remaps (relative names resolve under the node's namespace).
+    fn name(&self, n: &str) -> String {
+        params::remap(&self.remaps, &self.namespace, n)
+    }
 }
 
 fn fail(code: i32, msg: String) -> ! {
@@ -88,9 +98,6 @@ fn options() -> Options {
     ];
     if let Some(k) = p.keys().find(|k| !known.contains(&k.as_str())) {
         fail(2, format!("unknown parameter '{k}'"));
-    }
-    for (k, v) in &ros.remaps {
-        eprintln!("fcc-mission: topic remapping '{k}:={v}' is not supported; ignored");
     }
     let num = |k: &str, def: f64| -> f64 {
         match p.get(k) {
@@ -135,6 +142,7 @@ fn options() -> Options {
         use_sim_time,
         timeout_s: num("timeout_s", 600.0),
         arm_timeout_s: num("arm_timeout_s", 60.0),
+        remaps: ros.remaps.clone(),
     }
 }
 
@@ -215,34 +223,51 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
     let e1 = |e: String| (1, e);
     let ctx = ros_node::context(o.dds).map_err(e1)?;
     let mut node = ros_node::node(&ctx, &o.namespace, &o.node_name).map_err(e1)?;
-    let odom_sub =
-        ros_node::subscription::<Odometry>(&mut node, "state/odom", &ros_node::best_effort_qos(1))
-            .map_err(e1)?;
-    let status_sub =
-        ros_node::subscription::<Status>(&mut node, "status", &ros_node::best_effort_qos(5))
-            .map_err(e1)?;
+    let odom_sub = ros_node::subscription::<Odometry>(
+        &mut node,
+        &o.name("state/odom"),
+        &ros_node::best_effort_qos(1),
+    )
+    .map_err(e1)?;
+    let status_sub = ros_node::subscription::<Status>(
+        &mut node,
+        &o.name("status"),
+        &ros_node::best_effort_qos(5),
+    )
+    .map_err(e1)?;
     let clock_sub = if o.use_sim_time {
         Some(
-            ros_node::subscription::<Clock>(&mut node, "/clock", &ros_node::best_effort_qos(1))
-                .map_err(e1)?,
+            ros_node::subscription::<Clock>(
+                &mut node,
+                &o.name("/clock"),
+                &ros_node::best_effort_qos(1),
+            )
+            .map_err(e1)?,
         )
     } else {
         None
     };
     let sp_pub = ros_node::publisher::<TwistStamped>(
         &mut node,
-        "setpoint/velocity",
+        &o.name("setpoint/velocity"),
         &ros_node::reliable_qos(10),
     )
     .map_err(e1)?;
-    let arm_pub = ros_node::publisher::<Bool>(&mut node, "cmd/arm", &ros_node::reliable_qos(10))
-        .map_err(e1)?;
-    let mode_pub =
-        ros_node::publisher::<StringMsg>(&mut node, "cmd/mode", &ros_node::reliable_qos(10))
+    let arm_pub =
+        ros_node::publisher::<Bool>(&mut node, &o.name("cmd/arm"), &ros_node::reliable_qos(10))
             .map_err(e1)?;
-    let status_pub =
-        ros_node::publisher::<StringMsg>(&mut node, "mission/status", &ros_node::reliable_qos(10))
-            .map_err(e1)?;
+    let mode_pub = ros_node::publisher::<StringMsg>(
+        &mut node,
+        &o.name("cmd/mode"),
+        &ros_node::reliable_qos(10),
+    )
+    .map_err(e1)?;
+    let status_pub = ros_node::publisher::<StringMsg>(
+        &mut node,
+        &o.name("mission/status"),
+        &ros_node::reliable_qos(10),
+    )
+    .map_err(e1)?;
 
     let n_wp = o.mission.waypoints.len();
     println!(
