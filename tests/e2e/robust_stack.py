@@ -12,9 +12,12 @@ fcc-sitl gets SIGTERM) and what the peer saw. Prints its figures; exit 0 = all c
   reconnect     (5) SIGKILL + restart the bridge, then SIGKILL + restart the serial relay (the
                     device vanishes and comes back) while the vehicle hovers in hold
   config        (7) bad YAML / bad flags for every binary: exit 2, one line, no panic
+  sensors       (6) sensor failures in one hover (launch_configs/scenarios/sensors_stack.yaml):
+                    a 15 µT magnetic disturbance, the laser dead (no return), then GPS lost
+                    (hold on baro/accel, land, disarm); each seen on status, /diagnostics, /rosout
 
 Run ONLY inside a loopback-only network namespace: tests/e2e/robust_stack.sh does that.
-usage: robust_stack.py {noisy,kill-mission,reconnect,config} [--bin DIR] [--speed N] [--keep DIR]
+usage: robust_stack.py {noisy,kill-mission,reconnect,config,sensors} [--bin DIR] [--speed N] [--keep DIR]
 """
 import argparse
 import csv
@@ -125,7 +128,7 @@ def first(rows, cond, start_t=-1e9):
 class Peer:
     """Independent Cyclone DDS peer: subscribes to the bridge's topics, records arrival times."""
 
-    def __init__(self, ns="/fcc", domain=None, mission_topics=False):
+    def __init__(self, ns="/fcc", domain=None, mission_topics=False, sensor_topics=False):
         from cyclonedds.core import Policy, Qos
         from cyclonedds.domain import DomainParticipant
         from cyclonedds.idl import IdlStruct
@@ -155,6 +158,12 @@ class Peer:
         if mission_topics:
             topics["setpoint/velocity"] = (rt.TwistStamped, best)
             topics["mission/status"] = (rt.String, reliable)
+        if sensor_topics:
+            import ros_srv_types as srv
+            topics["altitude"] = (rt.Altitude, reliable)
+            topics["accel/observer"] = (rt.AccelStamped, reliable)
+            topics["accel/measured"] = (rt.AccelStamped, reliable)
+            topics["/rosout"] = (srv.Log, Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepLast(1000)))
         self.readers = {n: DataReader(self.dp, Topic(self.dp, name(n), ty), qos=q) for n, (ty, q) in topics.items()}
         self.got = {n: [] for n in topics}     # (wall time, sample)
         self.sp = DataWriter(self.dp, Topic(self.dp, name("setpoint/velocity"), rt.TwistStamped), qos=reliable)
@@ -619,6 +628,216 @@ def t_reconnect(a, tmp):
     return c.done()
 
 
+# ------------------------------------------------------------------ (6) sensor failures
+
+SENSORS_SCENARIO = f"{ROOT}/launch_configs/scenarios/sensors_stack.yaml"
+# Fault windows of sensors_stack.yaml (simulated s).
+MAG_FAULT = (24.0, 32.0)
+LASER_DEAD = (36.0, 48.0)
+GPS_LOST_AT = 52.0
+
+
+def stamp_s(h):
+    return h.stamp.sec + h.stamp.nanosec * 1e-9
+
+
+def t_sensors(a, tmp):
+    """Sensor failures through the real pty + bridge, observed by the independent peer."""
+    c = Checks("sensors")
+    pr = Procs(tmp)
+    peer = Peer(sensor_topics=True)
+    csv_path = os.path.join(tmp, "sensors.csv")
+    t0 = time.time()
+    ev = {}
+    try:
+        sitl, _, dev = stack_start(pr, a, tmp, SENSORS_SCENARIO, csv_path)
+        bridge = pr.start("bridge", bridge_argv(a, dev))
+        if not peer.wait(lambda: peer.st is not None and peer.now is not None, 30, "status and /clock"):
+            raise SystemExit(1)
+        if not c.check("armed through cmd/arm", peer.arm(), ""):
+            return c.done()
+        ev["armed"] = peer.now
+        peer.mode("velocity")
+        peer.fly_for(5.0, (0.0, 0.0, 1.0))       # climb ≈ 5 m
+        peer.fly_for(1.0, (0.0, 0.0, 0.0))
+        peer.mode("hold")                       # operator's hold: the MCU keeps the point
+        peer.wait(lambda: peer.st.mode_name == "hold", 5, "hold")
+        ev["hold"] = peer.now
+        c.check(f"holding before the first fault ({MAG_FAULT[0]:.0f} s sim)", peer.st.mode_name == "hold"
+                and ev["hold"] < MAG_FAULT[0] - 1.0, f"armed at {ev['armed']:.2f} s, hold at {ev['hold']:.2f} s (sim)")
+        # The rest is the scenario's: wait (in sim time) for the GPS-lost landing to finish.
+        landed = peer.wait(lambda: peer.now > GPS_LOST_AT and peer.st is not None and not peer.st.armed
+                           and peer.st.landed, (GPS_LOST_AT + 25.0 - peer.now) / a.speed + 30.0,
+                           "landed and disarmed after the GPS loss")
+        ev["end"] = peer.now
+        peer.sleep(1.5)  # the last /diagnostics and /rosout
+        bridge_alive = bridge.poll() is None
+        pr.stop(bridge)
+        src = pr.stop(sitl)
+    finally:
+        pr.cleanup()
+    wall = time.time() - t0
+    no_panic(c, pr, ["sitl", "bridge"])
+    c.check("fcc-bridge running at the end, fcc-sitl stops cleanly", bridge_alive and src == 0, src)
+    c.check("status: landed and disarmed after the GPS loss", landed)
+    rows = load_csv(csv_path)
+
+    # Sim time at which the peer received something (latest /clock at that wall time).
+    clocks = [(w, s.clock.sec + s.clock.nanosec * 1e-9) for w, s in peer.got["/clock"]]
+
+    def sim_at(wall):
+        import bisect
+        i = bisect.bisect_right([w for w, _ in clocks], wall)
+        return clocks[i - 1][1] if i > 0 else float("nan")
+
+    sts = [(w, stamp_s(s.header), s) for w, s in peer.got["status"]]
+    diags = [(w, sim_at(w), arr) for w, arr in peer.got["/diagnostics"]]
+    logs = [(w, sim_at(w), m) for w, m in peer.got["/rosout"] if "sensor health" in m.msg]
+    print("/rosout sensor-health lines (sim s at reception, level, text):")
+    for _, t, m in logs:
+        print(f"  {t:7.2f}  {m.level}  {m.msg}")
+
+    def sens_diag(t_from, t_to):
+        return [(t, s) for _, t, arr in diags if t_from <= t < t_to for s in arr.status if s.name == "fcc: sensors"]
+
+    def report(flag, t_fault, t_to, what):
+        """First status with `flag` after the fault: report delay in sim s by stamp and by reception."""
+        hit = next(((w, t, s) for w, t, s in sts if t_fault <= t < t_to and flag(s)), None)
+        if hit is None:
+            c.check(f"status: {what} reported", False)
+            return None
+        w, t, s = hit
+        d_stamp, d_recv = t - t_fault, sim_at(w) - t_fault
+        c.check(f"status: {what} reported within 2 s (sim) of the fault", d_recv <= 2.0,
+                f"stamp +{d_stamp:.2f} s, received at +{d_recv:.2f} s (sim)")
+        return d_recv
+
+    def rosout_check(word, level, t_from, t_to, what, exactly_one=True):
+        hits = [(t, m) for _, t, m in logs if word in m.msg and m.level == level and t_from <= t < t_to]
+        ok = len(hits) == 1 if exactly_one else len(hits) >= 1
+        c.check(f"/rosout: {what}", ok, f"{len(hits)} line(s)" + (f", first at {hits[0][0]:.2f} s: {hits[0][1].msg!r}"
+                                                                    if hits else ""))
+
+    def yaw_err_deg(r):
+        d = r["est_yaw_rad"] - r["true_yaw_rad"]
+        return math.degrees((d + math.pi) % (2 * math.pi) - math.pi)
+
+    def rms(v):
+        return math.sqrt(sum(x * x for x in v) / len(v)) if v else float("nan")
+
+    figs = {}
+    # ---------------------------------------------------------- (c) magnetometer disturbed
+    m0, m1 = MAG_FAULT
+    before = [s for _, t, s in sts if ev["hold"] <= t < m0]
+    c.check("mag: no disturbance reported before it (hold → fault)", before and not any(s.mag_disturbed for s in before),
+            f"{sum(s.mag_disturbed for s in before)} of {len(before)} status")
+    figs["mag_report"] = report(lambda s: s.mag_disturbed, m0, m1, "mag_disturbed true during the 15 µT disturbance")
+    during = [s for _, t, s in sts if m0 + 2.0 <= t < m1]
+    c.check("mag: status mag_disturbed true for most of the disturbance (≥ 80 % of status after 2 s)",
+            during and sum(s.mag_disturbed for s in during) >= 0.8 * len(during),
+            f"{sum(s.mag_disturbed for s in during)} of {len(during)}; mag_rejects {during[-1].mag_rejects if during else None}")
+    after = [s for _, t, s in sts if m1 + 1.0 <= t < LASER_DEAD[0]]
+    c.check("mag: recovers (mag_disturbed false from 1 s after the disturbance ends)",
+            after and not any(s.mag_disturbed for s in after), f"{sum(s.mag_disturbed for s in after)} of {len(after)}")
+    ye = [yaw_err_deg(r) for r in rows if m0 <= r["t_s"] < m1 + 4.0]
+    figs["yaw_rms"], figs["yaw_max"] = rms(ye), max(abs(x) for x in ye)
+    c.check("mag: yaw error vs truth (CSV) from the disturbance to 4 s after: RMS ≤ 3° (the lockstep bound)",
+            figs["yaw_rms"] <= 3.0, f"RMS {figs['yaw_rms']:.2f}°, max {figs['yaw_max']:.2f}°")
+    dm = sens_diag(m0 + 1.0, m1)
+    c.check("mag: /diagnostics 'fcc: sensors' WARN 'magnetometer disturbed'",
+            dm and any(s.level == 1 and "magnetometer disturbed" in s.message for _, s in dm),
+            sorted({(s.level, s.message) for _, s in dm}))
+    rosout_check("magnetometer disturbed", 30, m0, m1 + 1.0, "one WARN 'magnetometer disturbed' for the episode")
+    rosout_check("magnetometer ok again", 20, m1, LASER_DEAD[0], "INFO 'magnetometer ok again' after it")
+
+    # ---------------------------------------------------------- (b) laser dead → sonar
+    l0, l1 = LASER_DEAD
+    figs["laser_report"] = report(lambda s: not s.laser_ok, l0, l1, "laser_ok false while the laser is dead")
+    dur = [s for _, t, s in sts if l0 + 1.0 <= t < l1]
+    c.check("laser: status laser_ok false, sonar_ok true throughout (from 1 s in)",
+            dur and not any(s.laser_ok for s in dur) and all(s.sonar_ok for s in dur),
+            f"{len(dur)} status, laser_ok {sum(s.laser_ok for s in dur)}, sonar_ok {sum(s.sonar_ok for s in dur)}")
+    alts = [(stamp_s(m.header), m) for _, m in peer.got["altitude"]]
+    src = [m.source for t, m in alts if l0 + 1.0 <= t < l1]
+    c.check("laser: altitude.source = SONAR (2) throughout (from 1 s in)", src and set(src) == {2},
+            f"{len(src)} samples, sources {sorted(set(src))}")
+    ge = [r["ground_m"] - r["true_agl_m"] for r in rows if l0 + 1.0 <= r["t_s"] < l1]
+    figs["ground_rms"], figs["ground_max"] = rms(ge), max(abs(x) for x in ge)
+    c.check("laser: sonar-only ground estimate vs truth (CSV): RMS ≤ 0.03 m, max ≤ 0.10 m (paper B ground-test bounds)",
+            figs["ground_rms"] <= 0.03 and figs["ground_max"] <= 0.10,
+            f"RMS {figs['ground_rms']:.3f} m, max {figs['ground_max']:.3f} m, sources "
+            f"{sorted({r['ground_source'] for r in rows if l0 + 1.0 <= r['t_s'] < l1})}")
+    ts = [r["t_s"] for r in rows]
+    import bisect
+
+    def truth_agl(t):
+        i = bisect.bisect_left(ts, t)
+        if i <= 0 or i >= len(ts):
+            return None
+        w = (t - ts[i - 1]) / (ts[i] - ts[i - 1])
+        return rows[i - 1]["true_agl_m"] * (1 - w) + rows[i]["true_agl_m"] * w
+    pe = [m.ground_height_m - truth_agl(t) for t, m in alts if l0 + 1.0 <= t < l1 and truth_agl(t) is not None]
+    c.check("laser: the peer's altitude.ground_height_m vs truth at its stamp: RMS ≤ 0.03 m",
+            pe and rms(pe) <= 0.03, f"{len(pe)} samples, RMS {rms(pe):.3f} m, max {max(abs(x) for x in pe):.3f} m" if pe else "")
+    back = [s for _, t, s in sts if l1 + 1.5 <= t < GPS_LOST_AT]
+    c.check("laser: laser_ok true again after it", back and all(s.laser_ok for s in back),
+            f"{sum(s.laser_ok for s in back)} of {len(back)}")
+    dl = sens_diag(l0 + 1.5, l1)
+    c.check("laser: /diagnostics 'fcc: sensors' WARN 'laser not ok'",
+            dl and any(s.level == 1 and "laser not ok" in s.message for _, s in dl), sorted({(s.level, s.message) for _, s in dl}))
+    rosout_check("laser altimeter gives no valid reading", 30, l0, l1 + 1.0, "one WARN 'laser … no valid reading'")
+    rosout_check("laser altimeter ok again", 20, l1, GPS_LOST_AT, "INFO 'laser altimeter ok again'")
+
+    # ---------------------------------------------------------- (a) GPS lost → land on baro/accel
+    g0 = GPS_LOST_AT
+    c.check("gps: no GPS loss reported in flight before it",
+            not any(not s.gps_ok for _, t, s in sts if ev["hold"] <= t < g0), "")
+    figs["gps_report"] = report(lambda s: not s.gps_ok, g0, g0 + 30.0, "gps_ok false after the GPS loss")
+    fs = [s.failsafe_name for _, t, s in sts if t >= g0]
+    c.check("gps: status failsafe gps_lost, mode land seen", "gps_lost" in fs and any(s.mode_name == "land" for _, t, s in sts if t >= g0),
+            sorted(set(fs)))
+    land = first(rows, lambda r: r["mode"] == "Land" and r["failsafe"] == "GpsLost", g0)
+    disarm = first(rows, lambda r: r["mode"] == "Disarmed", g0)
+    gear = rows[0]["true_agl_m"]
+    if land and disarm:
+        hold = [r for r in rows if g0 <= r["t_s"] < land["t_s"]]
+        a0 = -hold[0]["true_d_m"] if hold else float("nan")
+        dev_alt = max(abs(-r["true_d_m"] - a0) for r in hold) if hold else float("nan")
+        figs["gps_alt_err"] = dev_alt
+        c.check("gps: CSV Land with failsafe GpsLost within the GPS timeout + 0.5 s (1.5 s)", land["t_s"] - g0 <= 1.5,
+                f"{land['t_s'] - g0:.2f} s after the loss")
+        c.check("gps: altitude held on baro/accel until the landing (truth within ±0.3 m of the altitude at the loss)",
+                hold and dev_alt <= 0.3, f"{len(hold)} rows, max deviation {dev_alt:.3f} m at {a0:.2f} m")
+        desc = [r for r in rows if land["t_s"] <= r["t_s"] < disarm["t_s"]]
+        contact = max((r["true_vd_mps"] for r in desc if r["true_agl_m"] - gear < 0.1), default=float("nan"))
+        drift = math.hypot(disarm["true_n_m"] - land["true_n_m"], disarm["true_e_m"] - land["true_e_m"])
+        figs["gps_contact"], figs["gps_drift"], figs["gps_land_s"] = contact, drift, disarm["t_s"] - land["t_s"]
+        c.check("gps: touchdown ≤ 0.5 m/s, disarmed on the gear (the lockstep bounds)",
+                contact <= 0.5 and abs(disarm["true_agl_m"] - gear) < 0.06,
+                f"contact {contact:.2f} m/s, AGL at disarm {disarm['true_agl_m']:.3f} m (gear {gear:.3f}), "
+                f"descent {disarm['t_s'] - land['t_s']:.1f} s, drift without GPS {drift:.2f} m")
+    else:
+        c.check("gps: CSV Land/GpsLost and Disarmed after the loss", False, (land is not None, disarm is not None))
+    c.check("gps: CSV disarmed at the end", rows[-1]["mode"] == "Disarmed", rows[-1]["mode"])
+    dg = sens_diag(g0 + 1.0, g0 + 60.0)
+    c.check("gps: /diagnostics 'fcc: sensors' WARN 'GPS lost'",
+            dg and any(s.level == 1 and "GPS lost" in s.message for _, s in dg), sorted({(s.level, s.message) for _, s in dg}))
+    rosout_check("GPS lost", 30, g0, g0 + 60.0, "one WARN 'GPS lost'")
+    # ---------------------------------------------------------- acceleration topics (Fig. 13)
+    n_odom = len(peer.got["state/odom"])
+    n_obs, n_meas = len(peer.got["accel/observer"]), len(peer.got["accel/measured"])
+    c.check("accel/observer and accel/measured at the nav-state rate (as many as state/odom ±5 %)",
+            n_odom > 1000 and abs(n_obs - n_odom) <= 0.05 * n_odom and abs(n_meas - n_odom) <= 0.05 * n_odom,
+            f"odom {n_odom}, observer {n_obs}, measured {n_meas}")
+    obs_z = max((abs(m.accel.linear.z) for _, m in peer.got["accel/observer"]), default=1.0)
+    c.check("accel/observer: frame map, z = 0", obs_z == 0.0 and all(m.header.frame_id == "map"
+                                                                     for _, m in peer.got["accel/observer"][:50]), obs_z)
+    print("FIGURE sensors: " + ", ".join(
+        f"{k} {v:.3f}" if isinstance(v, float) else f"{k} {v}" for k, v in figs.items()))
+    print(f"(sensors) {wall:.0f} s wall")
+    return c.done()
+
+
 # ------------------------------------------------------------------------ (7) bad configuration
 
 SCEN_OK = f"{ROOT}/launch_configs/scenarios/hover.yaml"
@@ -751,7 +970,7 @@ def t_config(a, tmp):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("test", choices=["noisy", "kill-mission", "reconnect", "config"])
+    ap.add_argument("test", choices=["noisy", "kill-mission", "reconnect", "config", "sensors"])
     ap.add_argument("--bin", default=os.environ.get("FCC_BIN_DIR", f"{ROOT}/target/release"))
     ap.add_argument("--speed", type=float, default=float(os.environ.get("FCC_ROBUST_SPEED", "2")))
     ap.add_argument("--gap", type=float, default=2.0, help="outage length, s wall (reconnect)")
@@ -761,7 +980,8 @@ def main():
     tmp = a.keep or tempfile.mkdtemp(prefix=f"robust_{a.test}_")
     os.makedirs(tmp, exist_ok=True)
     print(f"=== robust {a.test} (speed {a.speed}, logs in {tmp})", flush=True)
-    f = {"noisy": t_noisy, "kill-mission": t_kill_mission, "reconnect": t_reconnect, "config": t_config}[a.test]
+    f = {"noisy": t_noisy, "kill-mission": t_kill_mission, "reconnect": t_reconnect, "config": t_config,
+         "sensors": t_sensors}[a.test]
     rc = f(a, tmp)
     if not a.keep and rc == 0:
         subprocess.run(["rm", "-rf", tmp])
