@@ -1,9 +1,9 @@
 //! u-blox UBX protocol parser (sans-IO) for NAV-PVT, plus a frame encoder for configuration.
 //!
 //! Source: u-blox 8 / u-blox M8 Receiver Description incl. Protocol Specification
-//! (UBX-13003221): §32.2 UBX frame structure — sync chars 0xB5 0x62, class, ID, 2-byte
-//! little-endian payload length, payload, CK_A CK_B; §32.4 checksum — 8-bit Fletcher over
-//! class, ID, length and payload (`CK_A += b; CK_B += CK_A`, modulo 256); §32.17.15 UBX-NAV-PVT
+//! (UBX-13003221), chapter "UBX Protocol". Frame structure: sync chars 0xB5 0x62, class, ID,
+//! 2-byte little-endian payload length, payload, CK_A CK_B. Checksum: 8-bit Fletcher over
+//! class, ID, length and payload (`CK_A += b; CK_B += CK_A`, modulo 256). UBX-NAV-PVT
 //! (class 0x01, ID 0x07, 92 bytes): iTOW U4 @0, fixType U1 @20 (0 no fix, 1 dead reckoning,
 //! 2 2D, 3 3D, 4 GNSS + DR, 5 time only), flags X1 @21 (bit 0 gnssFixOK), numSV U1 @23,
 //! lon I4 @24 and lat I4 @28 (1e-7 deg), height I4 @32 (above the ellipsoid, mm), hMSL I4 @36
@@ -52,6 +52,8 @@ pub struct NavPvt {
     pub head_mot_e5: i32,
     pub s_acc_mm_s: u32,
     pub p_dop_e2: u16,
+    /// flags3 @78 (protocol ≥ 27, u-blox F9; reserved = 0 on M8): bit 0 invalidLlh.
+    pub flags3: u8,
 }
 
 impl NavPvt {
@@ -86,6 +88,7 @@ impl NavPvt {
             head_mot_e5: i4(64),
             s_acc_mm_s: u4(68),
             p_dop_e2: u16::from_le_bytes([u1(76), u1(77)]),
+            flags3: u1(78),
         })
     }
 
@@ -99,9 +102,14 @@ impl NavPvt {
     pub fn gnss_fix_ok(&self) -> bool {
         self.flags & 0x01 != 0
     }
-    /// A 3-D fix the navigation may use: gnssFixOK and fixType 3 (3D) or 4 (GNSS + DR).
+    /// flags3 bit 0 (newer receivers): lon, lat, height and hMSL are invalid.
+    pub fn invalid_llh(&self) -> bool {
+        self.flags3 & 0x01 != 0
+    }
+    /// A 3-D fix the navigation may use: gnssFixOK, fixType 3 (3D) or 4 (GNSS + DR), and the
+    /// position not marked invalid.
     pub fn fix_3d_ok(&self) -> bool {
-        self.gnss_fix_ok() && (self.fix_type == 3 || self.fix_type == 4)
+        self.gnss_fix_ok() && (self.fix_type == 3 || self.fix_type == 4) && !self.invalid_llh()
     }
 
     /// As the flight core's [`GpsFix`] (arrival time `now_us`; height above the ellipsoid, as
@@ -312,7 +320,7 @@ impl UbxParser {
     }
 }
 
-/// Fletcher-8 checksum of class, ID, length and payload (§32.4).
+/// Fletcher-8 checksum of class, ID, length and payload ("UBX checksum").
 pub fn checksum(bytes: &[u8]) -> (u8, u8) {
     bytes.iter().fold((0u8, 0u8), |(a, b), &x| {
         let a = a.wrapping_add(x);
@@ -340,6 +348,38 @@ pub fn encode(class: u8, id: u8, payload: &[u8], out: &mut [u8]) -> Option<usize
     Some(total)
 }
 
+/// Configuration messages for a u-blox M8 on its UART1 (UBX-13003221, UBX-CFG messages). Each
+/// writes a complete frame into `out` and returns its length (`None` if `out` is too small);
+/// send them at the receiver's current baud rate and wait for the [`UbxMessage::Ack`].
+pub mod config {
+    use super::encode;
+
+    /// UBX-CFG-PRT (0x06 0x00, 20 bytes) for UART1: 8N1 (mode 0x000008D0), `baud`, UBX + NMEA
+    /// in, UBX only out.
+    pub fn cfg_prt_uart1(baud: u32, out: &mut [u8]) -> Option<usize> {
+        let mut p = [0u8; 20];
+        p[0] = 1; // portID UART1
+        p[4..8].copy_from_slice(&0x0000_08D0u32.to_le_bytes());
+        p[8..12].copy_from_slice(&baud.to_le_bytes());
+        p[12..14].copy_from_slice(&0x0003u16.to_le_bytes()); // inProtoMask UBX | NMEA
+        p[14..16].copy_from_slice(&0x0001u16.to_le_bytes()); // outProtoMask UBX
+        encode(0x06, 0x00, &p, out)
+    }
+
+    /// UBX-CFG-RATE (0x06 0x08, 6 bytes): measurement period, one solution per measurement,
+    /// GPS time reference.
+    pub fn cfg_rate(meas_period_ms: u16, out: &mut [u8]) -> Option<usize> {
+        let [a, b] = meas_period_ms.to_le_bytes();
+        encode(0x06, 0x08, &[a, b, 0x01, 0x00, 0x01, 0x00], out)
+    }
+
+    /// UBX-CFG-MSG (0x06 0x01, 3 bytes): output rate of a message on the current port
+    /// (1 = every solution, 0 = off).
+    pub fn cfg_msg(class: u8, id: u8, rate: u8, out: &mut [u8]) -> Option<usize> {
+        encode(0x06, 0x01, &[class, id, rate], out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -349,7 +389,7 @@ mod tests {
         s.iter().filter_map(|&b| p.push(b)).collect()
     }
 
-    /// A NAV-PVT payload laid out by hand at the offsets of UBX-13003221 §32.17.15.
+    /// A NAV-PVT payload laid out by hand at the offsets of UBX-13003221 (UBX-NAV-PVT).
     fn pvt_payload() -> [u8; 92] {
         let mut p = [0u8; 92];
         let put = |p: &mut [u8; 92], o: usize, b: &[u8]| p[o..o + b.len()].copy_from_slice(b);
@@ -481,6 +521,33 @@ mod tests {
         s.extend_from_slice(&out[..n]);
         assert_eq!(feed(&mut p, &s).len(), 1);
         assert_eq!(p.stats.messages, 2);
+    }
+
+    #[test]
+    fn config_frames() {
+        let mut out = [0u8; 32];
+        // CFG-MSG enabling NAV-PVT as commonly printed: B5 62 06 01 03 00 01 07 01 13 51.
+        let n = config::cfg_msg(0x01, 0x07, 1, &mut out).unwrap();
+        assert_eq!(
+            &out[..n],
+            &[0xB5, 0x62, 0x06, 0x01, 0x03, 0x00, 0x01, 0x07, 0x01, 0x13, 0x51]
+        );
+        let n = config::cfg_rate(200, &mut out).unwrap();
+        assert_eq!(&out[6..8], &[0xC8, 0x00]);
+        assert_eq!(n, 14);
+        let n = config::cfg_prt_uart1(115_200, &mut out).unwrap();
+        assert_eq!(n, 28);
+        assert_eq!(&out[14..18], &115_200u32.to_le_bytes());
+        assert_eq!(checksum(&out[2..26]), (out[26], out[27]));
+        assert_eq!(config::cfg_prt_uart1(9600, &mut [0u8; 27]), None);
+    }
+
+    #[test]
+    fn invalid_llh_flag_clears_the_fix() {
+        let mut q = pvt_payload();
+        q[78] = 0x01;
+        let p = NavPvt::from_payload(&q).unwrap();
+        assert!(p.gnss_fix_ok() && p.invalid_llh() && !p.fix_3d_ok());
     }
 
     #[test]

@@ -11,7 +11,7 @@
 //! |---|---|---|---|---|
 //! | [`mpu9250::Mpu9250`] | SPI (`SpiDevice`, mode 3, ≤ 1 MHz for config, ≤ 20 MHz for data) | `Mpu9250::new(spi, Mpu9250Config::default())`, then `.init(&mut delay)` once | `.read(now_us)` at the sample rate (500 Hz) | [`mpu9250::Mpu9250Reading`]: `ImuSample` (FRD, SI), die temperature, `Option<MagSample>` (new AK8963 data only) |
 //! | [`ms5611::Ms5611`] | SPI (`SpiDevice`, mode 0 or 3, ≤ 20 MHz) | `Ms5611::new(spi, Osr::Osr4096)`, then `.init(&mut delay)` (reset + PROM + CRC-4) | `.poll(now_us)` every tick: starts/reads conversions when their time has passed | `Option<BaroSample>` (Pa, °C) |
-//! | [`gps_ubx::UbxParser`] | UART (u-blox, UBX out) | `UbxParser::new()` | `.push(byte)` for each received byte | `Option<UbxMessage>`; `NavPvt::to_gps_fix(now_us)` → `GpsFix` |
+//! | [`gps_ubx::UbxParser`] | UART (u-blox, UBX out) | `UbxParser::new()` | `.push(byte)` for each received byte | `Option<UbxMessage>` (NAV-PVT, ACK/NAK); `NavPvt::to_gps_fix(now_us)` → `GpsFix`; `gps_ubx::config::{cfg_prt_uart1, cfg_rate, cfg_msg}` build the setup frames (NMEA is not parsed: configure the receiver for UBX output) |
 //! | [`laser::LaserParser`] | UART (RS-232 via a level shifter) | `LaserParser::new()` | `.push(byte)` | `Option<LaserReading>`; `.to_range_sample(now_us)` (no return → 99 999 m sentinel) |
 //! | [`sonar::SonarParser`] | UART 9600 8N1, inverted TTL | `SonarParser::new(SonarConfig::MB7076)` | `.push(byte)` | `Option<SonarReading>` (m, at-min/at-max flags); `.to_range_sample(now_us)` |
 //! | [`sbus::SbusDecoder`] | UART 100 000 8E2, inverted | `SbusDecoder::new()` | `.push(byte)`; `.idle()` on a UART idle gap | `Option<SbusFrame>` (16 + 2 channels, frame-lost, failsafe); [`sbus::pilot_override`] |
