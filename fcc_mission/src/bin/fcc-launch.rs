@@ -188,6 +188,44 @@ struct Running {
     group: Option<String>,
     /// Set when the launcher sent SIGTERM (its group is done): SIGKILL after the stop timeout.
     stopping_since: Option<Instant>,
+    /// CPU time used (user, system), s, once reaped.
+    cpu_s: Option<(f64, f64)>,
+}
+
+impl Running {
+    /// Record the exit status of a process just reaped, and its CPU time.
+    fn reaped(&mut self, s: Option<ExitStatus>, cpu: &mut CpuMeter) {
+        self.status = s;
+        self.cpu_s = Some(cpu.delta());
+    }
+}
+
+/// CPU time of the reaped processes: `getrusage(RUSAGE_CHILDREN)` grows by each child's
+/// user and system time when it is reaped; this thread reaps them one at a time, so each
+/// growth is that child's (its own children included, once it has reaped them).
+struct CpuMeter {
+    last: (f64, f64),
+}
+
+impl CpuMeter {
+    fn children() -> (f64, f64) {
+        use nix::sys::resource::{getrusage, UsageWho};
+        let tv = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
+        getrusage(UsageWho::RUSAGE_CHILDREN)
+            .map(|u| (tv(u.user_time()), tv(u.system_time())))
+            .unwrap_or((0.0, 0.0))
+    }
+    fn new() -> Self {
+        CpuMeter {
+            last: Self::children(),
+        }
+    }
+    fn delta(&mut self) -> (f64, f64) {
+        let now = Self::children();
+        let d = (now.0 - self.last.0, now.1 - self.last.1);
+        self.last = now;
+        d
+    }
 }
 
 /// A started process as the supervision rules see it.
@@ -266,11 +304,11 @@ fn code_of(s: &ExitStatus) -> i32 {
 }
 
 /// SIGTERM the still-running processes in reverse start order, then SIGKILL after `timeout`.
-fn stop_all(procs: &mut [Running], timeout: Duration) {
+fn stop_all(procs: &mut [Running], timeout: Duration, cpu: &mut CpuMeter) {
     for p in procs.iter_mut().rev() {
         if p.status.is_none() {
             if let Ok(Some(s)) = p.child.try_wait() {
-                p.status = Some(s);
+                p.reaped(Some(s), cpu);
                 continue;
             }
             println!("fcc-launch: stopping {} (SIGTERM)", p.name);
@@ -278,7 +316,7 @@ fn stop_all(procs: &mut [Running], timeout: Duration) {
             let t0 = Instant::now();
             loop {
                 if let Ok(Some(s)) = p.child.try_wait() {
-                    p.status = Some(s);
+                    p.reaped(Some(s), cpu);
                     break;
                 }
                 if t0.elapsed() > timeout {
@@ -288,7 +326,8 @@ fn stop_all(procs: &mut [Running], timeout: Duration) {
                         timeout.as_secs_f64()
                     );
                     let _ = p.child.kill();
-                    p.status = p.child.wait().ok();
+                    let s = p.child.wait().ok();
+                    p.reaped(s, cpu);
                     break;
                 }
                 std::thread::sleep(Duration::from_millis(20));
@@ -363,6 +402,7 @@ fn main() {
 
     let stop_timeout = Duration::from_secs_f64(cfg.stop_timeout_s);
     let mut running: Vec<Running> = Vec::new();
+    let mut cpu = CpuMeter::new();
     let t_start = Instant::now();
     let mut fail_early: Option<String> = None;
     'start: for p in &cfg.processes {
@@ -398,6 +438,7 @@ fn main() {
             main: p.main,
             group: p.group.clone(),
             stopping_since: None,
+            cpu_s: None,
         });
         if let Some(w) = &p.wait_for {
             let path = PathBuf::from(x(w));
@@ -405,7 +446,7 @@ fn main() {
             while !path.exists() {
                 let r = running.last_mut().unwrap();
                 if let Ok(Some(s)) = r.child.try_wait() {
-                    r.status = Some(s);
+                    r.reaped(Some(s), &mut cpu);
                     fail_early = Some(format!(
                         "{} exited ({}) before {} appeared",
                         p.name,
@@ -450,7 +491,8 @@ fn main() {
                             stop_timeout.as_secs_f64()
                         );
                         let _ = r.child.kill();
-                        r.status = r.child.wait().ok();
+                        let s = r.child.wait().ok();
+                        r.reaped(s, &mut cpu);
                     }
                 }
             }
@@ -458,7 +500,7 @@ fn main() {
             for (i, r) in running.iter_mut().enumerate() {
                 if r.status.is_none() {
                     if let Ok(Some(s)) = r.child.try_wait() {
-                        r.status = Some(s);
+                        r.reaped(Some(s), &mut cpu);
                         ended = Some(i);
                         break;
                     }
@@ -537,9 +579,35 @@ fn main() {
             std::thread::sleep(Duration::from_millis(50));
         }
     }
-    stop_all(&mut running, stop_timeout);
+    stop_all(&mut running, stop_timeout, &mut cpu);
     // Let the output threads flush the last lines.
     std::thread::sleep(Duration::from_millis(100));
+    // CPU use of the run: each process, the launcher itself, the sum (% of one core).
+    let wall_s = t_start.elapsed().as_secs_f64();
+    let own = {
+        use nix::sys::resource::{getrusage, UsageWho};
+        let tv = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
+        getrusage(UsageWho::RUSAGE_SELF)
+            .map(|u| (tv(u.user_time()), tv(u.system_time())))
+            .unwrap_or((0.0, 0.0))
+    };
+    let mut total = own.0 + own.1;
+    for r in &running {
+        if let Some((u, s)) = r.cpu_s {
+            total += u + s;
+            println!(
+                "fcc-launch: cpu {} user {u:.2} s sys {s:.2} s ({:.1} % of one core)",
+                r.name,
+                100.0 * (u + s) / wall_s.max(1e-9)
+            );
+        }
+    }
+    println!(
+        "fcc-launch: cpu fcc-launch user {:.2} s sys {:.2} s; all processes {total:.2} s in {wall_s:.1} s wall = {:.1} % of one core",
+        own.0,
+        own.1,
+        100.0 * total / wall_s.max(1e-9)
+    );
     let _ = std::fs::remove_dir_all(&run_dir);
 
     if code == 0 {
