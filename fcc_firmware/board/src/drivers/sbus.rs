@@ -15,9 +15,11 @@
 //! - Values: 11-bit 0..2047. Typical transmitter range 172..1811 with 992 at centre
 //!   (FrSky/OpenTX ±100 %; Futaba ≈ 368..1680 centre 1024): see [`to_unit`].
 //!
-//! No trusted `no_std` crate for this exists (the crates.io candidates are single-author 0.1
-//! releases), and the decoder is ~80 lines, so it is written here and tested against a
-//! bit-by-bit reference decoder.
+//! Why not a crate: the crates.io candidates (checked November 2026) are `sbus` 0.2.2 (last
+//! release 2020), `uf-sbus` 0.1.0 and `sbus-rs` 0.1.3 (AeroRust; fuzz-tested, embedded-io
+//! based) — all pre-1.0, for ~80 lines of decoding. It is written here, sans-IO like the other
+//! parsers, and tested against the per-channel formulas of the common C decoders and a random
+//! byte stream; `sbus-rs` is the one to switch to if a dependency is preferred.
 
 /// Frame length, bytes.
 pub const FRAME_LEN: usize = 25;
