@@ -557,6 +557,22 @@ impl<W: Write + Seek> BagWriter<W> {
     }
 }
 
+/// An error with its chain of causes, one line: `outer: cause: cause` (a cause whose text the
+/// outer message already contains is not repeated).
+pub fn err_text(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = e.to_string();
+    let mut src = e.source();
+    while let Some(c) = src {
+        let t = c.to_string();
+        if !out.contains(&t) {
+            out.push_str(": ");
+            out.push_str(&t);
+        }
+        src = c.source();
+    }
+    out.replace('\n', " ")
+}
+
 struct WriterThread {
     opts: RecordOptions,
     channels: Vec<Option<ChannelDesc>>,
@@ -588,6 +604,8 @@ impl WriterThread {
     }
 
     fn fail(&mut self, what: &str, e: impl std::fmt::Display) {
+        // Callers pass `err_text(..)`: the error with its causes (mcap's I/O error hides the
+        // OS error, e.g. "No space left on device", in its source).
         if !self.failed {
             let path = self.report.files.last().cloned().unwrap_or_default();
             let msg = format!(
@@ -611,14 +629,14 @@ impl WriterThread {
         let path = split_path(&self.opts.path, self.file_index);
         self.file_index += 1;
         let r = std::fs::File::create(&path)
-            .map_err(|e| e.to_string())
+            .map_err(|e| err_text(&e))
             .and_then(|f| {
                 BagWriter::new(
                     BufWriter::with_capacity(1 << 20, f),
                     self.opts.zstd,
                     self.opts.chunk_bytes,
                 )
-                .map_err(|e| e.to_string())
+                .map_err(|e| err_text(&e))
             });
         self.report.files.push(path.clone());
         match r {
@@ -644,10 +662,10 @@ impl WriterThread {
                 Ok(_) => {
                     let mut inner = b.writer.into_inner();
                     if let Err(e) = inner.flush() {
-                        self.fail("flush", e);
+                        self.fail("flush", err_text(&e));
                     }
                 }
-                Err(e) => self.fail("finish", e),
+                Err(e) => self.fail("finish", err_text(&e)),
             }
         }
     }
@@ -670,7 +688,7 @@ impl WriterThread {
         };
         if let Err(e) = bag.write(ch, desc, t, &data) {
             self.report.not_recorded += 1;
-            self.fail("write", e);
+            self.fail("write", err_text(&e));
             return;
         }
         let i = ch as usize;
@@ -697,7 +715,7 @@ impl WriterThread {
             self.last_flush = Instant::now();
             if let Some(b) = self.bag.as_mut() {
                 if let Err(e) = b.writer.flush() {
-                    self.fail("write", e);
+                    self.fail("write", err_text(&e));
                 }
             }
         }
@@ -817,6 +835,15 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(from_cdr::<LinkFrame>(&cdr_bytes(&f)).unwrap(), f);
+    }
+
+    #[test]
+    fn error_text_names_the_os_cause() {
+        let io = std::io::Error::from_raw_os_error(28);
+        let e = mcap::McapError::from(io);
+        let t = err_text(&e);
+        assert!(t.contains("No space left on device"), "{t}");
+        assert!(!t.contains('\n'));
     }
 
     #[test]
