@@ -48,23 +48,75 @@ echo "image: $ELF"
 echo "flash: $flash B of ${FLASH_KB} KB ($(pct $flash $FLASH_KB)%)  [TM4C1294NCPDT]"
 echo "RAM:   $ram B static + ${STACK_RESERVE_KB} KB stack reserve = $ram_with_stack B of ${RAM_KB} KB ($(pct $ram_with_stack $RAM_KB)%)"
 
-# f64 on a single-precision FPU is software: list the image's functions that call the EABI
-# double-precision helpers (lat/lon geodesy is the allowed user).
+# f64 on a single-precision FPU is software (__aeabi_dmul, __aeabi_dadd, … from compiler-builtins).
+# Find every call into a double-precision helper, or into a function that uses them (libm's f64
+# routines), from code outside libm/compiler-builtins/core, and attribute it to the innermost
+# source line of THIS repository in its inline chain (addr2line -i on the debug info). Only the
+# sites in the allowlist below may use f64; anything else fails the build.
+f64_ok=1
 objdump=arm-none-eabi-objdump
 if command -v $objdump >/dev/null; then
-  $objdump -d --no-show-raw-insn -C "$ELF" > "$BOARD/target/fcc-board.dis"
-  echo "functions calling software double-precision helpers (__aeabi_d*, f64):"
-  awk '/^[0-9a-f]+ <.*>:$/ {fn=$0; sub(/^[0-9a-f]+ </,"",fn); sub(/>:$/,"",fn)}
-       /bl.*<__aeabi_(d|l2d|ul2d|i2d|ui2d|f2d|d2f)/ && fn !~ /^__aeabi|^compiler_builtins/ {print "  " fn}' \
-    "$BOARD/target/fcc-board.dis" | sort | uniq -c | sort -rn | head -20
+  DIS=$BOARD/target/fcc-board.dis
+  $objdump -d --no-show-raw-insn -C "$ELF" > "$DIS"
+  # Functions whose own body calls a double helper.
+  mapfile -t f64fns < <(awk '/^[0-9a-f]+ <.*>:$/ {fn=$0; sub(/^[0-9a-f]+ </,"",fn); sub(/>:$/,"",fn)}
+       /\t(bl|b|b\.w)\t[0-9a-f]+ <__aeabi_(d[a-z0-9]+|[a-z0-9]*2d|d2[a-z0-9]+)>/ {print fn}' "$DIS" | sort -u)
+  # Call sites (address, callee) of double helpers or of those functions, in non-library code.
+  awk -v list="$(printf '%s\n' "${f64fns[@]}")" '
+       BEGIN { n = split(list, a, "\n"); for (i = 1; i <= n; i++) if (a[i] != "") f64[a[i]] = 1 }
+       /^[0-9a-f]+ <.*>:$/ {fn=$0; sub(/^[0-9a-f]+ </,"",fn); sub(/>:$/,"",fn)}
+       /\t(bl|b|b\.w)\t[0-9a-f]+ </ {
+         callee = $0; sub(/.*\t(bl|b|b\.w)\t[0-9a-f]+ </, "", callee); sub(/>.*/, "", callee)
+         if (fn ~ /^(__aeabi|compiler_builtins|libm::)/) next
+         if (callee ~ /^__aeabi_(d[a-z0-9]+|[a-z0-9]*2d|d2[a-z0-9]+)$/ || (callee in f64)) {
+           addr = $1; sub(/:$/, "", addr); print addr "\t" callee
+         }
+       }' "$DIS" > "$BOARD/target/f64-sites.txt"
+  : > "$BOARD/target/f64-report.txt"
+  while IFS=$'\t' read -r addr callee; do
+    # Inline chain, innermost first: "function\nfile:line" pairs; keep the first frame in this repo.
+    where=$(arm-none-eabi-addr2line -e "$ELF" -f -i -C "0x$addr" | paste - - |
+      awk -F'\t' -v root="$ROOT/" 'index($2, root) == 1 && $2 !~ /\/target\// {
+        f = $2; sub(root, "", f); sub(/ \(discriminator [0-9]+\)/, "", f); print f "\t" $1; exit }')
+    [ -n "$where" ] || where=$'(outside this repository)\t?'
+    printf '%s\t%s\n' "$where" "$callee" >> "$BOARD/target/f64-report.txt"
+  done < "$BOARD/target/f64-sites.txt"
+  echo "f64 (software double precision) in the image, by source file and function (calls into __aeabi_d* / libm f64):"
+  # Allowlist: source file (and function / callee) → reason.
+  awk -F'\t' '
+    function reason(file, fn, callee) {
+      if (file ~ /^fcc_nav\/src\/geodesy\.rs$/) return "allowed: WGS-84 lat/lon -> local NED (home: once; then per GPS fix, 5 Hz)"
+      if (file ~ /^fcc_firmware\/src\/nav\.rs$/ && callee ~ /^(__aeabi_(f2d|d2f)|,)+$/) return "allowed: f32<->f64 glue around the lat/lon -> NED call"
+      if (file ~ /^fcc_nav\/src\/complementary\.rs$/ && fn ~ /CfGains>::discrete/) return "allowed: filter gain design, cached; recomputed only when dt changes (first step)"
+      if (file ~ /^fcc_firmware\/board\/src\/drivers\/.*(gps|ubx)/) return "allowed: lat/lon from the GPS receiver"
+      return "NOT ALLOWED: f64 in the flight path"
+    }
+    { f = $1; sub(/:[0-9?]+$/, "", f); key = f "\t" $2
+      if (!(key in n)) { keys++; c[key] = $3 } else if (index("," c[key] ",", "," $3 ",") == 0) c[key] = c[key] "," $3
+      n[key]++ }
+    END {
+      bad = 0
+      for (k in n) { split(k, p, "\t"); r = reason(p[1], p[2], c[k]); if (r ~ /^NOT/) bad = 1
+        cs = c[k]; gsub(/libm::math::[a-z0-9_]+::/, "libm::", cs); gsub(/fcc_nav::geodesy::/, "", cs)
+        printf "  %s: %s — %d call(s) of %s  => %s\n", p[1], p[2], n[k], cs, r | "sort" }
+      close("sort")
+      if (keys == 0) print "  none"
+      exit bad
+    }' "$BOARD/target/f64-report.txt" || f64_ok=0
+  echo "  (libm f64 routines in the image, reached only from the sites above: $(printf '%s\n' "${f64fns[@]}" | grep '^libm::' | sed 's/^libm::math::[a-z_0-9]*:://' | sort -u | tr '\n' ' '))"
+  echo "square roots: $(grep -c 'vsqrt.f32' "$DIS") VSQRT.F32 instruction(s); software sqrtf in the image: $(grep -q '<libm::math::sqrt::sqrtf>:' "$DIS" && echo yes || echo no)"
   echo "functions calling core::panicking (panic paths left in the image):"
   awk '/^[0-9a-f]+ <.*>:$/ {fn=$0; sub(/^[0-9a-f]+ </,"",fn); sub(/>:$/,"",fn)}
        /bl.*<core::panicking|bl.*<core::option::unwrap_failed|bl.*<core::slice::index/ {print "  " fn}' \
-    "$BOARD/target/fcc-board.dis" | sort | uniq -c | sort -rn | head -20
+    "$DIS" | sort | uniq -c | sort -rn | head -20
 fi
 
 if [ $flash -gt $((FLASH_KB * 1024)) ] || [ $ram_with_stack -gt $((RAM_KB * 1024)) ]; then
   echo "build-mcu.sh: OVER BUDGET" >&2
+  exit 1
+fi
+if [ $f64_ok = 0 ]; then
+  echo "build-mcu.sh: f64 arithmetic outside the allowed sites (see above)" >&2
   exit 1
 fi
 echo "build-mcu.sh: within budget"

@@ -342,7 +342,7 @@ impl FlightCore {
         }
         let l = &self.params.limits;
         let mut v = sp.vel_ned_mps;
-        let h = libm::hypotf(v[0], v[1]);
+        let h = fcc_nav::math::hypotf(v[0], v[1]);
         if h > l.max_horiz_speed_mps {
             v[0] *= l.max_horiz_speed_mps / h;
             v[1] *= l.max_horiz_speed_mps / h;
@@ -504,13 +504,13 @@ impl FlightCore {
         };
         // Geofence: the outward velocity is limited so the vehicle can brake to a stop at the
         // fence (v ≤ √(2·a·d)); outside it, it is pulled back in.
-        let r = libm::hypotf(nav.pos_ned_m[0], nav.pos_ned_m[1]);
+        let r = fcc_nav::math::hypotf(nav.pos_ned_m[0], nav.pos_ned_m[1]);
         if r > 1e-3 {
             let out = [nav.pos_ned_m[0] / r, nav.pos_ned_m[1] / r];
             let v_out = v_ne[0] * out[0] + v_ne[1] * out[1];
             let to_fence = l.fence_radius_m - r;
             let v_out_max = if to_fence > 0.0 {
-                libm::sqrtf(2.0 * FENCE_BRAKE_MPS2 * to_fence)
+                fcc_nav::math::sqrtf(2.0 * FENCE_BRAKE_MPS2 * to_fence)
             } else {
                 -0.5 * (-to_fence).min(2.0)
             };
@@ -556,7 +556,7 @@ impl FlightCore {
             self.cross_track.reset();
             v_cmd_ne
         };
-        let (sy, cy) = (libm::sinf(e.yaw_rad), libm::cosf(e.yaw_rad));
+        let (sy, cy) = fcc_nav::math::sincosf(e.yaw_rad);
         let to_fr = |v: [f32; 2]| [cy * v[0] + sy * v[1], -sy * v[0] + cy * v[1]];
         let sat_ne = [
             cy * self.tilt_sat_fr[0] - sy * self.tilt_sat_fr[1],
@@ -589,7 +589,7 @@ impl FlightCore {
                 0.0
             };
         }
-        let n = libm::hypotf(tilt_cmd[0], tilt_cmd[1]);
+        let n = fcc_nav::math::hypotf(tilt_cmd[0], tilt_cmd[1]);
         self.tilt_sat_fr = [0.0; 2];
         if n > max_tilt {
             self.tilt_sat_fr = [sign_or_zero(tilt_cmd[0]), sign_or_zero(tilt_cmd[1])];
@@ -601,7 +601,7 @@ impl FlightCore {
         let roll_cmd = tilt_cmd[1];
 
         // Vertical: climb-rate PI → thrust.
-        let tilt_cos = libm::cosf(e.roll_rad) * libm::cosf(e.pitch_rad);
+        let tilt_cos = fcc_nav::math::cosf(e.roll_rad) * fcc_nav::math::cosf(e.pitch_rad);
         // Final descent: the rangefinders see the ground, so the climb rate relative to it is
         // what the touchdown speed is about (paper B's fused height, issue: use in flight).
         let vz_up_meas = if self.mode == Mode::Land
@@ -703,7 +703,7 @@ impl FlightCore {
         } else {
             nav.vel_ned_mps[2]
         };
-        let not_moving = libm::fabsf(vz) < 0.25;
+        let not_moving = fcc_nav::math::fabsf(vz) < 0.25;
         let low_thrust = self.telemetry.thrust_n < if near_ground { 0.9 } else { 0.8 } * hover_n;
         if self.landed || (descending_cmd && not_moving && low_thrust) {
             self.touchdown_s += dt_s;
@@ -720,7 +720,7 @@ impl FlightCore {
 }
 
 fn clamp_norm(v: [f32; 2], max: f32) -> [f32; 2] {
-    let n = libm::hypotf(v[0], v[1]);
+    let n = fcc_nav::math::hypotf(v[0], v[1]);
     if n > max && n > 0.0 {
         [v[0] * max / n, v[1] * max / n]
     } else {

@@ -19,7 +19,8 @@ pub fn motor_azimuth_rad(i: usize) -> f32 {
 /// Body FRD position (x, y) of motor `i`.
 pub fn motor_position_m(i: usize, arm_m: f32) -> (f32, f32) {
     let a = motor_azimuth_rad(i);
-    (arm_m * libm::cosf(a), arm_m * libm::sinf(a))
+    let (s, c) = fcc_nav::math::sincosf(a);
+    (arm_m * c, arm_m * s)
 }
 
 /// +1 for a clockwise rotor (seen from above), −1 for counter-clockwise.

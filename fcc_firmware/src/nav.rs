@@ -342,7 +342,7 @@ impl Navigator {
             self.vert.reset(0.0, 0.0);
             // At rest the specific force must have magnitude g: the excess is the accelerometer
             // bias along gravity, i.e. the vertical channel's bias (NED down positive).
-            let f_norm = libm::sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+            let f_norm = fcc_nav::math::sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
             self.vert.down.set_bias(fcc_nav::GRAVITY_MPS2 - f_norm);
             self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
             self.calibrated = true;

@@ -10,8 +10,8 @@
 //! `[0, 0, −g]`; at rest with roll φ and pitch θ it reads `g·(sin θ, −sin φ cos θ, −cos φ cos θ)`.
 
 use crate::complementary::{wrap_pi, AngleCf, CfGains};
+use crate::math::{asinf, atan2f, sincosf, sqrtf};
 use crate::GRAVITY_MPS2;
-use libm::{asinf, atan2f, cosf, sinf, sqrtf};
 
 /// ZYX Euler angles \[rad].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -48,8 +48,8 @@ pub fn mag_heading_rad(
     declination_rad: f32,
 ) -> f32 {
     let [mx, my, mz] = m_frd;
-    let (sp, cp) = (sinf(roll_rad), cosf(roll_rad));
-    let (st, ct) = (sinf(pitch_rad), cosf(pitch_rad));
+    let (sp, cp) = sincosf(roll_rad);
+    let (st, ct) = sincosf(pitch_rad);
     let mx_h = mx * ct + my * sp * st + mz * cp * st;
     let my_h = my * cp - mz * sp;
     wrap_pi(atan2f(-my_h, mx_h) + declination_rad)
@@ -59,9 +59,8 @@ pub fn mag_heading_rad(
 /// `cos θ` is limited to ±1e−3 near ±90° pitch (gimbal lock).
 pub fn euler_rates(gyro_frd_radps: [f32; 3], roll_rad: f32, pitch_rad: f32) -> [f32; 3] {
     let [p, q, r] = gyro_frd_radps;
-    let (sp, cp) = (sinf(roll_rad), cosf(roll_rad));
-    let st = sinf(pitch_rad);
-    let mut ct = cosf(pitch_rad);
+    let (sp, cp) = sincosf(roll_rad);
+    let (st, mut ct) = sincosf(pitch_rad);
     const MIN_COS: f32 = 1e-3;
     if ct.abs() < MIN_COS {
         ct = if ct < 0.0 { -MIN_COS } else { MIN_COS };
@@ -72,9 +71,9 @@ pub fn euler_rates(gyro_frd_radps: [f32; 3], roll_rad: f32, pitch_rad: f32) -> [
 
 /// Rotation matrix body (FRD) → NED, `R = Rz(ψ)·Ry(θ)·Rx(φ)`, row-major.
 pub fn rot_body_to_ned(e: &Euler) -> [[f32; 3]; 3] {
-    let (sp, cp) = (sinf(e.roll_rad), cosf(e.roll_rad));
-    let (st, ct) = (sinf(e.pitch_rad), cosf(e.pitch_rad));
-    let (ss, cs) = (sinf(e.yaw_rad), cosf(e.yaw_rad));
+    let (sp, cp) = sincosf(e.roll_rad);
+    let (st, ct) = sincosf(e.pitch_rad);
+    let (ss, cs) = sincosf(e.yaw_rad);
     [
         [ct * cs, sp * st * cs - cp * ss, cp * st * cs + sp * ss],
         [ct * ss, sp * st * ss + cp * cs, cp * st * ss - sp * cs],

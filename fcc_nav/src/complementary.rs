@@ -140,7 +140,7 @@ pub fn wrap_pi(a_rad: f32) -> f32 {
         return a_rad;
     }
     let two_pi = 2.0 * PI;
-    let mut r = a_rad - two_pi * libm::floorf((a_rad + PI) / two_pi);
+    let mut r = a_rad - two_pi * crate::math::floorf((a_rad + PI) / two_pi);
     // r in [−π, π); map −π (and rounding spill-over) into (−π, π].
     if r <= -PI {
         r += two_pi;
@@ -470,7 +470,7 @@ mod tests {
         let mut max_verr = 0.0f32;
         for k in 0..5000 {
             let t = k as f32 * DT;
-            let u = 2.0 * libm::sinf(3.0 * t) + 0.5;
+            let u = 2.0 * crate::math::sinf(3.0 * t) + 0.5;
             x += v * DT + 0.5 * u * DT * DT;
             v += u * DT;
             f.set_measurement(x, 0);
@@ -565,12 +565,12 @@ mod tests {
         let mut t = 0.0f32;
         for _ in 0..(30.0 / DT) as usize {
             t += DT;
-            let truth = 0.2 * libm::sinf(t);
-            let rate = 0.2 * libm::cosf(t) + bias;
+            let truth = 0.2 * crate::math::sinf(t);
+            let rate = 0.2 * crate::math::cosf(t) + bias;
             f.update(rate, Some(truth), DT);
         }
         assert!((f.bias_radps() + bias).abs() < 1e-3, "{}", f.bias_radps());
-        assert!((f.angle_rad() - 0.2 * libm::sinf(t)).abs() < 1e-3);
+        assert!((f.angle_rad() - 0.2 * crate::math::sinf(t)).abs() < 1e-3);
     }
 
     #[test]

@@ -52,7 +52,7 @@
 //!
 //! Units: metres, seconds, radians, °C; `f32`, `no_std`, no heap.
 
-use libm::{acosf, cosf, expf, sinf, sqrtf};
+use crate::math::{acosf, cosf, expf, sinf, sqrtf};
 
 /// What the ILM-150-R outputs when it receives no return (paper B): 99 999 m.
 /// (Same value as `fcc_firmware::sensors::LASER_NO_RETURN_M`.)

@@ -11,6 +11,7 @@
 //! | [`vertical`] | altitude/vertical speed from baro + accel (eqs. 5–6) | accel down \[m/s²], baro altitude \[m] or pressure \[Pa] | altitude up \[m], vel down \[m/s] |
 //! | [`observer`] | Luenberger linear-acceleration observer (eqs. 10–14) | tilt, tilt command \[rad], measured accel \[m/s²] | filtered accel \[m/s²] |
 //! | [`geodesy`] | WGS-84 LLA ↔ ECEF ↔ local NED (`f64`) | lat/lon \[deg], alt \[m] | ECEF \[m], NED \[m] |
+//! | [`math`] | the `f32` elementary functions every module uses (no `f64` on the single-precision FPU) | | |
 //! | [`sysid`] | streaming least-squares fit of `a = k1·θ − k2·v` ("3D curve fitting") | tilt \[rad], vel \[m/s], accel \[m/s²] | k1 \[m/s²/rad], k2 \[1/s] |
 //!
 //! # Conventions
@@ -25,6 +26,9 @@
 //!   Everything is `f32` except geodesy (`f64`).
 //! * Every filter `update` takes its own `dt_s`; the design rate is 500 Hz (`dt_s = 0.002`).
 #![no_std]
+// The bare-metal ARM build (always cross-built with -Zbuild-std, i.e. nightly mode) takes the
+// FPU square root from core; see `math::sqrtf`.
+#![cfg_attr(all(target_arch = "arm", target_os = "none"), feature(core_float_math))]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -37,6 +41,7 @@ pub mod geodesy;
 pub mod ground_altitude;
 pub mod horizontal;
 pub mod lowpass;
+pub mod math;
 pub mod observer;
 pub mod sysid;
 pub mod vertical;

@@ -19,7 +19,7 @@ impl LowPass2 {
     /// Cut-off `cutoff_hz` at sample rate `sample_hz` (cut-off clamped below Nyquist).
     pub fn new(cutoff_hz: f32, sample_hz: f32) -> Self {
         let fc = cutoff_hz.clamp(1e-3, 0.45 * sample_hz);
-        let k = libm::tanf(PI * fc / sample_hz);
+        let k = crate::math::tanf(PI * fc / sample_hz);
         let q = core::f32::consts::FRAC_1_SQRT_2;
         let norm = 1.0 / (1.0 + k / q + k * k);
         let b0 = k * k * norm;
@@ -68,7 +68,7 @@ mod tests {
         let mut peak: f32 = 0.0;
         for k in 0..5000 {
             let t = k as f32 * 0.002;
-            let y = f.update(1.0 + 3.0 * libm::sinf(2.0 * PI * 100.0 * t));
+            let y = f.update(1.0 + 3.0 * crate::math::sinf(2.0 * PI * 100.0 * t));
             if k > 1000 {
                 peak = peak.max((y - 1.0).abs());
             }
@@ -83,7 +83,7 @@ mod tests {
         let mut f = LowPass2::new(20.0, 500.0);
         let mut peak: f32 = 0.0;
         for k in 0..20_000 {
-            let y = f.update(libm::sinf(2.0 * PI * 20.0 * k as f32 * 0.002));
+            let y = f.update(crate::math::sinf(2.0 * PI * 20.0 * k as f32 * 0.002));
             if k > 10_000 {
                 peak = peak.max(y.abs());
             }

@@ -15,7 +15,7 @@
 //! `â ← α·â + (1 − α)·(f + L·a_meas)/(k2 + L)`, `α = exp(−(k2 + L)·dt)`; forward Euler if
 //! `k2 + L` is ~0.
 
-use libm::expf;
+use crate::math::expf;
 
 /// Observer parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -135,8 +135,9 @@ mod tests {
 
     #[test]
     fn reduces_noise_vs_raw() {
-        let cmd =
-            |t: f32| 0.1 * libm::sinf(1.3 * t) + if (t as i32) % 4 < 2 { 0.05 } else { -0.05 };
+        let cmd = |t: f32| {
+            0.1 * crate::math::sinf(1.3 * t) + if (t as i32) % 4 < 2 { 0.05 } else { -0.05 }
+        };
         let (est, raw, _, _) = run(cmd, 1.0, 30.0);
         assert!((raw - 1.0).abs() < 0.05, "raw {raw}");
         std::println!("observer: est err std {est}, raw {raw}");

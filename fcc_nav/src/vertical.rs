@@ -7,7 +7,7 @@
 //! samples (timeout 1 s by default, see `PosVelCf::timeout_s`).
 
 use crate::complementary::{CfGains, PosVelCf};
-use libm::powf;
+use crate::math::powf;
 
 /// ISA barometric altitude \[m] above the reference pressure `p0_pa`:
 /// `44330.77·(1 − (p/p0)^0.190263)`.

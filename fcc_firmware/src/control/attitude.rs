@@ -7,7 +7,7 @@ use super::pi::ForgettingPi;
 
 fn wrap_pi(a: f32) -> f32 {
     let two_pi = 2.0 * core::f32::consts::PI;
-    let mut x = libm::fmodf(a + core::f32::consts::PI, two_pi);
+    let mut x = fcc_nav::math::fmodf(a + core::f32::consts::PI, two_pi);
     if x < 0.0 {
         x += two_pi;
     }

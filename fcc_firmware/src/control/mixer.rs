@@ -109,7 +109,7 @@ impl Mixer {
         let (t, sat) = self.mix_thrust(thrust_n, torque_nm);
         let mut cmd = [0.0f32; MOTOR_COUNT];
         for i in 0..MOTOR_COUNT {
-            cmd[i] = libm::sqrtf((t[i] / self.max_thrust_n).max(0.0)).min(1.0);
+            cmd[i] = fcc_nav::math::sqrtf((t[i] / self.max_thrust_n).max(0.0)).min(1.0);
         }
         (cmd, sat)
     }

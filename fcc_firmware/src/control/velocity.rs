@@ -49,7 +49,7 @@ impl CrossTrack {
         pos_ne_m: [f32; 2],
         vel_ne_mps: [f32; 2],
     ) -> [f32; 2] {
-        let speed = libm::hypotf(v_cmd_ne[0], v_cmd_ne[1]);
+        let speed = fcc_nav::math::hypotf(v_cmd_ne[0], v_cmd_ne[1]);
         if speed < MIN_TRACK_SPEED_MPS {
             self.reset();
             return v_cmd_ne;
@@ -117,7 +117,7 @@ impl VelocityController {
             a[i] = self.pi[i].update(v_cmd_ne[i] - vel_ne_mps[i], dt_s, saturated[i]);
         }
         // Limit the magnitude, keeping direction.
-        let n = libm::hypotf(a[0], a[1]);
+        let n = fcc_nav::math::hypotf(a[0], a[1]);
         if n > self.accel_limit_mps2 {
             let s = self.accel_limit_mps2 / n;
             a = [a[0] * s, a[1] * s];
@@ -170,7 +170,7 @@ mod tests {
     fn velocity_pi_limits_acceleration_magnitude() {
         let mut vc = VelocityController::new(2.0, 0.0, 1.0, 3.0);
         let a = vc.update(0.01, [10.0, 10.0], [0.0, 0.0], [0.0, 0.0]);
-        assert!((libm::hypotf(a[0], a[1]) - 3.0).abs() < 1e-4);
+        assert!((fcc_nav::math::hypotf(a[0], a[1]) - 3.0).abs() < 1e-4);
         assert!((a[0] - a[1]).abs() < 1e-5);
     }
 }

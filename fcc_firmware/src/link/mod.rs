@@ -576,9 +576,9 @@ fn nav_state(core: &FlightCore) -> NavState {
 
 /// Quaternion `[w, x, y, z]` rotating body FRD into NED for ZYX Euler angles (yaw, pitch, roll).
 pub fn quat_from_euler(roll_rad: f32, pitch_rad: f32, yaw_rad: f32) -> [f32; 4] {
-    let (sr, cr) = (libm::sinf(0.5 * roll_rad), libm::cosf(0.5 * roll_rad));
-    let (sp, cp) = (libm::sinf(0.5 * pitch_rad), libm::cosf(0.5 * pitch_rad));
-    let (sy, cy) = (libm::sinf(0.5 * yaw_rad), libm::cosf(0.5 * yaw_rad));
+    let (sr, cr) = fcc_nav::math::sincosf(0.5 * roll_rad);
+    let (sp, cp) = fcc_nav::math::sincosf(0.5 * pitch_rad);
+    let (sy, cy) = fcc_nav::math::sincosf(0.5 * yaw_rad);
     [
         cr * cp * cy + sr * sp * sy,
         sr * cp * cy - cr * sp * sy,
