@@ -1,7 +1,10 @@
 //! Test helper: fly a mission YAML through the bridge's ROS topics (odom in, arm / mode /
 //! velocity setpoints out) with `fcc_mission`'s waypoint follower — a minimal stand-in for the
 //! mission node, so that a SITL flight over the real link can be recorded.
-//!   fly_mission MISSION.yaml [--ns /fcc] [--timeout S]    (run under netns-run, with the bridge)
+//!   fly_mission MISSION.yaml [--timeout S] [--hover-s S]    (run under netns-run, with the bridge)
+//! `--hover-s S`: after the last waypoint, hover in the MCU's HOLD mode (`cmd/mode` = `hold`, no
+//! setpoints) for S seconds of the bag's clock (odometry stamps), then land — the flight core's
+//! hover test (paper A Fig. 16: climb, HOLD at the current estimate, land) through the stack.
 //! Exits 0 when the vehicle has landed and disarmed after the mission.
 
 use fcc_bridge::report::bag::odom_ned;
@@ -23,6 +26,11 @@ async fn main() -> anyhow::Result<()> {
         .position(|a| a == "--timeout")
         .and_then(|i| args.get(i + 1)?.parse::<f64>().ok())
         .unwrap_or(300.0);
+    let hover_s = args
+        .iter()
+        .position(|a| a == "--hover-s")
+        .and_then(|i| args.get(i + 1)?.parse::<f64>().ok())
+        .unwrap_or(0.0);
     let mission = fcc_mission::from_yaml_str(&std::fs::read_to_string(mission_path)?)
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let mut follower = WaypointFollower::new(mission);
@@ -59,6 +67,9 @@ async fn main() -> anyhow::Result<()> {
     let mut first_odom: Option<Instant> = None;
     let mut last_arm = Instant::now() - Duration::from_secs(10);
     let mut ready = false;
+    // Hover after the mission: (odom stamp at the hold command, last hold command sent).
+    let mut hover: Option<(f64, Instant)> = None;
+    let mut mode_now = Status::MODE_DISARMED;
     loop {
         if start.elapsed().as_secs_f64() > timeout {
             anyhow::bail!("mission not finished in {timeout} s");
@@ -66,6 +77,7 @@ async fn main() -> anyhow::Result<()> {
         tokio::select! {
             Some(Ok((s, _))) = status_s.next() => {
                 armed = s.armed;
+                mode_now = s.mode;
                 landed = s.landed;
                 was_armed |= armed;
                 ready |= s.time_synced || s.header.stamp.to_nanos() > 0;
@@ -81,12 +93,30 @@ async fn main() -> anyhow::Result<()> {
                     continue;
                 }
                 let t = o.header.stamp.to_nanos() as f64 * 1e-9;
+                if let Some((t_hold, sent)) = hover {
+                    // Hovering in HOLD: no setpoints (a fresh one would resume velocity mode).
+                    if t - t_hold >= hover_s {
+                        let _ = mode.publish(StringMsg { data: "land".into() });
+                        land_sent = true;
+                        eprintln!("fly_mission: hovered {:.1} s in HOLD, landing", t - t_hold);
+                    } else if mode_now != Status::MODE_HOLD && sent.elapsed() > Duration::from_secs(1) {
+                        let _ = mode.publish(StringMsg { data: "hold".into() });
+                        hover = Some((t_hold, Instant::now()));
+                    }
+                    continue;
+                }
                 let (p, v, _) = odom_ned(&o);
                 let g = follower.update(t, [p[0] as f32, p[1] as f32, p[2] as f32], [v[0] as f32, v[1] as f32, v[2] as f32]);
                 match g.request {
                     Some(Request::Arm) if !armed && last_arm.elapsed() > Duration::from_secs(1) => {
                         let _ = arm.publish(Bool { data: true });
                         last_arm = Instant::now();
+                    }
+                    Some(Request::Land) if !land_sent && hover_s > 0.0 => {
+                        let _ = mode.publish(StringMsg { data: "hold".into() });
+                        hover = Some((t, Instant::now()));
+                        eprintln!("fly_mission: mission done, hovering {hover_s} s in HOLD");
+                        continue;
                     }
                     Some(Request::Land) if !land_sent => {
                         let _ = mode.publish(StringMsg { data: "land".into() });

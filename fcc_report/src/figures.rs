@@ -4,7 +4,26 @@
 use fcc_bridge::record::from_cdr;
 use fcc_bridge::report::bag::{euler, odom_ned, BagMsg};
 use fcc_bridge::ros_types::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+
+/// The head of `fcc_msgs/Status` (the fields the report needs). CDR is sequential, so this
+/// prefix decodes every version of the message (later fields were added after `landed`).
+#[derive(Deserialize)]
+struct StatusHead {
+    header: Header,
+    mode: u8,
+    _mode_name: String,
+    armed: bool,
+    landed: bool,
+}
+
+/// `geometry_msgs/AccelStamped` (decoded here so bags of any bridge version read alike).
+#[derive(Deserialize)]
+struct AccelIn {
+    header: Header,
+    linear: Vector3,
+    _angular: Vector3,
+}
 
 /// Decoded time series (t in s of ROS time).
 #[derive(Default)]
@@ -17,8 +36,16 @@ pub struct Series {
     pub alt: Vec<(f64, f64, f64, f64, f64, f64)>,
     /// t, commanded velocity NED (received setpoints).
     pub vel_cmd: Vec<(f64, [f64; 3])>,
-    /// t, armed, mode.
-    pub status: Vec<(f64, bool, u8)>,
+    /// t, armed, mode, landed.
+    pub status: Vec<(f64, bool, u8, bool)>,
+    /// Mode commands the mission computer sent (`cmd/mode`): receive time, lower-case text.
+    pub mode_cmds: Vec<(f64, String)>,
+    /// Receive times of the velocity setpoints (`setpoint/velocity`).
+    pub setpoint_times: Vec<f64>,
+    /// t, the MCU's acceleration observer, horizontal N, E (m/s²) — `accel/observer`.
+    pub accel_obs: Vec<(f64, [f64; 2])>,
+    /// t, the measured (gravity-compensated) acceleration N, E, D (m/s²) — `accel/measured`.
+    pub accel_meas: Vec<(f64, [f64; 3])>,
     /// first cmd/arm receive time.
     pub first_arm_cmd: Option<f64>,
     pub topics: std::collections::BTreeMap<String, u64>,
@@ -64,11 +91,29 @@ pub fn decode(msgs: &[BagMsg]) -> Series {
                 if let Some(tw) = from_cdr::<TwistStamped>(&m.data) {
                     let v = tw.twist.linear.to_array();
                     s.vel_cmd.push((log_t, [v[1], v[0], -v[2]]));
+                    s.setpoint_times.push(log_t);
                 }
             }
             ("fcc_msgs/msg/Status", _) => {
-                if let Some(st) = from_cdr::<Status>(&m.data) {
-                    s.status.push((t_of(&st.header), st.armed, st.mode));
+                if let Some(st) = from_cdr::<StatusHead>(&m.data) {
+                    s.status
+                        .push((t_of(&st.header), st.armed, st.mode, st.landed));
+                }
+            }
+            ("std_msgs/msg/String", "mode") if m.topic.ends_with("cmd/mode") => {
+                if let Some(c) = from_cdr::<StringMsg>(&m.data) {
+                    s.mode_cmds
+                        .push((log_t, c.data.trim().to_ascii_lowercase()));
+                }
+            }
+            ("geometry_msgs/msg/AccelStamped", "observer" | "measured") => {
+                if let Some(a) = from_cdr::<AccelIn>(&m.data) {
+                    let (t, v) = (t_of(&a.header), a.linear.to_array()); // ENU
+                    if m.topic.ends_with("accel/observer") {
+                        s.accel_obs.push((t, [v[1], v[0]]));
+                    } else if m.topic.ends_with("accel/measured") {
+                        s.accel_meas.push((t, [v[1], v[0], -v[2]]));
+                    }
                 }
             }
             ("std_msgs/msg/Bool", "arm") => {
@@ -80,6 +125,9 @@ pub fn decode(msgs: &[BagMsg]) -> Series {
         }
     }
     s.odom.sort_by(|a, b| a.0.total_cmp(&b.0));
+    s.status.sort_by(|a, b| a.0.total_cmp(&b.0));
+    s.accel_obs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    s.accel_meas.sort_by(|a, b| a.0.total_cmp(&b.0));
     s
 }
 
@@ -187,6 +235,211 @@ pub fn legs(s: &Series, mission: &fcc_mission::Mission) -> Vec<Leg> {
     out
 }
 
+/// A hover must last this long to count (s).
+pub const MIN_HOVER_S: f64 = 10.0;
+
+/// The hover (paper A Fig. 16) and its box, defined as the flight core's hover test does
+/// (`fcc_firmware::sitl::metrics::hover_box`, `tests/tests/flight_core.rs`): the window is the
+/// time the MCU holds position in HOLD mode while armed; the hold point is the estimated
+/// position where the hold began (the MCU holds that point); the box is the largest
+/// |estimate − hold point| per axis (N, E, altitude) over the window.
+#[derive(Clone, Debug, Serialize)]
+pub struct Hover {
+    /// Window [t0, t1) in the bag's clock (s).
+    pub t0_s: f64,
+    pub t1_s: f64,
+    /// What fixed each edge: `cmd/mode hold`, `cmd/mode land`, `setpoint`, or `status` (the
+    /// first/last status reporting HOLD: the edge is known to a status period only).
+    pub start_from: String,
+    pub end_from: String,
+    /// Status period around the edges (s): the uncertainty of a `status` edge.
+    pub status_period_s: f64,
+    /// Estimated position at the first odometry of the window (NED, m).
+    pub hold_ned_m: [f64; 3],
+    pub samples: usize,
+    /// max |est − hold point| N, E, altitude (m).
+    pub box_m: [f64; 3],
+    /// Largest estimated speed per axis in the window (m/s), for judging edge effects.
+    pub max_speed_mps: [f64; 3],
+}
+
+/// Finds the hover from the bag alone. The MCU's mode on `status` (HOLD and armed, the longest
+/// run lasting ≥ [`MIN_HOVER_S`]) is the authority: it holds whether the hold came from
+/// `cmd/mode`, the bridge's `hold` service or a failsafe. `status` comes at 10 Hz, so the mode
+/// change lies somewhere between two status messages; an edge is refined to the command that
+/// caused it when the bag holds one inside that interval (`cmd/mode` = hold at the start; a
+/// mode command or the first velocity setpoint — which resumes velocity mode — at the end:
+/// the MCU acts on it within a tick or two), else it is the status message itself (inside the
+/// hold: no sample of another mode is counted).
+pub fn hover(s: &Series) -> Option<Hover> {
+    let st = &s.status;
+    let holding = |x: &(f64, bool, u8, bool)| x.1 && x.2 == Status::MODE_HOLD;
+    // Runs of consecutive HOLD statuses: (first, last) index.
+    let mut runs = Vec::new();
+    let mut i = 0;
+    while i < st.len() {
+        if holding(&st[i]) {
+            let j0 = i;
+            while i + 1 < st.len() && holding(&st[i + 1]) {
+                i += 1;
+            }
+            runs.push((j0, i));
+        }
+        i += 1;
+    }
+    let mut best: Option<Hover> = None;
+    for (a, b) in runs {
+        let before = if a > 0 {
+            st[a - 1].0
+        } else {
+            f64::NEG_INFINITY
+        };
+        let after = st.get(b + 1).map_or(f64::INFINITY, |x| x.0);
+        let period = if st.len() > 1 {
+            (st[st.len() - 1].0 - st[0].0) / (st.len() - 1) as f64
+        } else {
+            f64::NAN
+        };
+        let is_hold = |c: &str| matches!(c, "hold" | "loiter" | "position");
+        let (t0, start_from) = s
+            .mode_cmds
+            .iter()
+            .filter(|c| is_hold(&c.1) && c.0 > before && c.0 <= st[a].0)
+            .map(|c| c.0)
+            .next_back()
+            .map_or((st[a].0, "status".to_string()), |t| {
+                (t, "cmd/mode hold".into())
+            });
+        let end_cmd = s
+            .mode_cmds
+            .iter()
+            .filter(|c| !is_hold(&c.1) && c.0 >= st[b].0 && c.0 < after)
+            .map(|c| (c.0, format!("cmd/mode {}", c.1)))
+            .next();
+        let end_sp = s
+            .setpoint_times
+            .iter()
+            .find(|&&t| t >= st[b].0 && t < after)
+            .map(|&t| (t, "setpoint".to_string()));
+        let (t1, end_from) = match (end_cmd, end_sp) {
+            (Some(c), Some(p)) => {
+                if c.0 <= p.0 {
+                    c
+                } else {
+                    p
+                }
+            }
+            (Some(x), None) | (None, Some(x)) => x,
+            (None, None) => (st[b].0, "status".to_string()),
+        };
+        let win: Vec<_> = s.odom.iter().filter(|o| o.0 >= t0 && o.0 < t1).collect();
+        if win.len() < 3 || t1 - t0 < MIN_HOVER_S {
+            continue;
+        }
+        let h = win[0].1;
+        let (mut bx, mut vmax) = ([0.0f64; 3], [0.0f64; 3]);
+        for o in &win {
+            for k in 0..3 {
+                bx[k] = bx[k].max((o.1[k] - h[k]).abs());
+                vmax[k] = vmax[k].max(o.2[k].abs());
+            }
+        }
+        if best.as_ref().is_some_and(|x| x.t1_s - x.t0_s >= t1 - t0) {
+            continue;
+        }
+        best = Some(Hover {
+            t0_s: t0,
+            t1_s: t1,
+            start_from,
+            end_from,
+            status_period_s: period,
+            hold_ned_m: h,
+            samples: win.len(),
+            box_m: bx,
+            max_speed_mps: vmax,
+        });
+    }
+    best
+}
+
+/// Paper A Fig. 13: the MCU's acceleration observer against the measured acceleration, in
+/// flight (armed, not landed, estimated altitude > 1 m, as `metrics::observer_noise`). The bag
+/// has no truth, so the noise of each is its high-pass part: the deviation from a centred 1 s
+/// moving average, N and E pooled; the figure is std(observer) / std(measured) (the flight
+/// core's own figure, std(est − truth) / std(raw − truth), is below 0.3).
+#[derive(Clone, Debug, Serialize)]
+pub struct ObserverFig {
+    pub samples: usize,
+    pub observer_hp_std_mps2: f64,
+    pub measured_hp_std_mps2: f64,
+    pub ratio: f64,
+}
+
+/// Deviation of each sample from the centred moving average of ±`w` samples (`None` at the
+/// ends).
+fn high_pass(v: &[f64], w: usize) -> Vec<Option<f64>> {
+    let mut c = vec![0.0; v.len() + 1];
+    for (i, x) in v.iter().enumerate() {
+        c[i + 1] = c[i] + x;
+    }
+    (0..v.len())
+        .map(|i| {
+            (i >= w && i + w < v.len())
+                .then(|| v[i] - (c[i + w + 1] - c[i - w]) / (2 * w + 1) as f64)
+        })
+        .collect()
+}
+
+pub fn observer(s: &Series) -> Result<ObserverFig, String> {
+    if s.accel_obs.is_empty() || s.accel_meas.is_empty() {
+        return Err("the bag has no accel/observer and accel/measured topics (recorded by an older bridge); skipped".into());
+    }
+    let airborne = |t: f64| -> bool {
+        let i = s.status.partition_point(|x| x.0 <= t);
+        let j = s.odom.partition_point(|o| o.0 <= t);
+        i > 0 && s.status[i - 1].1 && !s.status[i - 1].3 && j > 0 && -s.odom[j - 1].1[2] > 1.0
+    };
+    let hp_std = |series: Vec<(f64, [f64; 2])>| -> (f64, usize) {
+        if series.len() < 3 {
+            return (f64::NAN, 0);
+        }
+        let rate = (series.len() - 1) as f64 / (series[series.len() - 1].0 - series[0].0);
+        let w = ((0.5 * rate).round() as usize).max(1);
+        let mut d = Vec::new();
+        for k in 0..2 {
+            let v: Vec<f64> = series.iter().map(|x| x.1[k]).collect();
+            for (x, h) in series.iter().zip(high_pass(&v, w)) {
+                if let Some(h) = h.filter(|_| airborne(x.0)) {
+                    d.push(h);
+                }
+            }
+        }
+        let n = d.len();
+        if n < 2 {
+            return (f64::NAN, n / 2);
+        }
+        let m = d.iter().sum::<f64>() / n as f64;
+        let var = d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64;
+        (var.sqrt(), n / 2)
+    };
+    let (o, n) = hp_std(s.accel_obs.clone());
+    let (r, _) = hp_std(
+        s.accel_meas
+            .iter()
+            .map(|x| (x.0, [x.1[0], x.1[1]]))
+            .collect(),
+    );
+    if n < 100 {
+        return Err(format!("only {n} airborne samples of accel/observer"));
+    }
+    Ok(ObserverFig {
+        samples: n,
+        observer_hp_std_mps2: o,
+        measured_hp_std_mps2: r,
+        ratio: o / r,
+    })
+}
+
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Figures {
     pub duration_s: f64,
@@ -195,6 +448,10 @@ pub struct Figures {
     /// Hover box while in HOLD mode (≥ 10 s): max |est − hold point| N, E, alt (m).
     pub hover_box_m: Option<[f64; 3]>,
     pub hover_s: f64,
+    /// The hover window and how it was found ([`hover`]).
+    pub hover: Option<Hover>,
+    /// Paper A Fig. 13 from `accel/observer` and `accel/measured` ([`observer`]).
+    pub observer: Option<ObserverFig>,
     pub legs: Vec<Leg>,
     pub cross_track_rms_m: Option<f64>,
     pub cross_track_max_m: Option<f64>,
@@ -227,28 +484,15 @@ pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
             (s.status[i - 1].1, s.status[i - 1].2)
         }
     };
-    // Hover box (HOLD mode while armed).
-    let hold: Vec<_> = s
-        .odom
-        .iter()
-        .filter(|o| {
-            let (a, m) = armed_at(o.0);
-            a && m == Status::MODE_HOLD
-        })
-        .collect();
-    if hold.len() > 2 && hold.last().unwrap().0 - hold[0].0 >= 10.0 {
-        let h = hold[0].1;
-        let mut b = [0.0f64; 3];
-        for o in &hold {
-            for k in 0..3 {
-                b[k] = b[k].max((o.1[k] - h[k]).abs());
-            }
+    match hover(s) {
+        Some(h) => {
+            f.hover_box_m = Some(h.box_m);
+            f.hover_s = h.t1_s - h.t0_s;
+            f.hover = Some(h);
         }
-        f.hover_box_m = Some(b);
-        f.hover_s = hold.last().unwrap().0 - hold[0].0;
-    } else {
-        f.missing
-            .push("hover box: no HOLD-mode period ≥ 10 s in this flight".into());
+        None => f.missing.push(format!(
+            "hover box: no HOLD-mode period ≥ {MIN_HOVER_S} s on status in this flight"
+        )),
     }
     match mission {
         Some(m) => {
@@ -349,7 +593,12 @@ pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
             fit.count(),
         ));
     }
-    f.missing.push("observer vs raw acceleration (Fig. 13): the link carries no observer acceleration, so the bag cannot show it (fcc-sitl's CSV has it)".into());
+    match observer(s) {
+        Ok(o) => f.observer = Some(o),
+        Err(why) => f
+            .missing
+            .push(format!("observer vs raw acceleration (Fig. 13): {why}")),
+    }
     f
 }
 
@@ -362,8 +611,9 @@ impl std::fmt::Display for Figures {
             self.messages,
             self.topics.len()
         )?;
-        if let Some(b) = self.hover_box_m {
-            writeln!(w, "hover {:.0} s, estimated position max |dev| from hold point: N {:.3} m  E {:.3} m  alt {:.3} m", self.hover_s, b[0], b[1], b[2])?;
+        if let Some(h) = &self.hover {
+            let b = h.box_m;
+            writeln!(w, "hover {:.1} s in HOLD ({:.1}–{:.1} s, from {} to {}), estimated position max |dev| from hold point: N {:.3} m  E {:.3} m  alt {:.3} m (paper A: N 0.7, E 1.1, alt 0.3 m)", h.t1_s - h.t0_s, h.t0_s, h.t1_s, h.start_from, h.end_from, b[0], b[1], b[2])?;
         }
         for l in &self.legs {
             writeln!(
@@ -401,6 +651,9 @@ impl std::fmt::Display for Figures {
                 g[0], g[1]
             )?;
         }
+        if let Some(o) = &self.observer {
+            writeln!(w, "acceleration observer vs measured (in flight, {} samples): high-pass (1 s) σ observer {:.3} m/s² vs measured {:.3} m/s², ratio {:.3} (flight core goal on est − truth: < 0.3)", o.samples, o.observer_hp_std_mps2, o.measured_hp_std_mps2, o.ratio)?;
+        }
         if let Some((k1, k2, r2, n)) = self.k1_k2_fit {
             writeln!(w, "k1/k2 fit (a = k1·tilt − k2·v, {n} samples): k1 = {k1:.3} m/s²/rad, k2 = {k2:.3} 1/s, R² = {r2:.3} → suggested params: k1_mps2_per_rad = {k1:.2}, k2_per_s = {k2:.3}")?;
         }
@@ -408,5 +661,106 @@ impl std::fmt::Display for Figures {
             writeln!(w, "missing: {m}")?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 100 Hz odometry with a known path, 10 Hz status in HOLD over [20.014, 50.024) s.
+    fn flight(hold_cmd: bool) -> Series {
+        let mut s = Series::default();
+        let pos = |t: f64| {
+            [
+                0.1 * (t * 0.7).sin(),
+                -0.2 * (t * 0.3).cos(),
+                -5.0 + 0.05 * t.sin(),
+            ]
+        };
+        for i in 0..7000 {
+            let t = i as f64 * 0.01;
+            s.odom.push((t, pos(t), [0.0; 3], [0.0; 3]));
+        }
+        let (t_hold, t_land) = (20.014, 50.024);
+        for i in 0..700 {
+            let t = i as f64 * 0.1 + 0.005;
+            let mode = if t < 5.0 {
+                Status::MODE_DISARMED
+            } else if (t_hold..t_land).contains(&t) {
+                Status::MODE_HOLD
+            } else if t < t_hold {
+                Status::MODE_VELOCITY
+            } else {
+                Status::MODE_LAND
+            };
+            s.status.push((t, t >= 5.0, mode, false));
+        }
+        if hold_cmd {
+            s.mode_cmds.push((t_hold, "hold".into()));
+            s.mode_cmds.push((t_land, "land".into()));
+        }
+        s
+    }
+
+    #[test]
+    fn hover_window_from_status_refined_by_the_commands() {
+        let s = flight(true);
+        let h = hover(&s).expect("hover");
+        assert_eq!((h.t0_s, h.t1_s), (20.014, 50.024));
+        assert_eq!(h.start_from, "cmd/mode hold");
+        assert_eq!(h.end_from, "cmd/mode land");
+        // Same definition as metrics::hover_box: first sample of the window is the hold point.
+        let win: Vec<_> = s
+            .odom
+            .iter()
+            .filter(|o| o.0 >= 20.014 && o.0 < 50.024)
+            .collect();
+        assert_eq!(h.hold_ned_m, win[0].1);
+        for k in 0..3 {
+            let want = win
+                .iter()
+                .fold(0.0f64, |m, o| m.max((o.1[k] - win[0].1[k]).abs()));
+            assert_eq!(h.box_m[k], want);
+        }
+    }
+
+    #[test]
+    fn hover_window_from_status_alone_stays_inside_the_hold() {
+        let h = hover(&flight(false)).expect("hover");
+        assert_eq!(
+            (h.start_from.as_str(), h.end_from.as_str()),
+            ("status", "status")
+        );
+        assert!(h.t0_s >= 20.014 && h.t0_s < 20.014 + 0.1, "{}", h.t0_s);
+        assert!(h.t1_s <= 50.024 && h.t1_s > 50.024 - 0.1, "{}", h.t1_s);
+    }
+
+    #[test]
+    fn short_hold_is_no_hover_and_old_bags_skip_the_observer() {
+        let mut s = flight(true);
+        for x in s.status.iter_mut().filter(|x| x.0 > 25.0 && x.0 < 26.0) {
+            x.2 = Status::MODE_VELOCITY; // splits the hold into 5 s and 24 s
+        }
+        let h = hover(&s).expect("the longer part");
+        assert!(h.t0_s > 25.0 && h.t1_s == 50.024);
+        s.status
+            .iter_mut()
+            .for_each(|x| x.2 = Status::MODE_VELOCITY);
+        assert!(hover(&s).is_none());
+        let e = observer(&s).unwrap_err();
+        assert!(e.contains("no accel/observer"), "{e}");
+    }
+
+    #[test]
+    fn high_pass_removes_the_slow_part() {
+        let v: Vec<f64> = (0..1000)
+            .map(|i| 0.01 * i as f64 + if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let h = high_pass(&v, 50);
+        assert!(h[..50].iter().all(|x| x.is_none()) && h[950..].iter().all(|x| x.is_none()));
+        for x in h[50..950].iter().flatten() {
+            assert!((x.abs() - 1.0).abs() < 0.02, "{x}");
+        }
     }
 }

@@ -1,8 +1,8 @@
 //! Acceptance of the flight recorder, report and replay. Runs the scripts in `tests/mcap/`
 //! (each puts its processes into ONE loopback-only network namespace with netns-run):
 //! `run.sh` (fake MCU: readers, 0 lost, SIGKILL ≤ 1 s, disk full, replay) and `sitl_flight.sh`
-//! (a real fcc-sitl square flight over the link: readers, 0 lost, fcc-report vs the flight
-//! core's log). Python: `FCC_DDS_PYTHON` must import mcap, mcap_ros2 and rosbags; otherwise
+//! (a real fcc-sitl square flight and a 30 s HOLD hover over the link: readers, 0 lost,
+//! fcc-report's cross-track, hover box and observer ratio vs the flight core's log). Python: `FCC_DDS_PYTHON` must import mcap, mcap_ros2 and rosbags; otherwise
 //! skipped, unless `FCC_REQUIRE_DDS_PEER=1` (CI), where it fails.
 
 use std::path::PathBuf;
@@ -55,6 +55,14 @@ fn recorder_on_sitl_square_flight() {
     let dir = std::env::temp_dir().join(format!("fcc-sitl-flight-{}", std::process::id()));
     let s = run("tests/mcap/sitl_flight.sh", &[dir.to_str().unwrap(), &py]);
     assert!(s.contains("PASS bag read by independent readers"));
-    assert!(s.contains("|met"));
+    for row in [
+        "ROW|report cross-track RMS vs flight core|",
+        "ROW|report hover box vs flight core",
+        "ROW|report observer/measured high-pass σ ratio|",
+    ] {
+        let line = s.lines().find(|l| l.starts_with(row));
+        assert!(line.is_some_and(|l| l.ends_with("|met")), "{row}: {line:?}");
+    }
+    assert!(s.contains("hover check rejects a box off by 2·tol on any axis: yes"));
     let _ = std::fs::remove_dir_all(&dir);
 }

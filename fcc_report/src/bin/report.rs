@@ -5,7 +5,7 @@ use clap::Parser;
 use fcc_bridge::report::bag;
 use fcc_report::{
     figures,
-    plot::{chart, Line},
+    plot::{chart, panels, Line},
 };
 use plotters::style::{RGBColor, BLUE, GREEN, MAGENTA, RED};
 use std::path::PathBuf;
@@ -98,38 +98,91 @@ fn main() -> anyhow::Result<()> {
             true,
         ),
     ));
-    // Fig. 16: hover (estimated horizontal position while in HOLD, else the whole flight).
-    plots.push((
-        "hover.png",
-        "Position over time (paper A Fig. 16)",
-        chart(
-            &p("hover.png"),
-            "Estimated position",
-            "t s",
-            "m",
-            vec![
-                Line {
-                    name: "north",
-                    pts: s.odom.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
-                    color: BLUE,
+    // Fig. 16: hover — deviation from the hold point over the HOLD window, with the box;
+    // without a hover, the estimated position over the whole flight.
+    match &f.hover {
+        Some(h) => {
+            let win: Vec<_> = s
+                .odom
+                .iter()
+                .filter(|o| o.0 >= h.t0_s && o.0 < h.t1_s)
+                .collect();
+            let dev = |k: usize, sign: f64| -> Vec<(f64, f64)> {
+                win.iter()
+                    .map(|o| (o.0 - h.t0_s, sign * (o.1[k] - h.hold_ned_m[k])))
+                    .collect()
+            };
+            let span = h.t1_s - h.t0_s;
+            let mut lines = Vec::new();
+            for (k, name, sign, col) in [
+                (0, "north", 1.0, BLUE),
+                (1, "east", 1.0, RED),
+                (2, "altitude", -1.0, GREEN),
+            ] {
+                lines.push(Line {
+                    name,
+                    pts: dev(k, sign),
+                    color: col,
                     dots: false,
-                },
-                Line {
-                    name: "east",
-                    pts: s.odom.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
-                    color: RED,
-                    dots: false,
-                },
-                Line {
-                    name: "altitude",
-                    pts: s.odom.iter().map(|o| (o.0 - t0, -o.1[2])).collect(),
-                    color: GREEN,
-                    dots: false,
-                },
-            ],
-            false,
-        ),
-    ));
+                });
+                let b = h.box_m[k];
+                for y in [b, -b] {
+                    lines.push(Line {
+                        name: "",
+                        pts: vec![(0.0, y), (span, y)],
+                        color: col,
+                        dots: false,
+                    });
+                }
+            }
+            plots.push((
+                "hover.png",
+                "Hover in HOLD: deviation from the hold point, with the box (paper A Fig. 16)",
+                chart(
+                    &p("hover.png"),
+                    &format!(
+                        "Hover {:.0} s: box N {:.2} E {:.2} alt {:.2} m",
+                        span, h.box_m[0], h.box_m[1], h.box_m[2]
+                    ),
+                    "t s (from hold start)",
+                    "m",
+                    lines,
+                    false,
+                ),
+            ));
+        }
+        None => plots.push((
+            "hover.png",
+            "Position over time (no hover in this flight; paper A Fig. 16)",
+            chart(
+                &p("hover.png"),
+                "Estimated position",
+                "t s",
+                "m",
+                vec![
+                    Line {
+                        name: "north",
+                        pts: s.odom.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
+                        color: BLUE,
+                        dots: false,
+                    },
+                    Line {
+                        name: "east",
+                        pts: s.odom.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
+                        color: RED,
+                        dots: false,
+                    },
+                    Line {
+                        name: "altitude",
+                        pts: s.odom.iter().map(|o| (o.0 - t0, -o.1[2])).collect(),
+                        color: GREEN,
+                        dots: false,
+                    },
+                ],
+                false,
+            ),
+        )),
+    }
     // Fig. 18: velocity tracking.
     plots.push((
         "velocity.png",
@@ -280,6 +333,38 @@ fn main() -> anyhow::Result<()> {
             false,
         ),
     ));
+    // Fig. 13: acceleration observer vs measured acceleration (skipped on older bags).
+    if let Some(o) = &f.observer {
+        let mut pan = Vec::new();
+        for (k, axis) in [(0, "north"), (1, "east")] {
+            pan.push((
+                format!(
+                    "Acceleration {axis}: observer vs measured (ratio of 1 s high-pass σ {:.3})",
+                    o.ratio
+                ),
+                "m/s²",
+                vec![
+                    Line {
+                        name: "measured (accelerometer, gravity removed)",
+                        pts: s.accel_meas.iter().map(|a| (a.0 - t0, a.1[k])).collect(),
+                        color: c(170, 170, 170),
+                        dots: true,
+                    },
+                    Line {
+                        name: "observer",
+                        pts: s.accel_obs.iter().map(|a| (a.0 - t0, a.1[k])).collect(),
+                        color: BLUE,
+                        dots: false,
+                    },
+                ],
+            ));
+        }
+        plots.push((
+            "observer.png",
+            "Acceleration observer vs measured acceleration (paper A Fig. 13)",
+            panels(&p("observer.png"), "t s", pan),
+        ));
+    }
     // Fig. 12: k1/k2 fit — measured acceleration vs the fitted model along the flight.
     if let Some((k1, k2, _, _)) = f.k1_k2_fit {
         let mut meas = Vec::new();
