@@ -5,6 +5,10 @@
 #     republishes the bag (rate 4) without error.
 #  2. SIGKILL mid-flight: the bag opens (streamed) and loses ≤ 1 s (printed).
 #  3. A full disk (/dev/full): one clear error, the bridge keeps running.
+#  4. Recorder options, three bridges at once (own namespaces): split by time with uncompressed
+#     chunks, split by size (zstd), record only while armed (armed/disarmed twice over DDS by
+#     a Cyclone publisher): every file complete and read by both readers, 0 lost across the
+#     splits, one file per arm period (check_files.py).
 #   usage: tests/mcap/run.sh [PYTHON]   (PYTHON with mcap, mcap-ros2-support, rosbags)
 # Needs: cargo build --release -p fcc_bridge -p fcc_report.
 set -euo pipefail
@@ -54,4 +58,24 @@ if kill -0 $b 2>/dev/null && [ "$n" = 1 ]; then
   echo "PASS disk full: one error ($(grep -o 'stopped: .*' "$tmp/f.log" | head -1)), bridge still running"
 else echo "FAIL disk full: alive=$(kill -0 $b 2>/dev/null && echo yes || echo no), errors=$n"; tail -5 "$tmp/f.log"; rc=1; fi
 kill -INT $b; wait $b || true
+# 4. recorder options
+pty=$(fake s 30)
+"$bin/fcc-bridge" --device "$pty" --record "$tmp/s.mcap" --ros-args -r __ns:=/split_s \
+  -p record_split_s:=2 -p record_compression:=none > "$tmp/s.log" 2>&1 &
+bs=$!
+pty=$(fake m 30)
+"$bin/fcc-bridge" --device "$pty" --record "$tmp/m.mcap" --ros-args -r __ns:=/split_mb \
+  -p record_split_mb:=1 > "$tmp/m.log" 2>&1 &
+bm=$!
+pty=$(fake r 30)
+"$bin/fcc-bridge" --device "$pty" --record "$tmp/r.mcap" --ros-args -p record_on_arm:=true > "$tmp/r.log" 2>&1 &
+br=$!
+"$py" "$here/arm_cycle.py" 2.5 4.5 5.5 7.5 || rc=1
+sleep 0.5; kill -INT $bs $bm $br; wait $bs $bm $br || true
+echo "record_split_s:=2, record_compression:=none"
+"$py" "$here/check_files.py" "$tmp/s.mcap.counts.json" --min-files 3 --split-s 2 --compression none || rc=1
+echo "record_split_mb:=1"
+"$py" "$here/check_files.py" "$tmp/m.mcap.counts.json" --min-files 2 --split-mb 1 --compression zstd || rc=1
+echo "record_on_arm:=true"
+"$py" "$here/check_files.py" "$tmp/r.mcap.counts.json" --on-arm --arm-periods 2 --compression zstd || rc=1
 exit $rc
