@@ -92,9 +92,10 @@ awk -v wall="$wall" '
   /^peer cpu / { u["peer (python)"] += $4; s["peer (python)"] += $7; n["peer (python)"] = 1 }
   BEGIN { lw = "n/a" }
   END {
-    for (k in u) { t = u[k] + s[k]; tot += t
+    for (k in u) { t = u[k] + s[k]; tot += t; if (k !~ /^peer/) stack += t
       printf "  %-14s x%d  user %6.2f s  sys %6.2f s  = %5.1f %% of one core\n", k, n[k], u[k], s[k], 100 * t / wall }
-    printf "  all processes: %.2f s CPU in %.1f s wall = %.1f %% of one core (flight: %s s of it)\n", tot, wall, 100 * tot / wall, lw
+    printf "  flight stack (launcher, 4 × sitl, bridge, mission): %.2f s CPU = %.1f %% of one core\n", stack, 100 * stack / wall
+    printf "  all processes incl. the peer: %.2f s CPU in %.1f s wall = %.1f %% of one core (flight: %s s of it)\n", tot, wall, 100 * tot / wall, lw
   }' "$tmp/launch.log" "$tmp/peer.log"
 echo "four vehicles: launcher exit $lrc, peer exit $prc, $wall s wall"
 if [ -n "${FCC_E2E_KEEP:-}" ]; then
