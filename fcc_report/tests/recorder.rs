@@ -1,6 +1,6 @@
 //! Acceptance of the flight recorder, report and replay. Runs the scripts in `tests/mcap/`
 //! (each puts its processes into ONE loopback-only network namespace with netns-run):
-//! `run.sh` (fake MCU: readers, 0 lost, SIGKILL ≤ 1 s, disk full, replay, split by time and
+//! `run.sh` (fake MCU: readers, 0 lost, SIGKILL ≤ 1 s, disk full, replay timing and content, split by time and
 //! size, compression, record on arm) and `sitl_flight.sh`
 //! (a real fcc-sitl square flight and a 30 s HOLD hover over the link: readers, 0 lost,
 //! fcc-report's cross-track, hover box and observer ratio vs the flight core's log). Python: `FCC_DDS_PYTHON` must import mcap, mcap_ros2 and rosbags; otherwise
@@ -48,6 +48,8 @@ fn recorder_with_fake_mcu() {
     assert!(s.contains("ROW|recorder messages lost|0 of"));
     assert!(s.contains("PASS truncated bag readable"));
     assert!(s.contains("PASS disk full"));
+    assert!(s.contains("PASS fcc-replay --rate 4"));
+    assert!(s.contains("PASS replayed messages equal the bag's"));
     // Recorder options: split by time (uncompressed) and by size, record only while armed.
     assert_eq!(s.matches("PASS split recording").count(), 2);
     assert!(s.contains("PASS record_on_arm"));

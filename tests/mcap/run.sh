@@ -2,7 +2,8 @@
 # Recorder tests with the fake MCU, in ONE loopback-only network namespace:
 #  1. a bag from a clean SIGINT stop: independent readers decode every message; counts == the
 #     bridge's own (0 lost); fcc-replay --decode-raw re-decodes the raw frames; fcc-replay
-#     republishes the bag (rate 4) without error.
+#     republishes the bag at rate 4 under /replay: it takes the bag's span / 4, and a Cyclone
+#     subscriber receives the odometry equal to the bag's (replay_sub.py).
 #  2. SIGKILL mid-flight: the bag opens (streamed) and loses ≤ 1 s (printed).
 #  3. A full disk (/dev/full): one clear error, the bridge keeps running.
 #  4. Recorder options, three bridges at once (own namespaces): split by time with uncompressed
@@ -41,9 +42,20 @@ b=$!; sleep 8; kill -INT $b; wait $b || true
 "$py" "$here/check_bag.py" "$tmp/a.mcap" --counts "$tmp/a.mcap.counts.json" --min-seconds 5 || rc=1
 "$bin/fcc-replay" "$tmp/a.mcap" --decode-raw > "$tmp/raw.txt"; head -4 "$tmp/raw.txt"
 grep -q "mcu→linux ImuRaw" "$tmp/raw.txt" && echo "PASS fcc-replay --decode-raw" || { echo "FAIL decode-raw"; rc=1; }
-if timeout 20 "$bin/fcc-replay" "$tmp/a.mcap" --rate 4 2> "$tmp/replay.err"; then
-  echo "PASS fcc-replay --rate 4: $(tail -1 "$tmp/replay.err")"
+# replay at 4× under /replay: a Cyclone subscriber gets the bag's odometry unchanged, on time
+"$py" "$here/replay_sub.py" "$tmp/a.mcap" /fcc/state/odom 7 --prefix /replay > "$tmp/replay_sub.out" 2>&1 &
+sub=$!; sleep 1.5
+if timeout 20 "$bin/fcc-replay" "$tmp/a.mcap" --rate 4 --ns-prefix /replay 2> "$tmp/replay.err"; then
+  span=$("$py" -c "
+from mcap.reader import make_reader
+s = make_reader(open('$tmp/a.mcap','rb')).get_summary().statistics
+print((s.message_end_time - s.message_start_time) / 1e9)")
+  took=$(grep -o 'in [0-9.]* s' "$tmp/replay.err" | tail -1 | awk '{print $2}')
+  if "$py" -c "import sys; s, t = $span / 4, $took; sys.exit(0 if s - 0.1 <= t <= s + 1.0 else 1)"; then
+    echo "PASS fcc-replay --rate 4: $(tail -1 "$tmp/replay.err") (the bag spans $(awk "BEGIN{printf \"%.2f s, / 4 = %.2f\", $span, $span/4}") s)"
+  else echo "FAIL fcc-replay --rate 4 took $took s for a $span s bag"; rc=1; fi
 else echo "FAIL fcc-replay"; cat "$tmp/replay.err"; rc=1; fi
+wait $sub || rc=1; cat "$tmp/replay_sub.out"
 # 2. SIGKILL
 pty=$(fake k 30)
 "$bin/fcc-bridge" --device "$pty" --record "$tmp/k.mcap" > "$tmp/k.log" 2>&1 &

@@ -24,6 +24,10 @@ struct Cli {
     /// Only re-decode the raw link frames and print per-type counts (no DDS).
     #[arg(long)]
     decode_raw: bool,
+    /// Republish under this prefix (`/replay`: `/fcc/imu/data_raw` → `/replay/fcc/imu/data_raw`),
+    /// e.g. beside a live bridge.
+    #[arg(long)]
+    ns_prefix: Option<String>,
 }
 
 fn decode_raw(msgs: &[BagMsg]) {
@@ -74,10 +78,16 @@ fn main() -> anyhow::Result<()> {
     }
     msgs.sort_by_key(|m| m.log_time);
     let rt = tokio::runtime::Runtime::new()?;
-    rt.block_on(play(msgs, cli.rate))
+    let prefix = cli
+        .ns_prefix
+        .as_deref()
+        .map(|p| format!("/{}", p.trim_matches('/')))
+        .filter(|p| p != "/")
+        .unwrap_or_default();
+    rt.block_on(play(msgs, cli.rate, &prefix))
 }
 
-async fn play(msgs: Vec<BagMsg>, rate: f64) -> anyhow::Result<()> {
+async fn play(msgs: Vec<BagMsg>, rate: f64, prefix: &str) -> anyhow::Result<()> {
     use ros2_client::{Context, MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
     let ctx = Context::new()?;
     let mut node = ctx.new_node(NodeName::new("/", "fcc_replay")?, NodeOptions::new())?;
@@ -93,8 +103,9 @@ async fn play(msgs: Vec<BagMsg>, rate: f64) -> anyhow::Result<()> {
             Some(x) => x,
             None => continue,
         };
+        let full = format!("{prefix}{}", m.topic);
         let topic = node.create_topic(
-            &Name::parse(&m.topic).map_err(|e| anyhow::anyhow!("{e:?}"))?,
+            &Name::parse(&full).map_err(|e| anyhow::anyhow!("{full}: {e:?}"))?,
             MessageTypeName::new(pkg, name),
             &qos,
         )?;
