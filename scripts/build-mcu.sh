@@ -77,7 +77,9 @@ if command -v $objdump >/dev/null; then
     # Inline chain, innermost first: "function\nfile:line" pairs; keep the first frame in this repo.
     where=$(arm-none-eabi-addr2line -e "$ELF" -f -i -C "0x$addr" | paste - - |
       awk -F'\t' -v root="$ROOT/" 'index($2, root) == 1 && $2 !~ /\/target\// {
-        f = $2; sub(root, "", f); sub(/ \(discriminator [0-9]+\)/, "", f); print f "\t" $1; exit }')
+        fn = $1; sub(/^.*::/, "", fn); f = $2; sub(root, "", f); sub(/ \(discriminator [0-9]+\)/, "", f)
+        if (!n++) { first = f; name = $1 } else { name = name " <- " fn; exit } }
+        END { if (n) print first "\t" name }')
     [ -n "$where" ] || where=$'(outside this repository)\t?'
     printf '%s\t%s\n' "$where" "$callee" >> "$BOARD/target/f64-report.txt"
   done < "$BOARD/target/f64-sites.txt"
@@ -86,7 +88,7 @@ if command -v $objdump >/dev/null; then
   awk -F'\t' '
     function reason(file, fn, callee) {
       if (file ~ /^fcc_nav\/src\/geodesy\.rs$/) return "allowed: WGS-84 lat/lon -> local NED (home: once; then per GPS fix, 5 Hz)"
-      if (file ~ /^fcc_firmware\/src\/nav\.rs$/ && callee ~ /^(__aeabi_(f2d|d2f)|,)+$/) return "allowed: f32<->f64 glue around the lat/lon -> NED call"
+      if (callee ~ /^(__aeabi_(f2d|d2f)|,)+$/) return "allowed: f32<->f64 conversion only (lat/lon and home fields are f64), no f64 arithmetic"
       if (file ~ /^fcc_nav\/src\/complementary\.rs$/ && fn ~ /CfGains>::discrete/) return "allowed: filter gain design, cached; recomputed only when dt changes (first step)"
       if (file ~ /^fcc_firmware\/board\/src\/drivers\/.*(gps|ubx)/) return "allowed: lat/lon from the GPS receiver"
       return "NOT ALLOWED: f64 in the flight path"

@@ -18,6 +18,20 @@ if ! .venv-dds/bin/python -c 'import mcap, mcap_ros2.decoder, rosbags.highlevel'
 fi
 export FCC_DDS_PYTHON="$PWD/.venv-dds/bin/python" FCC_REQUIRE_DDS_PEER=1
 
+# --- step "MCU: cross-build, size, QEMU replay" (issue 8) ---------------------------------------
+# Installs what it needs when missing (apt-get: Debian's rustc-web, cargo-web, rust-web-src,
+# binutils-arm-none-eabi, qemu-system-arm; root in CI) and fetches the board crate's crates, so it
+# runs here, before the offline namespace. It cross-builds the TM4C129x image for
+# thumbv7em-none-eabihf (flash/RAM use; fails on f64 arithmetic outside lat/lon and one-off
+# init), records a 16 s SITL flight on the host, replays it through the core in QEMU (Cortex-M4,
+# mps2-an386), requires bit-identical motor commands, and prints instructions per 500 Hz step
+# and the share of the 240,000-cycle budget. FCC_REQUIRE_MCU=1 makes tests/tests/mcu_qemu.rs
+# (which repeats the replay offline inside `cargo test`) fail instead of skipping if the
+# toolchain were missing. Measured on a fresh target dir: see scripts/test-mcu.sh's header.
+scripts/test-mcu.sh
+export FCC_REQUIRE_MCU=1
+# --- end of step "MCU: cross-build, size, QEMU replay" ------------------------------------------
+
 # 2. Everything that runs, in a private network namespace with loopback only when available.
 netns=""
 for c in ../shared/tools/netns-run /work/shared/tools/netns-run; do
