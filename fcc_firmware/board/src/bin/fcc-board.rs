@@ -16,12 +16,19 @@
 //! - The eight ESC outputs: PWM0 generators 0–3 (`fcc_board::drivers::pwm::tm4c::Pwm0Esc`,
 //!   400 Hz, 1000–2000 µs) on M0PWM0..7 = PF0–PF3, PG0, PG1, PK4, PK5 (alternate function 6).
 //!
-//! Not wired in this image: the sensor buses. `fcc_board::drivers` has the MPU-9250/AK8963 and
-//! MS5611 (SPI `SpiDevice`), u-blox UBX, ILM-150-R laser, MB7076 sonar and S.BUS drivers, but
-//! `tm4c129x-hal` 0.9 has no SPI (SSI) driver, so they need an SSI `SpiDevice` adapter and one
-//! more interrupt-fed UART ring per serial sensor (as UART0's here). Until then
-//! [`Tm4cSensors::poll`] returns the samples an interrupt handler deposited in `PENDING` (none),
-//! so the core stays disarmed: it refuses to arm without an IMU.
+//! - The sensors, through `fcc_board::drivers`, polled by [`Tm4cSensors::poll`] in the tick:
+//!   MPU-9250 + AK8963 on SSI2 (PD3 clock, PD1 MOSI, PD0 MISO, PD2 chip select as GPIO; SPI
+//!   mode 3, 1 MHz while configuring, then 10 MHz for the sensor-register bursts), MS5611 on SSI3
+//!   (PQ0 clock, PQ2 MOSI, PQ3 MISO, PQ1 chip select; mode 3, 10 MHz), u-blox GPS on UART2 (PA6
+//!   RX, PA7 TX; configured at its 9600-baud default for NAV-PVT at 5 Hz, then switched to 38400),
+//!   ILM-150-R laser on UART3 (PJ0 RX, 9600) and MB7076 sonar on UART6 (PP0 RX, 9600), both
+//!   through an external inverter (inverted-TTL outputs). `tm4c129x-hal` 0.9 has no SPI driver:
+//!   [`SsiSpi`] is a small blocking register-level `embedded_hal::spi::SpiDevice`. At 9600 and
+//!   38400 baud a 16-byte RX FIFO lasts 16.7 / 4.2 ms, longer than the 2 ms tick, so those UARTs
+//!   are drained by polling in the tick (no interrupts).
+//!   A sensor whose initialisation fails is left out (its samples stay `None`: without the IMU
+//!   the core refuses to arm). Not wired: S.BUS (the core takes no pilot input yet) and the
+//!   battery monitor (no ADC driver).
 #![no_std]
 #![no_main]
 
@@ -30,7 +37,15 @@ use core::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 use cortex_m::interrupt::Mutex;
 use cortex_m::peripheral::{scb::SystemHandler, syst::SystClkSource, DWT, NVIC};
 use cortex_m_rt::{entry, exception};
+use embedded_hal::delay::DelayNs;
+use fcc_board::drivers::gps_ubx::{
+    config as ubx_config, UbxMessage, UbxParser, CLASS_NAV, ID_NAV_PVT,
+};
+use fcc_board::drivers::laser::LaserParser;
+use fcc_board::drivers::mpu9250::{Mpu9250, Mpu9250Config};
+use fcc_board::drivers::ms5611::{Ms5611, Osr};
 use fcc_board::drivers::pwm::{tm4c::Pwm0Esc, EscOutputs, PwmConfig};
+use fcc_board::drivers::sonar::{SonarConfig, SonarParser};
 use fcc_firmware::flight::FlightCore;
 use fcc_firmware::link::LinkEndpoint;
 use fcc_firmware::params::Params;
@@ -38,11 +53,14 @@ use fcc_firmware::scheduler::{self, TICK_US};
 use fcc_firmware::sensors::{SensorBoard, SensorInputs};
 use tm4c129x_hal::{
     self as hal,
-    gpio::{AF1, AF6},
+    gpio::{AF1, AF14, AF6},
     interrupt,
     prelude::*,
     serial::{NewlineMode, Serial},
-    tm4c129x::{Interrupt, UART0},
+    tm4c129x::{
+        Interrupt, GPIO_PORTD_AHB, GPIO_PORTJ_AHB, GPIO_PORTP, GPIO_PORTQ, SSI2, SSI3, UART0,
+        UART2, UART3, UART6,
+    },
 };
 
 /// Core clock after PLL setup.
@@ -157,7 +175,16 @@ fn UART0() {
     // interrupt masked, see `kick_tx`).
     let u = unsafe { &*UART0::ptr() };
     // Receive interrupt, receive timeout (bytes waiting below the FIFO level), transmit.
-    u.icr.write(|w| w.rxic().set_bit().rtic().set_bit().txic().set_bit().oeic().set_bit());
+    u.icr.write(|w| {
+        w.rxic()
+            .set_bit()
+            .rtic()
+            .set_bit()
+            .txic()
+            .set_bit()
+            .oeic()
+            .set_bit()
+    });
     while u.fr.read().rxfe().bit_is_clear() {
         let dr = u.dr.read().bits();
         // DR bits 8..11: framing, parity, break, overrun error for this byte.
@@ -195,30 +222,216 @@ fn kick_tx() {
     NVIC::pend(Interrupt::UART0);
 }
 
-/// The sensor drivers' interrupt handlers (not attached yet, see the module docs) deposit their
-/// newest samples here; the tick takes them. Read volatile so the image keeps the whole
-/// per-step path.
-static mut PENDING: SensorInputs = SensorInputs {
-    imu: None,
-    mag: None,
-    baro: None,
-    gps: None,
-    laser: None,
-    sonar: None,
-    battery: None,
-};
+/// SSI (SPI) clock = SysClk / (CPSDVSR · (1 + SCR)) with CPSDVSR = 2.
+const fn ssi_scr(hz: u32) -> u32 {
+    let scr = SYSCLK_HZ / (2 * hz);
+    if scr == 0 {
+        0
+    } else {
+        scr - 1
+    }
+}
 
-struct Tm4cSensors;
+/// Alternate function 15 (the TM4C129x's SSI0–SSI2 pins); `tm4c-hal` 0.4 names only 1–9, 14.
+struct AF15;
+impl hal::gpio::AlternateFunctionChoice for AF15 {
+    fn number() -> u32 {
+        15
+    }
+}
+
+/// A blocking, register-level SPI master on one SSI module (TM4C1294NCPDT datasheet, SSI
+/// chapter: SSICR0 = SCR·2⁸ | SPH·2⁷ | SPO·2⁶ | FRF 0 (Freescale SPI) | DSS 7 (8 bits); SSICR1.SSE
+/// enables, MS = 0 master; SSICPSR even prescaler; SSISR TNF/RNE/BSY), with a GPIO chip select
+/// held low for a whole `transaction`.
+struct SsiSpi {
+    ssi: &'static hal::tm4c129x::ssi0::RegisterBlock,
+    /// Bit-band target: the GPIO port's DATA register and the chip-select pin number.
+    cs_data: *const u32,
+    cs_pin: u8,
+    /// SPI mode bits of SSICR0 (SPO, SPH).
+    mode: u32,
+    hz: u32,
+    /// Where the owner can ask for another clock rate between transactions (the MPU-9250 runs
+    /// its configuration at 1 MHz and its sensor-register bursts at up to 20 MHz).
+    hz_request: Option<&'static AtomicU32>,
+}
+
+// SAFETY: one core; an `SsiSpi` is built in `main` and then moved, once, to the SysTick handler,
+// its only user (it holds raw pointers to its own SSI module's and chip-select port's registers).
+unsafe impl Send for SsiSpi {}
+
+impl SsiSpi {
+    /// `ssi` must be powered and its pins configured; `cs` must be a GPIO output.
+    fn new(
+        ssi: &'static hal::tm4c129x::ssi0::RegisterBlock,
+        cs_data: *const u32,
+        cs_pin: u8,
+        hz: u32,
+        hz_request: Option<&'static AtomicU32>,
+    ) -> Self {
+        let mut s = Self {
+            ssi,
+            cs_data,
+            cs_pin,
+            mode: 0xC0, // SPO = 1, SPH = 1: SPI mode 3
+            hz,
+            hz_request,
+        };
+        s.cs(true);
+        // SAFETY: raw SSI register values per the datasheet; this struct owns the module.
+        unsafe {
+            s.ssi.cr1.write(|w| w.bits(0)); // disabled, master
+            s.ssi.cc.write(|w| w.bits(0)); // system clock
+            s.ssi.cpsr.write(|w| w.bits(2));
+        }
+        s.set_hz(hz);
+        s
+    }
+
+    fn set_hz(&mut self, hz: u32) {
+        self.hz = hz;
+        // SAFETY: as in `new` (SSE off while changing the format).
+        unsafe {
+            self.ssi.cr1.write(|w| w.bits(0));
+            self.ssi
+                .cr0
+                .write(|w| w.bits((ssi_scr(hz) << 8) | self.mode | 0x7));
+            self.ssi.cr1.write(|w| w.bits(0x2)); // SSE
+        }
+    }
+
+    fn cs(&mut self, high: bool) {
+        // SAFETY: bit-band write of one GPIO DATA bit (the pin is an output owned by this SPI).
+        unsafe { hal::bb::change_bit(self.cs_data, self.cs_pin, high) };
+    }
+
+    fn xfer(&mut self, out: u8) -> u8 {
+        while self.ssi.sr.read().bits() & 0x2 == 0 {} // TNF
+                                                      // SAFETY: 8-bit frame into the TX FIFO.
+        unsafe { self.ssi.dr.write(|w| w.bits(out as u32)) };
+        while self.ssi.sr.read().bits() & 0x4 == 0 {} // RNE
+        self.ssi.dr.read().bits() as u8
+    }
+}
+
+impl embedded_hal::spi::ErrorType for SsiSpi {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_hal::spi::SpiDevice for SsiSpi {
+    fn transaction(
+        &mut self,
+        operations: &mut [embedded_hal::spi::Operation<'_, u8>],
+    ) -> Result<(), Self::Error> {
+        use embedded_hal::spi::Operation;
+        if let Some(want) = self.hz_request.map(|r| r.load(Ordering::Relaxed)) {
+            if want != self.hz {
+                self.set_hz(want);
+            }
+        }
+        while self.ssi.sr.read().bits() & 0x4 != 0 {
+            let _ = self.ssi.dr.read(); // stale RX bytes
+        }
+        self.cs(false);
+        for op in operations.iter_mut() {
+            match op {
+                Operation::Read(buf) => buf.iter_mut().for_each(|b| *b = self.xfer(0)),
+                Operation::Write(buf) => buf.iter().for_each(|&b| {
+                    self.xfer(b);
+                }),
+                Operation::Transfer(read, write) => {
+                    for i in 0..read.len().max(write.len()) {
+                        let r = self.xfer(write.get(i).copied().unwrap_or(0));
+                        if let Some(slot) = read.get_mut(i) {
+                            *slot = r;
+                        }
+                    }
+                }
+                Operation::TransferInPlace(buf) => buf.iter_mut().for_each(|b| *b = self.xfer(*b)),
+                Operation::DelayNs(ns) => CycleDelay.delay_ns(*ns),
+            }
+        }
+        while self.ssi.sr.read().bits() & 0x10 != 0 {} // BSY
+        self.cs(true);
+        Ok(())
+    }
+}
+
+/// Busy-wait delays from the core clock (drivers' power-up and reset waits, at start-up only).
+struct CycleDelay;
+
+impl embedded_hal::delay::DelayNs for CycleDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        let cycles = (ns as u64 * (SYSCLK_HZ / 1_000_000) as u64).div_ceil(1000);
+        cortex_m::asm::delay(cycles.min(u32::MAX as u64) as u32);
+    }
+}
+
+/// Hand every byte waiting in a sensor UART's RX FIFO to `sink` (bytes with a framing, parity
+/// or break error are dropped; the parsers resynchronise). At most 64 per call.
+fn drain_uart(u: &hal::tm4c129x::uart0::RegisterBlock, mut sink: impl FnMut(u8)) {
+    for _ in 0..64 {
+        if u.fr.read().rxfe().bit_is_set() {
+            break;
+        }
+        let dr = u.dr.read().bits();
+        if dr & 0x700 == 0 {
+            sink(dr as u8);
+        }
+    }
+}
+
+/// The board's sensors behind the core's `SensorBoard` trait.
+struct Tm4cSensors {
+    imu: Option<Mpu9250<SsiSpi>>,
+    baro: Option<Ms5611<SsiSpi>>,
+    gps: UbxParser,
+    laser: LaserParser,
+    sonar: SonarParser,
+    /// SPI reads that failed (cannot happen with `SsiSpi`) or returned a stuck bus.
+    bus_errors: u32,
+}
 
 impl SensorBoard for Tm4cSensors {
-    fn poll(&mut self, _now_us: u64) -> SensorInputs {
-        // Only called from SysTick, the only user of PENDING.
-        unsafe {
-            let p = core::ptr::addr_of_mut!(PENDING);
-            let s = core::ptr::read_volatile(p);
-            core::ptr::write_volatile(p, SensorInputs::default());
-            s
+    fn poll(&mut self, now_us: u64) -> SensorInputs {
+        let mut s = SensorInputs::default();
+        if let Some(imu) = self.imu.as_mut() {
+            match imu.read(now_us) {
+                Ok(Some(r)) => {
+                    s.imu = Some(r.imu);
+                    s.mag = r.mag;
+                }
+                _ => self.bus_errors = self.bus_errors.wrapping_add(1),
+            }
         }
+        if let Some(baro) = self.baro.as_mut() {
+            match baro.poll(now_us) {
+                Ok(b) => s.baro = b,
+                Err(_) => self.bus_errors = self.bus_errors.wrapping_add(1),
+            }
+        }
+        // SAFETY: after set-up the tick is the only user of these UARTs' data registers.
+        let (u2, u3, u6) = unsafe { (&*UART2::ptr(), &*UART3::ptr(), &*UART6::ptr()) };
+        let gps = &mut self.gps;
+        drain_uart(u2, |b| {
+            if let Some(UbxMessage::NavPvt(p)) = gps.push(b) {
+                s.gps = Some(p.to_gps_fix(now_us));
+            }
+        });
+        let laser = &mut self.laser;
+        drain_uart(u3, |b| {
+            if let Some(r) = laser.push(b) {
+                s.laser = Some(r.to_range_sample(now_us));
+            }
+        });
+        let sonar = &mut self.sonar;
+        drain_uart(u6, |b| {
+            if let Some(r) = sonar.push(b) {
+                s.sonar = Some(r.to_range_sample(now_us));
+            }
+        });
+        s
     }
 }
 
@@ -232,6 +445,144 @@ struct Board {
 
 /// Handed from `main` to the first SysTick, which keeps it.
 static BOARD: Mutex<Cell<Option<Board>>> = Mutex::new(Cell::new(None));
+
+/// MPU-9250 SPI clock: 1 MHz until its configuration is done, then 10 MHz (sensor registers
+/// allow 20 MHz, PS §7.5).
+static IMU_SPI_HZ: AtomicU32 = AtomicU32::new(1_000_000);
+
+/// Pins, SSI modules and UARTs of the sensors; each driver's start-up sequence. A sensor whose
+/// start-up fails is left out (`None`), see the module docs.
+#[allow(clippy::too_many_arguments)]
+fn setup_sensors<P>(
+    ssi2: SSI2,
+    ssi3: SSI3,
+    uart2: UART2,
+    uart3: UART3,
+    uart6: UART6,
+    portd: GPIO_PORTD_AHB,
+    portq: GPIO_PORTQ,
+    portj: GPIO_PORTJ_AHB,
+    portp: GPIO_PORTP,
+    gps_pins: (
+        P,
+        hal::gpio::gpioa::PA6<hal::gpio::AlternateFunction<AF1, hal::gpio::PushPull>>,
+    ),
+    clocks: &hal::sysctl::Clocks,
+    pc: &hal::sysctl::PowerControl,
+) -> Tm4cSensors
+where
+    P: hal::serial::TxPin<UART2>,
+{
+    use hal::sysctl::{self, Domain, PowerState, RunMode};
+    let mut delay = CycleDelay;
+
+    // SPI: SSI2 (IMU) on PD0–PD3 (AF15), SSI3 (barometer) on PQ0–PQ3 (AF14); chip selects GPIO.
+    let mut pd = portd.split(pc);
+    let _imu_pins = (
+        pd.pd3.into_af_push_pull::<AF15>(&mut pd.control),
+        pd.pd1.into_af_push_pull::<AF15>(&mut pd.control),
+        pd.pd0.into_af_push_pull::<AF15>(&mut pd.control),
+        pd.pd2.into_push_pull_output(),
+    );
+    let mut pq = portq.split(pc);
+    let _baro_pins = (
+        pq.pq0.into_af_push_pull::<AF14>(&mut pq.control),
+        pq.pq2.into_af_push_pull::<AF14>(&mut pq.control),
+        pq.pq3.into_af_push_pull::<AF14>(&mut pq.control),
+        pq.pq1.into_push_pull_output(),
+    );
+    for d in [Domain::Ssi2, Domain::Ssi3] {
+        sysctl::control_power(pc, d, RunMode::Run, PowerState::On);
+        sysctl::reset(pc, d);
+    }
+    // The SSI modules are used through their register blocks from here on.
+    let _ = (ssi2, ssi3);
+    // SAFETY: the register blocks exist for the program's life; SsiSpi owns each module.
+    let (ssi2_regs, ssi3_regs) = unsafe { (&*SSI2::ptr(), &*SSI3::ptr()) };
+    let (pd_data, pq_data) = unsafe {
+        (
+            core::ptr::addr_of!((*GPIO_PORTD_AHB::ptr()).data) as *const u32,
+            core::ptr::addr_of!((*GPIO_PORTQ::ptr()).data) as *const u32,
+        )
+    };
+
+    let imu_spi = SsiSpi::new(ssi2_regs, pd_data, 2, 1_000_000, Some(&IMU_SPI_HZ));
+    let mut imu = Mpu9250::new(imu_spi, Mpu9250Config::default());
+    let imu = match imu.init(&mut delay) {
+        Ok(()) => {
+            IMU_SPI_HZ.store(10_000_000, Ordering::Relaxed);
+            Some(imu)
+        }
+        Err(_) => None,
+    };
+    let baro_spi = SsiSpi::new(ssi3_regs, pq_data, 1, 10_000_000, None);
+    let mut baro = Ms5611::new(baro_spi, Osr::Osr4096);
+    let baro = baro.init(&mut delay).ok().map(|_| baro);
+
+    // GPS on UART2: NAV-PVT every 200 ms, then the receiver's port to 38400 baud (sent at the
+    // u-blox default of 9600; a receiver already at 38400 ignores it and is simply read there).
+    let mut gps_uart = Serial::uart2(
+        uart2,
+        gps_pins.0,
+        gps_pins.1,
+        (),
+        (),
+        9_600.bps(),
+        NewlineMode::Binary,
+        clocks,
+        pc,
+    );
+    let mut frame = [0u8; 32];
+    for build in [
+        |f: &mut [u8]| ubx_config::cfg_msg(CLASS_NAV, ID_NAV_PVT, 1, f),
+        |f: &mut [u8]| ubx_config::cfg_rate(200, f),
+        |f: &mut [u8]| ubx_config::cfg_prt_uart1(38_400, f),
+    ] {
+        if let Some(bytes) = build(&mut frame).and_then(|n| frame.get(..n)) {
+            gps_uart.write_all(bytes);
+        }
+        delay.delay_ms(50); // the frame leaves the FIFO (≤ 28 bytes at 9600 baud: 29 ms)
+    }
+    delay.delay_ms(100);
+    gps_uart.change_baud_rate(38_400.bps(), clocks);
+
+    // Laser on UART3 (PJ0) and sonar on UART6 (PP0), receive only, 9600 8N1.
+    let mut pj = portj.split(pc);
+    let laser_rx = pj.pj0.into_af_push_pull::<AF1>(&mut pj.control);
+    let _laser_uart = Serial::uart3(
+        uart3,
+        (),
+        laser_rx,
+        (),
+        (),
+        9_600.bps(),
+        NewlineMode::Binary,
+        clocks,
+        pc,
+    );
+    let mut pp = portp.split(pc);
+    let sonar_rx = pp.pp0.into_af_push_pull::<AF1>(&mut pp.control);
+    let _sonar_uart = Serial::uart6(
+        uart6,
+        (),
+        sonar_rx,
+        (),
+        (),
+        9_600.bps(),
+        NewlineMode::Binary,
+        clocks,
+        pc,
+    );
+
+    Tm4cSensors {
+        imu,
+        baro,
+        gps: UbxParser::new(),
+        laser: LaserParser::new(),
+        sonar: SonarParser::new(SonarConfig::MB7076),
+        bus_errors: 0,
+    }
+}
 
 #[entry]
 fn main() -> ! {
@@ -271,6 +622,10 @@ fn main() -> ! {
     let mut porta = p.GPIO_PORTA_AHB.split(&sc.power_control);
     let u0_tx = porta.pa1.into_af_push_pull::<AF1>(&mut porta.control);
     let u0_rx = porta.pa0.into_af_push_pull::<AF1>(&mut porta.control);
+    let porta_sensor_pins = (
+        porta.pa7.into_af_push_pull::<AF1>(&mut porta.control), // U2TX
+        porta.pa6.into_af_push_pull::<AF1>(&mut porta.control), // U2RX
+    );
     let uart = Serial::uart0(
         p.UART0,
         u0_tx,
@@ -293,11 +648,26 @@ fn main() -> ! {
         u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
     }
 
+    let sensors = setup_sensors(
+        p.SSI2,
+        p.SSI3,
+        p.UART2,
+        p.UART3,
+        p.UART6,
+        p.GPIO_PORTD_AHB,
+        p.GPIO_PORTQ,
+        p.GPIO_PORTJ_AHB,
+        p.GPIO_PORTP,
+        porta_sensor_pins,
+        &clocks,
+        &sc.power_control,
+    );
+
     cortex_m::interrupt::free(|cs| {
         BOARD.borrow(cs).set(Some(Board {
             core: FlightCore::new(Params::default()),
             link: LinkEndpoint::default(),
-            sensors: Tm4cSensors,
+            sensors,
             escs,
             now_us: 0,
         }));
