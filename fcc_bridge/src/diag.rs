@@ -1,4 +1,8 @@
-//! `/diagnostics` (diagnostic_msgs/DiagnosticArray) from the bridge's state.
+//! `/diagnostics` (diagnostic_msgs/DiagnosticArray) from the bridge's state, and the sensor-health
+//! rules: statuses `fcc_bridge: link`, `fcc_bridge: time sync`, `fcc_bridge: setpoints`,
+//! `fcc: vehicle` and `fcc: sensors` (WARN while GPS is lost, the magnetometer is disturbed, or
+//! the laser / sonar gives no valid reading while it should see the ground); [`SensorWatch`]
+//! turns the same rules into one `/rosout` WARN per episode and an INFO on recovery.
 
 use crate::convert::Config;
 use crate::ros_types::*;
