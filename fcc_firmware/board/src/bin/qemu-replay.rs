@@ -8,7 +8,10 @@
 //! executed instruction). SysTick runs from the mps2's CPU clock on that virtual clock; the image
 //! calibrates SysTick ticks → instructions with a loop of known length, so the per-step figures
 //! are in instructions. Output lines:
-//!   `M <tick> <8 × hex f32>` per tick, then `CAL`, `STEP`, `SELF`, `DONE` summary lines.
+//!   `M <tick> <8 × hex f32>` per tick, then `CAL`, `STEP`, `LINK`, `SELF`, `DONE` summary lines.
+//! `LINK` is the link's transmit side run after each step as the board does (telemetry frames
+//! at the default stream rates; the recording has no received bytes, so `on_bytes` is not
+//! exercised).
 #![no_std]
 #![no_main]
 
@@ -18,6 +21,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hio};
 use fcc_board::replay::{apply_events, InputStream, MotorLatch, OutputStream, ReplayBoard};
 use fcc_firmware::flight::FlightCore;
+use fcc_firmware::link::LinkEndpoint;
 use fcc_firmware::params::Params;
 use fcc_firmware::sensors::SensorInputs;
 
@@ -99,6 +103,11 @@ fn main() -> ! {
     let mut core = FlightCore::new(Params::default());
     let mut board = ReplayBoard { next: SensorInputs::default() };
     let mut motors = MotorLatch::default();
+    // The link's transmit side as the board runs it after each step (telemetry at the default
+    // stream rates into at most 512 bytes); it reads the core and does not change it.
+    let mut link = LinkEndpoint::default();
+    let mut tx = [0u8; 512];
+    let (mut link_sum, mut link_max, mut link_bytes, mut total_max) = (0u64, 0u32, 0u64, 0u32);
     let (mut n, mut sum, mut min, mut max, mut max_at) = (0u32, 0u64, u32::MAX, 0u32, 0u32);
     let (mut armed_n, mut armed_sum, mut armed_max) = (0u32, 0u64, 0u32);
     let mut max_diff = 0.0f32;
@@ -107,9 +116,16 @@ fn main() -> ! {
         apply_events(&mut core, &rec);
         board.next = rec.inputs;
         let a = SYST::get_current();
-        fcc_firmware::scheduler::tick(&mut core, &mut board, &mut motors, rec.now_us);
+        let inputs = fcc_firmware::scheduler::tick(&mut core, &mut board, &mut motors, rec.now_us);
         let b = SYST::get_current();
         let t = elapsed(a, b);
+        let nb = link.poll_tx(rec.now_us, &core, &inputs, &mut tx);
+        let c = SYST::get_current();
+        let tl = elapsed(b, c);
+        link_sum += tl as u64;
+        link_max = link_max.max(tl);
+        link_bytes += nb as u64;
+        total_max = total_max.max(t + tl);
         sum += t as u64;
         if t < min {
             min = t;
@@ -153,6 +169,15 @@ fn main() -> ! {
         armed_n,
         armed_mean * k,
         armed_max as f32 * k
+    );
+    let _ = writeln!(
+        out,
+        "LINK all {} ticks: poll_tx mean {:.0} max {:.0} insns, {:.1} bytes/tick; step + poll_tx max {:.0} insns",
+        n,
+        if n > 0 { link_sum as f32 / n as f32 * k } else { 0.0 },
+        link_max as f32 * k,
+        if n > 0 { link_bytes as f32 / n as f32 } else { 0.0 },
+        total_max as f32 * k
     );
     let _ = writeln!(out, "SELF compared {} ticks with the embedded host outputs: max abs diff {:e}", compared, max_diff);
     let _ = writeln!(out, "DONE {}", n);
