@@ -10,7 +10,7 @@
 use fcc_bridge::report::bag::odom_ned;
 use fcc_bridge::ros_types::*;
 use fcc_mission::{Request, WaypointFollower};
-use futures::StreamExt;
+use futures::{FutureExt, StreamExt};
 use ros2_client::qos::{History, WhenFull};
 use ros2_client::{Context, Name, NodeName, NodeOptions, QosProfile};
 use std::time::{Duration, Instant};
@@ -87,6 +87,12 @@ async fn main() -> anyhow::Result<()> {
                 }
             }
             Some(Ok((o, _))) = odom_s.next() => {
+                // Work on the newest odometry only: on a loaded machine a backlog would make the
+                // setpoints (stamped with their odometry) too old for the bridge's TTL check.
+                let mut o = o;
+                while let Some(Some(Ok((n, _)))) = odom_s.next().now_or_never() {
+                    o = n;
+                }
                 // Let the navigation calibrate (≈ 5 s after the first state) before starting.
                 let f = *first_odom.get_or_insert_with(Instant::now);
                 if !ready || f.elapsed() < Duration::from_secs(6) || land_sent {

@@ -36,6 +36,11 @@ with open(bag, "rb") as f:
         n_bag += 1
         want[(st.sec, st.nanosec)] = (p.x, p.y, p.z, q.w, q.x, q.y, q.z, v.x, v.y, v.z)
 bad = 0
+order = sorted(want)
+have = {(m.header.stamp.sec, m.header.stamp.nanosec) for m in got}
+missing = [i for i, k in enumerate(order) if k not in have]
+if missing:
+    print(f"missing {len(missing)}: bag indices {missing[:5]}…{missing[-3:]} of 0..{len(order) - 1}")
 for m in got:
     st = m.header.stamp
     p, q, v = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist.linear

@@ -92,7 +92,10 @@ async fn play(msgs: Vec<BagMsg>, rate: f64, prefix: &str) -> anyhow::Result<()> 
     let ctx = Context::new()?;
     let mut node = ctx.new_node(NodeName::new("/", "fcc_replay")?, NodeOptions::new())?;
     tokio::spawn(node.spinner()?.spin());
-    let qos = QosProfile::publisher_default();
+    // Reliable, and a writer history deep enough that a subscriber that falls behind for a
+    // moment gets the samples resent instead of overwritten (the default keeps only 1).
+    let qos = QosProfile::publisher_default()
+        .history(ros2_client::qos::History::KeepLast { depth: 1000 });
     // Raw CDR passthrough: publish the recorded bytes as they are.
     let mut pubs: BTreeMap<String, ros2_client::Publisher<RawCdr>> = BTreeMap::new();
     for m in &msgs {
