@@ -329,6 +329,12 @@ def observe(a):
     for v in vehicles:
         c.check(f"/uav{v}: two nodes (bridge + mission node) in the namespace", len(per_ns[v]) >= 2,
                 len(per_ns[v]))
+        eps = [(t, kind) for pk, t, ty, kind in endpoints.values() if pk != me and NS_RE.match(t)
+               and int(NS_RE.match(t).group(2)) == v]
+        print(f"INFO /uav{v}: {sum(1 for t, k in eps if t.startswith('rt/') and k == 'pub')} topics published, "
+              f"{sum(1 for t, k in eps if t.startswith('rt/') and k == 'sub')} subscribed, "
+              f"{sum(1 for t, k in eps if not t.startswith('rt/'))} service request/reply endpoints "
+              f"(parameters, arm, land, hold), all under /uav{v}", flush=True)
 
     # ---- per-message checks against each vehicle's own truth
     logs = {v: load_csv(os.path.join(a.csv_dir, f"uav{v}.csv")) for v in vehicles}

@@ -14,6 +14,10 @@
 //! on); a non-main process that exits on its own while a main process of its group (or, without
 //! a group, any main process) still runs is an early exit: everything is stopped, exit code 1.
 //!
+//! At the end it prints the CPU time (user, system) of each process it started, measured when the
+//! process is reaped (`getrusage(RUSAGE_CHILDREN)` deltas), its own, and the sum as % of one core
+//! over the wall time: `fcc-launch: cpu NAME user U s sys S s (P % of one core)`.
+//!
 //! Config (see `launch_configs/square_flight.yaml`):
 //! ```yaml
 //! vars: { speed: "1", out: out }        # defaults; override with speed:=2 on the command line
