@@ -98,8 +98,8 @@ impl SensorWatch {
     ) -> Vec<HealthEvent> {
         let bad = unhealthy(s, ground_height_m, cfg);
         let mut out = Vec::new();
-        for i in 0..SENSORS.len() {
-            if bad[i] {
+        for (i, &is_bad) in bad.iter().enumerate() {
+            if is_bad {
                 self.last_bad_us[i] = t_us;
                 if !self.reported[i] {
                     self.reported[i] = true;
