@@ -53,9 +53,15 @@ run cargo build --offline --locked --release -p fcc_mission --features ros --bin
 # Unit tests beside the code, the scenario tests in tests/ (optimised: whole flights), the DDS
 # peer and recorder tests.
 run cargo test --offline --locked --workspace --release
+# The board's sensor/actuator drivers (MPU-9250, MS5611, UBX, laser, sonar, S.BUS, ESC PWM) on the
+# host, against datasheet byte sequences (the board crate is not a workspace member).
+run cargo test --offline --locked --manifest-path fcc_firmware/board/Cargo.toml --features std
 # The full stack (fcc-sitl --link-pty ⇄ fcc-bridge ⇄ fcc-mission, started by fcc-launch) against
 # the independent Cyclone DDS peer; the script puts everything in ONE loopback-only namespace.
 tests/e2e/run_stack.sh "$FCC_DDS_PYTHON"
+# Four vehicles on one DDS domain (/uav1 … /uav4, each its own SITL, bridge and mission): every
+# namespaced topic seen by the Cyclone peer, no message crossing namespaces, CPU use printed.
+tests/e2e/four_uav.sh "$FCC_DDS_PYTHON"
 # Robustness through the real pty + bridge (issue 6): bad configuration, a noisy wire under the
 # square mission, the mission node killed mid-leg, the bridge and the serial device lost and back.
 tests/e2e/robust_stack.sh "$FCC_DDS_PYTHON"
