@@ -222,7 +222,8 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
         },
-    };
+    }
+    .with_remaps(&opts.remaps);
     let rt = tokio::runtime::Runtime::new().expect("tokio runtime");
     let r = rt.block_on(async {
         let mut term =

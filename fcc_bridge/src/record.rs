@@ -178,6 +178,8 @@ pub struct RecorderReport {
 /// thread when recording.
 pub struct Tap {
     namespace: String,
+    /// `-r from:=to` remaps: a message is filed under the topic it really went out on.
+    remaps: Vec<(String, String)>,
     inner: Mutex<TapInner>,
     tx: Option<mpsc::Sender<Ev>>,
     thread: Mutex<Option<std::thread::JoinHandle<()>>>,
@@ -199,6 +201,7 @@ impl Tap {
     pub fn counting(namespace: &str) -> Arc<Tap> {
         Arc::new(Tap {
             namespace: namespace.to_string(),
+            remaps: Vec::new(),
             inner: Mutex::new(TapInner {
                 counts: Counts::default(),
                 names: HashMap::new(),
@@ -235,6 +238,24 @@ impl Tap {
         t.thread = Mutex::new(Some(th));
         t.path = Some(path);
         Ok(Arc::new(t))
+    }
+
+    /// The same tap, filing messages under their remapped topics (`-r /tf:=tf` records the
+    /// bridge's TF under `NAMESPACE/tf`, where it was published). Call before sharing the tap.
+    pub fn with_remaps(self: Arc<Self>, remaps: &[(String, String)]) -> Arc<Self> {
+        match Arc::try_unwrap(self) {
+            Ok(mut t) => {
+                t.remaps = remaps.to_vec();
+                Arc::new(t)
+            }
+            Err(shared) => shared,
+        }
+    }
+
+    /// Full topic of a name the bridge publishes or subscribes to (namespace + remaps).
+    fn topic_of(&self, name: &str) -> String {
+        let remapped = crate::params::remap(&self.remaps, &self.namespace, name);
+        full_topic(&self.namespace, &remapped)
     }
 
     pub fn is_recording(&self) -> bool {
@@ -320,7 +341,7 @@ impl Tap {
         let g = &mut *g;
         if !g.names.contains_key(name) {
             g.names
-                .insert(name.to_string(), (full_topic(&self.namespace, name), 0, 0));
+                .insert(name.to_string(), (self.topic_of(name), 0, 0));
         }
         let e = g.names.get_mut(name).expect("inserted");
         if publ {
@@ -411,7 +432,7 @@ impl Tap {
             t_us,
             data,
         };
-        let topic = full_topic(&self.namespace, RAW_FRAMES_TOPIC);
+        let topic = self.topic_of(RAW_FRAMES_TOPIC);
         self.record(g, &topic, QosInfo::TELEMETRY, &m, t_ns);
     }
 
@@ -844,6 +865,19 @@ mod tests {
         let t = err_text(&e);
         assert!(t.contains("No space left on device"), "{t}");
         assert!(!t.contains('\n'));
+    }
+
+    #[test]
+    fn remapped_topics_are_counted_where_they_went_out() {
+        let remaps = vec![
+            ("/tf".to_string(), "tf".to_string()),
+            ("battery".to_string(), "power/battery".to_string()),
+        ];
+        let tap = Tap::counting("/uav1").with_remaps(&remaps);
+        assert_eq!(tap.topic_of("/tf"), "/uav1/tf");
+        assert_eq!(tap.topic_of("battery"), "/uav1/power/battery");
+        assert_eq!(tap.topic_of("/clock"), "/clock");
+        assert_eq!(tap.topic_of("status"), "/uav1/status");
     }
 
     #[test]
