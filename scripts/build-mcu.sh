@@ -89,7 +89,7 @@ if command -v $objdump >/dev/null; then
     function reason(file, fn, callee) {
       if (file ~ /^fcc_nav\/src\/geodesy\.rs$/) return "allowed: WGS-84 lat/lon -> local NED (home: once; then per GPS fix, 5 Hz)"
       if (callee ~ /^(__aeabi_(f2d|d2f)|,)+$/) return "allowed: f32<->f64 conversion only (lat/lon and home fields are f64), no f64 arithmetic"
-      if (file ~ /^fcc_nav\/src\/complementary\.rs$/ && fn ~ /CfGains>::discrete/) return "allowed: filter gain design, cached; recomputed only when dt changes (first step)"
+      if (file ~ /^fcc_nav\/src\/complementary\.rs$/ && fn ~ /CfGains>::discrete/) return "allowed: filter gain design, cached per dt (first IMU sample; again only if an IMU sample is missed)"
       if (file ~ /^fcc_firmware\/board\/src\/drivers\/.*(gps|ubx)/) return "allowed: lat/lon from the GPS receiver"
       return "NOT ALLOWED: f64 in the flight path"
     }
