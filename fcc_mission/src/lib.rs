@@ -47,9 +47,11 @@
 //!
 //! Not yet supported: lat/lon waypoints (rejected as unknown fields).
 
+pub mod ending;
 pub mod follower;
 pub mod mission;
 
+pub use ending::{EndEvent, EndPhase, EndSequence, EndStep, McuMode, ModeCommand};
 pub use follower::{Guidance, LegInfo, Phase, Request, WaypointFollower};
 pub use mission::{from_yaml_str, Mission, MissionError, Waypoint};
 pub mod track;

@@ -3,8 +3,12 @@
 //! The mission node: flies a mission YAML (see `launch_configs/missions/`) through the bridge.
 //! Subscribes `state/odom` (nav_msgs/Odometry, ENU/FLU) and `status` (fcc_msgs/Status),
 //! publishes `setpoint/velocity` (geometry_msgs/TwistStamped, frame `map`, ENU) at `rate_hz`,
-//! `cmd/arm` (std_msgs/Bool), `cmd/mode` (std_msgs/String "land") and `mission/status`
-//! (std_msgs/String, one JSON object per message).
+//! `cmd/arm` (std_msgs/Bool), `cmd/mode` (std_msgs/String "hold", "land") and `mission/status`
+//! (std_msgs/String, one JSON object per message); logs to stdout and `/rosout`.
+//!
+//! After the last waypoint it lands (`cmd/mode` "land"), or with `-p hover_s:=S` (S > 0) first
+//! hovers S seconds of ROS time in the MCU's HOLD mode (`cmd/mode` "hold", no setpoints; paper A
+//! Fig. 16), then lands; the sequencing is `fcc_mission::EndSequence`.
 //!
 //! Exit codes: 0 when the vehicle is landed and disarmed after the mission; 1 on a failure
 //! (timeout, disarmed in flight, DDS setup); 2 on a bad mission file or bad arguments.
@@ -16,8 +20,10 @@ use fcc_bridge::ros_node::{self, DdsEnv, RosClock};
 use fcc_bridge::ros_types::{
     Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
 };
-use fcc_mission::{Mission, Phase, Request, WaypointFollower};
+use fcc_mission::{EndPhase, EndSequence, McuMode, Mission, Phase, Request, WaypointFollower};
 use futures::StreamExt;
+use ros2_client::log::LogLevel;
+use ros2_client::{NodeLoggingHandle, RosoutRaw};
 use std::time::{Duration, Instant};
 
 #[derive(Parser, Debug)]
@@ -28,7 +34,9 @@ use std::time::{Duration, Instant};
   [-p name:=value ...] (remaps as the bridge's, e.g. -r /clock:=clock for a per-vehicle clock)\n\
 Parameters: mission (file; or --mission), rate_hz (50), use_sim_time (false: stamp with the\n\
   Linux clock; true: with /clock, e.g. from fcc-bridge -p clock_source:=mcu),\n\
-  timeout_s (600, from start), arm_timeout_s (60), localhost_only (true).\n\
+  timeout_s (600, from start), arm_timeout_s (60), localhost_only (true),\n\
+  hover_s (0: land right after the last waypoint; S > 0: hover S s of ROS time in the MCU's\n\
+  HOLD mode first, then land).\n\
 Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE."
 )]
 struct Cli {
@@ -47,6 +55,8 @@ struct Options {
     use_sim_time: bool,
     timeout_s: f64,
     arm_timeout_s: f64,
+    /// Seconds of ROS time in HOLD after the last waypoint before landing (0 = land at once).
+    hover_s: f64,
     /// `-r from:=to` topic remaps (e.g. `-r /clock:=clock`: a per-vehicle simulated clock).
     remaps: Vec<(String, String)>,
 }
@@ -95,6 +105,7 @@ fn options() -> Options {
         "timeout_s",
         "arm_timeout_s",
         "localhost_only",
+        "hover_s",
     ];
     if let Some(k) = p.keys().find(|k| !known.contains(&k.as_str())) {
         fail(2, format!("unknown parameter '{k}'"));
@@ -125,6 +136,16 @@ fn options() -> Options {
         .get("use_sim_time")
         .map(|v| parse_bool(v).unwrap_or_else(|e| fail(2, format!("parameter use_sim_time: {e}"))))
         .unwrap_or(false);
+    let hover_s = match p.get("hover_s") {
+        None => 0.0,
+        Some(v) => match v.parse::<f64>() {
+            Ok(x) if x.is_finite() && x >= 0.0 => x,
+            _ => fail(
+                2,
+                format!("parameter hover_s: '{v}' is not a number of seconds >= 0"),
+            ),
+        },
+    };
     let rate_hz = num("rate_hz", 50.0);
     if rate_hz < 20.0 {
         fail(2, format!("parameter rate_hz: {rate_hz} is below 20 Hz"));
@@ -142,6 +163,7 @@ fn options() -> Options {
         use_sim_time,
         timeout_s: num("timeout_s", 600.0),
         arm_timeout_s: num("arm_timeout_s", 60.0),
+        hover_s,
         remaps: ros.remaps.clone(),
     }
 }
@@ -210,6 +232,48 @@ fn stamp(ns: i64) -> Time {
     Time::from_nanos(ns)
 }
 
+/// The node's log lines: stdout (`fcc-mission: …`, what fcc-launch shows) and `/rosout`,
+/// stamped with ROS time (simulated time with use_sim_time; the system clock before the first
+/// /clock).
+struct Log {
+    handle: NodeLoggingHandle,
+    name: String,
+}
+
+impl Log {
+    fn log(&self, level: LogLevel, now_ns: Option<i64>, msg: &str) {
+        println!("fcc-mission: {msg}");
+        self.handle.rosout_raw(
+            ros2_client::builtin_interfaces::Time::from_nanos(
+                now_ns.unwrap_or_else(fcc_bridge::now_ns),
+            ),
+            level,
+            &self.name,
+            msg,
+            file!(),
+            "",
+            line!(),
+        );
+    }
+    fn info(&self, now_ns: Option<i64>, msg: &str) {
+        self.log(LogLevel::Info, now_ns, msg)
+    }
+    fn warn(&self, now_ns: Option<i64>, msg: &str) {
+        self.log(LogLevel::Warn, now_ns, msg)
+    }
+}
+
+/// The MCU's mode and whether a failsafe is active, from `status`.
+fn mcu_mode(st: &Status) -> (McuMode, bool) {
+    let mode = match st.mode {
+        Status::MODE_HOLD => McuMode::Hold,
+        Status::MODE_VELOCITY => McuMode::Velocity,
+        Status::MODE_LAND => McuMode::Land,
+        _ => McuMode::Disarmed,
+    };
+    (mode, st.failsafe != Status::FAILSAFE_NONE)
+}
+
 #[tokio::main(flavor = "current_thread")]
 async fn main() {
     let o = options();
@@ -269,9 +333,13 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
     )
     .map_err(e1)?;
 
+    let log = Log {
+        handle: node.logging_handle(),
+        name: fcc_bridge::ros_api::logger_name(&o.namespace, &o.node_name),
+    };
     let n_wp = o.mission.waypoints.len();
-    println!(
-        "fcc-mission: node {}/{} (DDS domain {}, {}), mission {} ({} waypoints, {} m/s), setpoints at {} Hz, {} time",
+    log.info(None, &format!(
+        "node {}/{} (DDS domain {}, {}), mission {} ({} waypoints, {} m/s), setpoints at {} Hz, {} time, {}",
         o.namespace.trim_end_matches('/'),
         o.node_name,
         o.dds.domain_id,
@@ -280,10 +348,21 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
         n_wp,
         o.mission.speed_mps,
         o.rate_hz,
-        if o.use_sim_time { "sim (/clock)" } else { "system" }
-    );
+        if o.use_sim_time { "sim (/clock)" } else { "system" },
+        if o.hover_s > 0.0 {
+            format!("then {} s in HOLD before landing", o.hover_s)
+        } else {
+            "landing after the last waypoint".into()
+        }
+    ));
     if o.mission.yaw_deg.is_some() {
-        println!("fcc-mission: note: yaw_deg is not sent (TwistStamped carries no heading; the bridge keeps the current heading)");
+        log.info(None, "note: yaw_deg is not sent (TwistStamped carries no heading; the bridge keeps the current heading)");
+    }
+    if o.hover_s > 0.0 && !o.mission.land_at_end {
+        log.warn(
+            None,
+            "hover_s is ignored: the mission does not land at the end (land_at_end: false)",
+        );
     }
 
     let odom_stream = odom_sub.async_stream();
@@ -300,8 +379,7 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
     let mut arm_sent_at: Option<Instant> = None;
     let mut arm_attempts = 0u32;
     let mut armed_at_ns: Option<i64> = None;
-    let mut land_sent_at: Option<Instant> = None;
-    let mut land_requested_ns: Option<i64> = None;
+    let mut end = EndSequence::new(o.hover_s);
     let mut last_report = Instant::now() - Duration::from_secs(10);
     let mut setpoints = 0u64;
     let mut track = Track::default();
@@ -337,15 +415,18 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
         let (Some(od), Some(st), Some(now_ns)) = (odom.as_ref(), status.as_ref(), clock.now_ns())
         else {
             if !waiting_note && elapsed > 5.0 {
-                println!(
-                    "fcc-mission: waiting for the bridge: state/odom {}, status {}, clock {}",
-                    if odom.is_some() { "ok" } else { "none yet" },
-                    if status.is_some() { "ok" } else { "none yet" },
-                    if clock.now_ns().is_some() {
-                        "ok"
-                    } else {
-                        "no /clock yet"
-                    }
+                log.info(
+                    clock.now_ns(),
+                    &format!(
+                        "waiting for the bridge: state/odom {}, status {}, clock {}",
+                        if odom.is_some() { "ok" } else { "none yet" },
+                        if status.is_some() { "ok" } else { "none yet" },
+                        if clock.now_ns().is_some() {
+                            "ok"
+                        } else {
+                            "no /clock yet"
+                        }
+                    ),
                 );
                 waiting_note = true;
             }
@@ -359,7 +440,7 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
         if st.last_reject != last_reject {
             last_reject = st.last_reject.clone();
             if !last_reject.is_empty() && last_reject != "accepted" {
-                println!("fcc-mission: MCU/bridge reject: {last_reject}");
+                log.warn(Some(now_ns), &format!("MCU/bridge reject: {last_reject}"));
             }
         }
 
@@ -370,9 +451,12 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
                 let mut f = WaypointFollower::new(o.mission.clone());
                 let _ = f.update(t_s, pos, vel);
                 follower = Some(f);
-                println!(
-                    "fcc-mission: armed at t={tr:.2} s, home NED [{:.2}, {:.2}, {:.2}] m",
-                    pos[0], pos[1], pos[2]
+                log.info(
+                    Some(now_ns),
+                    &format!(
+                        "armed at t={tr:.2} s, home NED [{:.2}, {:.2}, {:.2}] m",
+                        pos[0], pos[1], pos[2]
+                    ),
                 );
             } else {
                 let mut probe = WaypointFollower::new(o.mission.clone());
@@ -412,28 +496,31 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
         // ---- flying
         if !st.armed {
             let flight_s = (now_ns - armed_at_ns.unwrap_or(now_ns)) as f64 * 1e-9;
-            if land_requested_ns.is_some() && st.landed {
+            if end.land_requested() && st.landed {
                 let _ = status_pub.publish(StringMsg {
                     data: format!("{{\"phase\":\"finished\",\"waypoint\":{n_wp},\"of\":{n_wp},\"dist_to_go_m\":0.0,\"armed\":false,\"landed\":true}}"),
                 });
-                println!(
-                    "fcc-mission: mission complete: {n_wp}/{n_wp} waypoints, {flight_s:.1} s armed, {setpoints} setpoints, cross-track (estimate, as seen on state/odom) RMS {:.3} m max {:.3} m; landed and disarmed",
+                log.info(Some(now_ns), &format!(
+                    "mission complete: {n_wp}/{n_wp} waypoints, {flight_s:.1} s armed, {setpoints} setpoints, cross-track (estimate, as seen on state/odom) RMS {:.3} m max {:.3} m; landed and disarmed",
                     track.rms(),
                     track.max
-                );
+                ));
                 return Ok(());
             }
             return Err((1, format!(
-                "disarmed in flight after {flight_s:.1} s (phase {:?}, mode {}, failsafe {}, landed {})",
-                last_phase, st.mode_name, st.failsafe_name, st.landed
+                "disarmed in flight after {flight_s:.1} s (phase {:?}, end {:?}, mode {}, failsafe {}, landed {})",
+                last_phase, end.phase(), st.mode_name, st.failsafe_name, st.landed
             )));
         }
         let g = f.update(t_s, pos, vel);
         let (name, idx) = phase_name(g.phase);
         if last_phase != Some((name, idx)) {
-            println!(
-                "fcc-mission: t={tr:.2} s {name}{}",
-                idx.map(|i| format!(" {i}")).unwrap_or_default()
+            log.info(
+                Some(now_ns),
+                &format!(
+                    "t={tr:.2} s {name}{}",
+                    idx.map(|i| format!(" {i}")).unwrap_or_default()
+                ),
             );
             last_phase = Some((name, idx));
         }
@@ -448,24 +535,32 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
             ];
             (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
         });
-        if g.request == Some(Request::Land) || land_requested_ns.is_some() {
-            if land_requested_ns.is_none() {
-                land_requested_ns = Some(now_ns);
-                println!("fcc-mission: t={tr:.2} s mission done, landing");
+        // ---- the end: land, or hover in HOLD first (no setpoints), then land; commands are
+        // re-sent until the MCU reports the mode (they travel best-effort).
+        let (mode, failsafe) = mcu_mode(st);
+        let step = end.update(t_s, g.request == Some(Request::Land), mode, failsafe);
+        if let Some(e) = &step.event {
+            let line = format!("t={tr:.2} s {e}");
+            if e.is_warning() {
+                log.warn(Some(now_ns), &line);
+            } else {
+                log.info(Some(now_ns), &line);
             }
-            // Resend until the MCU reports land mode (commands travel best-effort).
-            if st.mode_name != "land"
-                && land_sent_at.is_none_or(|t| t.elapsed() >= Duration::from_millis(500))
-            {
-                let _ = mode_pub.publish(StringMsg {
-                    data: "land".into(),
-                });
-                land_sent_at = Some(Instant::now());
-            }
+        }
+        if let Some(c) = step.command {
+            let _ = mode_pub.publish(StringMsg {
+                data: c.as_str().into(),
+            });
+        }
+        if !step.send_setpoints {
             report(
                 &status_pub,
                 &mut last_report,
-                "landing",
+                if end.phase() == EndPhase::Hover {
+                    "hover"
+                } else {
+                    "landing"
+                },
                 None,
                 n_wp,
                 None,
