@@ -347,7 +347,9 @@ impl FlightCore {
             v[0] *= l.max_horiz_speed_mps / h;
             v[1] *= l.max_horiz_speed_mps / h;
         }
-        v[2] = v[2].clamp(-l.max_climb_mps, l.max_descent_mps);
+        // max/min, not clamp: clamp panics on inverted bounds; the limits are range-checked
+        // (params.rs) but the MCU image must have no panic path reachable from link bytes.
+        v[2] = v[2].max(-l.max_climb_mps).min(l.max_descent_mps);
         self.setpoint = Some((
             VelocitySetpoint {
                 vel_ned_mps: v,
@@ -475,8 +477,11 @@ impl FlightCore {
         };
         let (mut v_ne, mut vz_down, yaw) = match self.mode {
             Mode::Hold => {
-                let vz = (-(c.alt_p_per_s * (self.hold_alt_m - alt)))
-                    .clamp(-l.max_climb_mps, l.max_descent_mps);
+                let vz = fcc_nav::math::clampf(
+                    -(c.alt_p_per_s * (self.hold_alt_m - alt)),
+                    -l.max_climb_mps,
+                    l.max_descent_mps,
+                );
                 (hold_ne(self), vz, self.yaw_hold_rad)
             }
             Mode::Velocity => match self.setpoint {

@@ -32,7 +32,7 @@ pub fn accel_tilt_rad(f_frd_mps2: [f32; 3]) -> (f32, f32) {
     if norm < 1e-6 {
         return (0.0, 0.0);
     }
-    let pitch = asinf((fx / norm).clamp(-1.0, 1.0));
+    let pitch = asinf(crate::math::clampf(fx / norm, -1.0, 1.0));
     let roll = atan2f(-fy, -fz);
     (roll, pitch)
 }

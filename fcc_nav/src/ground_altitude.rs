@@ -86,7 +86,11 @@ pub fn tilt_cos(roll_rad: f32, pitch_rad: f32) -> f32 {
 
 /// Angle between body-down and local vertical \[rad], `acos(cos φ·cos θ)`.
 pub fn tilt_angle_rad(roll_rad: f32, pitch_rad: f32) -> f32 {
-    acosf(tilt_cos(roll_rad, pitch_rad).clamp(-1.0, 1.0))
+    acosf(crate::math::clampf(
+        tilt_cos(roll_rad, pitch_rad),
+        -1.0,
+        1.0,
+    ))
 }
 
 const DEG: f32 = core::f32::consts::PI / 180.0;

@@ -18,7 +18,7 @@ pub struct LowPass2 {
 impl LowPass2 {
     /// Cut-off `cutoff_hz` at sample rate `sample_hz` (cut-off clamped below Nyquist).
     pub fn new(cutoff_hz: f32, sample_hz: f32) -> Self {
-        let fc = cutoff_hz.clamp(1e-3, 0.45 * sample_hz);
+        let fc = crate::math::clampf(cutoff_hz, 1e-3, 0.45 * sample_hz);
         let k = crate::math::tanf(PI * fc / sample_hz);
         let q = core::f32::consts::FRAC_1_SQRT_2;
         let norm = 1.0 / (1.0 + k / q + k * k);

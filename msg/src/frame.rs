@@ -97,23 +97,33 @@ pub fn encode(msg: &Message, seq: u16, t_us: u64, out: &mut [u8]) -> Result<usiz
     };
     let mut h = [0u8; HEADER_LEN];
     header.write(&mut h);
-    raw[..HEADER_LEN].copy_from_slice(&h);
+    // Slices by `get`, not indexing: no panic path in the MCU image (scripts/build-mcu.sh
+    // lists them); the lengths are constants, so these never fail.
+    let (head, rest) = raw.split_at_mut(HEADER_LEN);
+    head.copy_from_slice(&h);
+    let payload = rest
+        .get_mut(..MAX_PAYLOAD_LEN)
+        .ok_or(EncodeError::Serialize)?;
     let n = msg
-        .serialize_payload(&mut raw[HEADER_LEN..HEADER_LEN + MAX_PAYLOAD_LEN])
+        .serialize_payload(payload)
         .map_err(|_| EncodeError::Serialize)?;
     let crc_at = HEADER_LEN + n;
-    let crc = CRC32C.checksum(&raw[..crc_at]);
-    raw[crc_at..crc_at + CRC_LEN].copy_from_slice(&crc.to_le_bytes());
+    let crc = CRC32C.checksum(raw.get(..crc_at).ok_or(EncodeError::Serialize)?);
+    raw.get_mut(crc_at..crc_at + CRC_LEN)
+        .ok_or(EncodeError::Serialize)?
+        .copy_from_slice(&crc.to_le_bytes());
     let raw_len = crc_at + CRC_LEN;
     let needed = cobs::max_encoding_length(raw_len) + 1;
+    let too_small = EncodeError::BufferTooSmall {
+        needed,
+        available: out.len(),
+    };
     if out.len() < needed {
-        return Err(EncodeError::BufferTooSmall {
-            needed,
-            available: out.len(),
-        });
+        return Err(too_small);
     }
-    let len = cobs::encode(&raw[..raw_len], out);
-    out[len] = 0;
+    let src = raw.get(..raw_len).ok_or(EncodeError::Serialize)?;
+    let len = cobs::try_encode(src, out).map_err(|_| too_small)?;
+    *out.get_mut(len).ok_or(too_small)? = 0;
     Ok(len + 1)
 }
 
@@ -251,14 +261,14 @@ impl FrameDecoder {
             if self.discarding {
                 return None;
             }
-            if self.len == self.buf.len() {
+            let Some(slot) = self.buf.get_mut(self.len) else {
                 self.discarding = true;
                 self.len = 0;
                 c.overruns = c.overruns.wrapping_add(1);
                 c.resyncs = c.resyncs.wrapping_add(1);
                 return Some(Err(DecodeError::Overrun));
-            }
-            self.buf[self.len] = byte;
+            };
+            *slot = byte;
             self.len += 1;
             return None;
         }
@@ -301,8 +311,8 @@ impl FrameDecoder {
     }
 
     fn check(&mut self, len: usize) -> Result<Frame, DecodeError> {
-        let raw_len =
-            cobs::decode_in_place(&mut self.buf[..len]).map_err(|_| DecodeError::Framing)?;
+        let candidate = self.buf.get_mut(..len).ok_or(DecodeError::Overrun)?;
+        let raw_len = cobs::decode_in_place(candidate).map_err(|_| DecodeError::Framing)?;
         if raw_len < HEADER_LEN + CRC_LEN {
             return Err(DecodeError::Framing);
         }
@@ -312,11 +322,11 @@ impl FrameDecoder {
             counters,
             ..
         } = self;
-        let raw = &buf[..raw_len];
-        let body = raw_len - CRC_LEN;
+        let raw = buf.get(..raw_len).ok_or(DecodeError::Framing)?;
+        let (body, crc_bytes) = raw.split_at(raw_len - CRC_LEN);
         let mut crc = [0u8; 4];
-        crc.copy_from_slice(&raw[body..]);
-        if CRC32C.checksum(&raw[..body]) != u32::from_le_bytes(crc) {
+        crc.copy_from_slice(crc_bytes);
+        if CRC32C.checksum(body) != u32::from_le_bytes(crc) {
             return Err(DecodeError::Crc);
         }
         let header = Header::read(raw);
@@ -329,12 +339,12 @@ impl FrameDecoder {
             });
         }
         let msg_id = header.msg_id;
-        let message =
-            Message::deserialize_payload(msg_id, &raw[HEADER_LEN..body]).map_err(|e| match e {
-                PayloadError::UnknownId => DecodeError::UnknownId { msg_id },
-                PayloadError::Invalid => DecodeError::Payload { msg_id },
-                PayloadError::TrailingBytes(extra) => DecodeError::TrailingBytes { msg_id, extra },
-            })?;
+        let payload = body.get(HEADER_LEN..).ok_or(DecodeError::Framing)?;
+        let message = Message::deserialize_payload(msg_id, payload).map_err(|e| match e {
+            PayloadError::UnknownId => DecodeError::UnknownId { msg_id },
+            PayloadError::Invalid => DecodeError::Payload { msg_id },
+            PayloadError::TrailingBytes(extra) => DecodeError::TrailingBytes { msg_id, extra },
+        })?;
         Ok(Frame { header, message })
     }
 }

@@ -84,8 +84,11 @@ impl YawController {
 
     /// Yaw-rate command (rad/s) from the heading error, wrapped to ±π.
     pub fn rate_cmd_radps(&self, yaw_cmd_rad: f32, yaw_rad: f32) -> f32 {
-        (self.heading_p_per_s * wrap_pi(yaw_cmd_rad - yaw_rad))
-            .clamp(-self.rate_limit_radps, self.rate_limit_radps)
+        fcc_nav::math::clampf(
+            self.heading_p_per_s * wrap_pi(yaw_cmd_rad - yaw_rad),
+            -self.rate_limit_radps,
+            self.rate_limit_radps,
+        )
     }
 
     /// Yaw torque (N·m): `K_ff·r_cmd + Kp·e_r + Ki·I_r`.

@@ -99,7 +99,7 @@ impl Mixer {
         sat.yaw_scale = k;
         let mut t = [0.0f32; MOTOR_COUNT];
         for i in 0..MOTOR_COUNT {
-            t[i] = (c + att[i] + k * yaw[i]).clamp(lo, hi);
+            t[i] = fcc_nav::math::clampf(c + att[i] + k * yaw[i], lo, hi);
         }
         (t, sat)
     }

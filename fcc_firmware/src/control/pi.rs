@@ -41,7 +41,7 @@ impl ForgettingPi {
         }
         if self.ki > 0.0 {
             let lim = self.i_limit / self.ki;
-            i = i.clamp(-lim, lim);
+            i = fcc_nav::math::clampf(i, -lim, lim);
         }
         self.integral = i;
         self.kp * error + self.ki * self.integral

@@ -36,7 +36,7 @@ impl VerticalController {
         let a_up = self
             .pi
             .update(vz_up_cmd_mps - vz_up_mps, dt_s, saturated_sign);
-        let c = tilt_cos.clamp(0.5, 1.0);
+        let c = fcc_nav::math::clampf(tilt_cos, 0.5, 1.0);
         self.mass_kg * (GRAVITY_MPS2 + a_up) / c
     }
 }

@@ -355,11 +355,15 @@ impl LinkEndpoint {
         }
 
         let streams = self.rates.streams();
-        for (i, &(_, hz)) in streams.iter().enumerate() {
+        for (i, (&(_, hz), &phase_us)) in streams.iter().zip(PHASE_US.iter()).enumerate() {
             let Some(period) = period_us(hz) else {
                 continue;
             };
-            let due = *self.next_due_us[i].get_or_insert(now_us + PHASE_US[i] % period);
+            // `get`, not indexing: no panic path in the MCU image (STREAMS entries each).
+            let Some(slot) = self.next_due_us.get_mut(i) else {
+                continue;
+            };
+            let due = *slot.get_or_insert(now_us + phase_us % period);
             if now_us < due {
                 continue;
             }
@@ -374,7 +378,9 @@ impl LinkEndpoint {
             if next <= now_us {
                 next = now_us + period;
             }
-            self.next_due_us[i] = Some(next);
+            if let Some(slot) = self.next_due_us.get_mut(i) {
+                *slot = Some(next);
+            }
         }
         pos
     }
@@ -386,7 +392,8 @@ impl LinkEndpoint {
         out: &mut [u8],
         pos: &mut usize,
     ) -> Result<(), EncodeError> {
-        let n = self.encoder.encode(msg, t_us, &mut out[*pos..])?;
+        let rest = out.get_mut(*pos..).unwrap_or_default();
+        let n = self.encoder.encode(msg, t_us, rest)?;
         *pos += n;
         self.stats.tx_frames = self.stats.tx_frames.wrapping_add(1);
         self.stats.tx_bytes = self.stats.tx_bytes.wrapping_add(n as u32);

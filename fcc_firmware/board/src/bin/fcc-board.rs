@@ -224,7 +224,8 @@ fn kick_tx() {
 
 /// SSI (SPI) clock = SysClk / (CPSDVSR · (1 + SCR)) with CPSDVSR = 2.
 const fn ssi_scr(hz: u32) -> u32 {
-    let scr = SYSCLK_HZ / (2 * hz);
+    // hz = 0 would divide by zero (a panic path): treat it as the slowest clock.
+    let scr = SYSCLK_HZ / 2 / if hz == 0 { 1 } else { hz };
     if scr == 0 {
         0
     } else {
