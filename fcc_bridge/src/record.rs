@@ -10,11 +10,17 @@
 //! [`RecordOptions::chunk_interval`] (default 500 ms of wall time) or when it reaches
 //! [`RecordOptions::chunk_bytes`] (default 4 MiB), whichever comes first. A SIGKILL (or power
 //! loss after the kernel wrote its cache) therefore loses at most the open chunk: ≤ 0.5 s plus
-//! the queue, measured ≈ 0.5 s. A SIGINT/SIGTERM finishes the file (summary, footer).
+//! the queue, measured 0.3–0.5 s. A SIGINT/SIGTERM finishes the file (summary, footer). Chunks
+//! follow the wall clock (crash safety is about real time); file splits follow log time.
 //!
 //! **Files**: the first file is `PATH`; a split (`record_split_s`, `record_split_mb`) or a new
-//! arm period (`record_on_arm`) opens `STEM_1.mcap`, `STEM_2.mcap`, … beside it. At the end the
-//! bridge writes `PATH.counts.json`: the per-topic counts it published/received and recorded.
+//! arm period (`record_on_arm`) opens `STEM_1.mcap`, `STEM_2.mcap`, … beside it.
+//! `record_split_s` splits on the messages' **log time**, as rosbag2 does: a message whose log
+//! time is ≥ the file's first log time + split_s starts the next file, so a file spans < split_s
+//! of log time however far the writer thread lags (deterministic for a given stream of
+//! messages). `record_split_mb` splits by bytes: a file holds ≤ MB·10^6 B of messages plus one.
+//! At the end the bridge writes `PATH.counts.json`: the per-topic counts it published/received
+//! and recorded.
 //!
 //! **Write errors** (disk full, …): one error is logged, the recording stops, the bridge runs on.
 
@@ -39,7 +45,7 @@ pub struct RecordOptions {
     pub chunk_interval: Duration,
     /// ... or when it holds this many bytes.
     pub chunk_bytes: u64,
-    /// Start a new file after this many seconds of recording.
+    /// Start a new file when a message's log time reaches the file's first log time + this.
     pub split_s: Option<f64>,
     /// Start a new file after this many MB (10^6 B) of messages.
     pub split_mb: Option<f64>,
@@ -599,7 +605,8 @@ struct WriterThread {
     channels: Vec<Option<ChannelDesc>>,
     bag: Option<BagWriter<McapFile>>,
     file_index: usize,
-    opened_at: Instant,
+    /// Log time (ns) of the open file's first message (for `split_s`).
+    file_first_log: Option<u64>,
     last_flush: Instant,
     armed: bool,
     failed: bool,
@@ -615,7 +622,7 @@ impl WriterThread {
             channels: Vec::new(),
             bag: None,
             file_index: 0,
-            opened_at: Instant::now(),
+            file_first_log: None,
             last_flush: Instant::now(),
             armed: false,
             failed: false,
@@ -670,7 +677,7 @@ impl WriterThread {
                     if self.opts.zstd { ", zstd" } else { "" }
                 );
                 self.bag = Some(b);
-                self.opened_at = Instant::now();
+                self.file_first_log = None;
                 self.last_flush = Instant::now();
             }
             Err(e) => self.fail("create", e),
@@ -699,8 +706,22 @@ impl WriterThread {
             self.report.not_recorded += 1;
             return;
         }
+        // Split on log time (before writing: the message that reaches the limit opens the
+        // next file, so each file spans < split_s of log time).
+        if let (Some(s), Some(first), true) =
+            (self.opts.split_s, self.file_first_log, self.bag.is_some())
+        {
+            if t >= first.saturating_add((s * 1e9) as u64) {
+                self.close();
+                self.open();
+            }
+        }
         if self.bag.is_none() {
             self.open();
+        }
+        // Log time 0 = no time yet (`clock_source:=mcu` before the MCU's first message).
+        if self.file_first_log.is_none() && self.bag.is_some() && t > 0 {
+            self.file_first_log = Some(t);
         }
         let (Some(bag), Some(Some(desc))) = (self.bag.as_mut(), self.channels.get(ch as usize))
         else {
@@ -721,11 +742,7 @@ impl WriterThread {
             .opts
             .split_mb
             .is_some_and(|mb| bag.bytes as f64 >= mb * 1e6);
-        let split_time = self
-            .opts
-            .split_s
-            .is_some_and(|s| self.opened_at.elapsed().as_secs_f64() >= s);
-        if split_bytes || split_time {
+        if split_bytes {
             self.close();
             self.open();
         }
@@ -878,6 +895,65 @@ mod tests {
         assert_eq!(tap.topic_of("battery"), "/uav1/power/battery");
         assert_eq!(tap.topic_of("/clock"), "/clock");
         assert_eq!(tap.topic_of("status"), "/uav1/status");
+    }
+
+    /// Log-time spans (ns) of each file of a recording, by reading them back.
+    fn spans(files: &[PathBuf]) -> Vec<(u64, u64, usize)> {
+        files
+            .iter()
+            .map(|f| {
+                let buf = std::fs::read(f).unwrap();
+                let ts: Vec<u64> = mcap::MessageStream::new(&buf)
+                    .unwrap()
+                    .map(|m| m.unwrap().log_time)
+                    .collect();
+                (
+                    *ts.iter().min().unwrap(),
+                    *ts.iter().max().unwrap(),
+                    ts.len(),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn split_s_follows_log_time_not_the_writer_clock() {
+        let dir = std::env::temp_dir().join(format!("fcc-split-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut o = RecordOptions::new(dir.join("s.mcap"));
+        o.split_s = Some(2.0);
+        let tap = Tap::recording("/fcc", o).unwrap();
+        // 7 s of log time at 100 Hz, queued in no time at all (the writer sees it all at once:
+        // a wall-clock split would give one file), with a little disorder between two topics.
+        let t0 = 1_700_000_000_000_000_000i64;
+        for i in 0..700i64 {
+            let t = t0 + i * 10_000_000;
+            tap.published("imu/data_raw", QosInfo::TELEMETRY, &Imu::default(), t);
+            tap.published(
+                "state/imu",
+                QosInfo::TELEMETRY,
+                &Imu::default(),
+                t - 1_000_000,
+            );
+        }
+        let r = tap.finish(Duration::from_secs(10)).unwrap();
+        assert_eq!(r.files.len(), 4, "{:?}", r.files);
+        let sp = spans(&r.files);
+        let total: usize = sp.iter().map(|s| s.2).sum();
+        assert_eq!(total, 1400);
+        for (i, (a, b, _)) in sp.iter().enumerate() {
+            // < 2 s, plus the 1 ms disorder at most.
+            assert!(b - a < 2_001_000_000, "file {i} spans {} ns", b - a);
+            if i > 0 {
+                // A split happens when the log time reaches first + 2 s, not before.
+                assert!(
+                    *a + 1_000_000 >= sp[i - 1].0 + 2_000_000_000,
+                    "file {i} starts early"
+                );
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

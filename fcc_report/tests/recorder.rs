@@ -1,6 +1,7 @@
 //! Acceptance of the flight recorder, report and replay. Runs the scripts in `tests/mcap/`
 //! (each puts its processes into ONE loopback-only network namespace with netns-run):
-//! `run.sh` (fake MCU: readers, 0 lost, SIGKILL ≤ 1 s, disk full, replay timing and content, split by time and
+//! `run.sh` (fake MCU: readers, 0 lost, SIGKILL ≤ 1 s, disk full, replay timing, content and
+//! recorded QoS (a late joiner gets `/tf_static`), split by log time and
 //! size, compression, record on arm) and `sitl_flight.sh`
 //! (a real fcc-sitl square flight and a 30 s HOLD hover over the link: readers, 0 lost,
 //! fcc-report's cross-track, hover box and observer ratio vs the flight core's log). Python: `FCC_DDS_PYTHON` must import mcap, mcap_ros2 and rosbags; otherwise
@@ -50,6 +51,11 @@ fn recorder_with_fake_mcu() {
     assert!(s.contains("PASS disk full"));
     assert!(s.contains("PASS fcc-replay --rate 4"));
     assert!(s.contains("PASS replayed messages equal the bag's"));
+    // The recorded QoS: /tf_static transient local, received by a late joiner.
+    assert!(s.contains("PASS fcc-replay republishes the recorded QoS"));
+    assert!(s.contains("PASS late joiner got /tf_static from fcc-replay"));
+    // record_split_s splits on log time: every file spans < split_s (+ 10 ms of disorder).
+    assert!(s.contains("split on log time: every file spans < 2.0 s"));
     // Recorder options: split by time (uncompressed) and by size, record only while armed.
     assert_eq!(s.matches("PASS split recording").count(), 2);
     assert!(s.contains("PASS record_on_arm"));

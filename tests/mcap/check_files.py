@@ -7,8 +7,10 @@ record_on_arm), from its PATH.counts.json (which lists the files):
 
 * every file: complete (summary, Statistics), every message decoded by Foxglove's mcap +
   mcap-ros2-support and by rosbags' AnyReader (same counts), chunk compression as asked;
-* --split-s: each file spans ≤ 2·S + 0.5 s of log time (the recorder splits on its writer's
-  wall clock, so a lagging writer stretches a file; > S + 0.5 s is printed as a NOTE); --split-mb: each
+* --split-s: the recorder splits on the messages' log time (a message at ≥ the file's first log
+  time + S opens the next file), so each file spans < S + TOL of log time and each next file
+  starts ≥ S − TOL after the previous one (TOL = 10 ms: messages of concurrent tasks reach the
+  recorder up to a few ms out of log-time order), however much the writer lags; --split-mb: each
   file holds ≤ MB·10^6 bytes of message data plus one message;
 * the files together hold exactly what the recorder counted as recorded, and — unless
   --on-arm — everything the bridge published/received (0 lost across the splits);
@@ -40,6 +42,9 @@ doc = json.load(open(a.counts))
 files = doc["recorder"]["files"]
 total = collections.Counter()
 disarmed_status = 0
+TOL = 0.010
+starts = []
+disorder = 0.0
 for f in files:
     counts = collections.Counter(); first = last = None; data_bytes = 0; biggest = 0
     with open(f, "rb") as fh:
@@ -55,6 +60,8 @@ for f in files:
             counts[ch.topic] += 1
             data_bytes += len(m.data); biggest = max(biggest, len(m.data))
             first = m.log_time if first is None else min(first, m.log_time)
+            if last is not None:
+                disorder = max(disorder, (last - m.log_time) / 1e9)
             last = m.log_time if last is None else max(last, m.log_time)
             if schema.name == "fcc_msgs/msg/Status" and not dec.armed:
                 disarmed_status += 1
@@ -63,17 +70,21 @@ for f in files:
     if rbc != counts:
         fail(f"{f}: rosbags counts differ from mcap's")
     span = (last - first) / 1e9 if first is not None else 0.0
-    print(f"{Path(f).name}: {sum(counts.values())} messages, {span:.2f} s, {data_bytes/1e6:.2f} MB of messages, "
+    starts.append(first)
+    print(f"{Path(f).name}: {sum(counts.values())} messages, {span:.3f} s, {data_bytes/1e6:.2f} MB of messages, "
           f"chunks {sorted(comp) or '-'}; read by mcap and rosbags alike")
-    if a.split_s and span > a.split_s + 0.5:
-        # The recorder splits on its writer thread's wall clock; when that thread lags behind
-        # the link (a loaded machine), a file's messages span more than split_s.
-        print(f"NOTE {Path(f).name} spans {span:.2f} s of log time > split {a.split_s} s + 0.5 s (writer lag)")
-        if span > 2 * a.split_s + 0.5:
-            fail(f"{f}: spans {span:.2f} s > 2 × split {a.split_s} s + 0.5 s")
+    if a.split_s and span >= a.split_s + TOL:
+        fail(f"{f}: spans {span:.3f} s of log time ≥ split {a.split_s} s + {TOL} s")
+    if a.split_s and len(starts) > 1 and None not in starts[-2:] \
+            and (starts[-1] - starts[-2]) / 1e9 < a.split_s - TOL:
+        fail(f"{f}: starts {(starts[-1] - starts[-2]) / 1e9:.3f} s after the previous file < split {a.split_s} s")
     if a.split_mb and data_bytes > a.split_mb * 1e6 + biggest:
         fail(f"{f}: {data_bytes} B of messages > split {a.split_mb} MB")
     total += counts
+if a.split_s:
+    gaps = [(b - a_) / 1e9 for a_, b in zip(starts, starts[1:]) if a_ is not None and b is not None]
+    print(f"split on log time: every file spans < {a.split_s} s + {TOL} s; files start "
+          f"{min(gaps, default=0):.3f}–{max(gaps, default=0):.3f} s apart; log times out of file order by ≤ {disorder * 1e3:.1f} ms")
 if len(files) < a.min_files:
     fail(f"{len(files)} files < {a.min_files}")
 rec = collections.Counter(doc["recorder"]["recorded"])

@@ -3,7 +3,9 @@
 #  1. a bag from a clean SIGINT stop: independent readers decode every message; counts == the
 #     bridge's own (0 lost); fcc-replay --decode-raw re-decodes the raw frames; fcc-replay
 #     republishes the bag at rate 4 under /replay: it takes the bag's span / 4, and a Cyclone
-#     subscriber receives the odometry equal to the bag's (replay_sub.py).
+#     subscriber receives the odometry equal to the bag's (replay_sub.py); at rate 1 with the
+#     recorded QoS, a Cyclone subscriber that joins after /tf_static was published gets it
+#     (transient local, late_tf_static.py).
 #  2. SIGKILL mid-flight: the bag opens (streamed) and loses ≤ 1 s (printed).
 #  3. A full disk (/dev/full): one clear error, the bridge keeps running.
 #  4. Recorder options, three bridges at once (own namespaces): split by time with uncompressed
@@ -56,6 +58,18 @@ print((s.message_end_time - s.message_start_time) / 1e9)")
   else echo "FAIL fcc-replay --rate 4 took $took s for a $span s bag"; rc=1; fi
 else echo "FAIL fcc-replay"; cat "$tmp/replay.err"; rc=1; fi
 wait $sub || rc=1; cat "$tmp/replay_sub.out"
+# replay at 1×: the recorded QoS (offered_qos_profiles) — /tf_static transient local; a Cyclone
+# subscriber that joins 1 s after the replay published it still gets it (late_tf_static.py)
+"$bin/fcc-replay" "$tmp/a.mcap" --ns-prefix /late 2> "$tmp/late.err" &
+rp=$!
+for _ in $(seq 100); do grep -q '^fcc-replay: publishing' "$tmp/late.err" && break; sleep 0.1; done
+sleep 1
+"$py" "$here/late_tf_static.py" "$tmp/a.mcap" 4 --prefix /late || rc=1
+wait $rp || { echo "FAIL fcc-replay (late joiner run)"; rc=1; }
+grep -E '/tf_static:|QoS from the bag' "$tmp/late.err" | sed 's/^/  /'
+grep -q 'QoS from the bag.* 0 without a usable profile' "$tmp/late.err" \
+  && grep -q '/late/tf_static: reliable, transient local, keep last 1$' "$tmp/late.err" \
+  && echo "PASS fcc-replay republishes the recorded QoS" || { echo "FAIL replay QoS"; cat "$tmp/late.err"; rc=1; }
 # 2. SIGKILL
 pty=$(fake k 30)
 "$bin/fcc-bridge" --device "$pty" --record "$tmp/k.mcap" > "$tmp/k.log" 2>&1 &

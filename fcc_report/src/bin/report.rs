@@ -34,12 +34,27 @@ fn main() -> anyhow::Result<()> {
         ))
     });
     std::fs::create_dir_all(&out)?;
+    // The file is read (bytes), then decoded message by message against the summary's message
+    // count; a bag without a summary (cut by SIGKILL) shows the bytes decoded instead.
     let pb = indicatif::ProgressBar::new(1);
-    pb.set_style(
-        indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {bytes}/{total_bytes}").unwrap(),
-    );
-    pb.set_message("reading bag");
-    let (msgs, err) = bag::read_bag(&cli.bag, |d, t| {
+    let style = |unit: bag::Progress| {
+        let t = match unit {
+            bag::Progress::FileBytes => "{msg} [{bar:40}] {bytes}/{total_bytes}",
+            bag::Progress::Messages => "{msg} [{bar:40}] {human_pos}/{human_len} messages",
+            bag::Progress::Bytes => "{msg} [{bar:40}] {bytes}/{total_bytes} (no summary)",
+        };
+        indicatif::ProgressStyle::with_template(t).unwrap()
+    };
+    let mut shown: Option<bag::Progress> = None;
+    let (msgs, err) = bag::read_bag(&cli.bag, |unit, d, t| {
+        if shown != Some(unit) {
+            shown = Some(unit);
+            pb.set_style(style(unit));
+            pb.set_message(match unit {
+                bag::Progress::FileBytes => "reading bag",
+                _ => "decoding",
+            });
+        }
         pb.set_length(t);
         pb.set_position(d);
     })?;
