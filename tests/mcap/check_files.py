@@ -7,10 +7,11 @@ record_on_arm), from its PATH.counts.json (which lists the files):
 
 * every file: complete (summary, Statistics), every message decoded by Foxglove's mcap +
   mcap-ros2-support and by rosbags' AnyReader (same counts), chunk compression as asked;
-* --split-s: the recorder splits on the messages' log time (a message at ≥ the file's first log
-  time + S opens the next file), so each file spans < S + TOL of log time and each next file
-  starts ≥ S − TOL after the previous one (TOL = 10 ms: messages of concurrent tasks reach the
-  recorder up to a few ms out of log-time order), however much the writer lags; --split-mb: each
+* --split-s: the recorder splits on the messages' log time (a message at ≥ the log time of the
+  file's first message + S opens the next file): no message in a file is ≥ S after the file's
+  first (exact), each file spans < S + TOL of log time (min..max) and each next file
+  starts ≥ S − TOL after the previous one (TOL = 10 ms: log times can step back a little when
+  the time sync corrects the clock offset), however much the writer lags; --split-mb: each
   file holds ≤ MB·10^6 bytes of message data plus one message;
 * the files together hold exactly what the recorder counted as recorded, and — unless
   --on-arm — everything the bridge published/received (0 lost across the splits);
@@ -56,7 +57,10 @@ for f in files:
         want = {"zstd": {"zstd"}, "none": {""}}.get(a.compression)
         if want is not None and comp and comp != want:
             fail(f"{f}: chunk compression {comp}, want {want}")
-        for schema, ch, m, dec in r.iter_decoded_messages():
+        first_written = None  # the file's first message in file order (the recorder's reference)
+        for schema, ch, m, dec in r.iter_decoded_messages(log_time_order=False):
+            if first_written is None and m.log_time > 0:  # 0 = no time yet (as the recorder)
+                first_written = m.log_time
             counts[ch.topic] += 1
             data_bytes += len(m.data); biggest = max(biggest, len(m.data))
             first = m.log_time if first is None else min(first, m.log_time)
@@ -73,6 +77,10 @@ for f in files:
     starts.append(first)
     print(f"{Path(f).name}: {sum(counts.values())} messages, {span:.3f} s, {data_bytes/1e6:.2f} MB of messages, "
           f"chunks {sorted(comp) or '-'}; read by mcap and rosbags alike")
+    # Exact: no message reaches the first written message's log time + S (it would open the
+    # next file); with out-of-order messages the min..max span may exceed S by the disorder.
+    if a.split_s and first_written is not None and (last - first_written) / 1e9 >= a.split_s:
+        fail(f"{f}: a message {(last - first_written) / 1e9:.3f} s after the file's first ≥ split {a.split_s} s")
     if a.split_s and span >= a.split_s + TOL:
         fail(f"{f}: spans {span:.3f} s of log time ≥ split {a.split_s} s + {TOL} s")
     if a.split_s and len(starts) > 1 and None not in starts[-2:] \
