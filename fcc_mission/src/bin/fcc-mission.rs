@@ -136,16 +136,10 @@ fn options() -> Options {
         .get("use_sim_time")
         .map(|v| parse_bool(v).unwrap_or_else(|e| fail(2, format!("parameter use_sim_time: {e}"))))
         .unwrap_or(false);
-    let hover_s = match p.get("hover_s") {
-        None => 0.0,
-        Some(v) => match v.parse::<f64>() {
-            Ok(x) if x.is_finite() && x >= 0.0 => x,
-            _ => fail(
-                2,
-                format!("parameter hover_s: '{v}' is not a number of seconds >= 0"),
-            ),
-        },
-    };
+    let hover_s = p.get("hover_s").map_or(0.0, |v| {
+        fcc_mission::ending::parse_hover_s(v)
+            .unwrap_or_else(|e| fail(2, format!("parameter hover_s: {e}")))
+    });
     let rate_hz = num("rate_hz", 50.0);
     if rate_hz < 20.0 {
         fail(2, format!("parameter rate_hz: {rate_hz} is below 20 Hz"));
@@ -227,6 +221,9 @@ impl Track {
         }
     }
 }
+
+/// Wall time the node stays alive after its last message (reliable re-sends), before exiting.
+const LINGER: Duration = Duration::from_millis(1000);
 
 fn stamp(ns: i64) -> Time {
     Time::from_nanos(ns)
@@ -505,6 +502,9 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
                     track.rms(),
                     track.max
                 ));
+                // Stay on the graph a moment so reliable readers get the last messages
+                // (a sample lost on a busy loopback is re-sent only while the writer lives).
+                tokio::time::sleep(LINGER).await;
                 return Ok(());
             }
             return Err((1, format!(
