@@ -86,7 +86,13 @@ fn main() -> anyhow::Result<()> {
     // Fig. 17: path, with the mission's legs.
     let mut lines = vec![Line {
         name: "estimated path",
-        pts: s.odom.iter().map(|o| (o.1[1], o.1[0])).collect(),
+        // From the arm command on: before it the estimate may still be settling on home.
+        pts: s
+            .odom
+            .iter()
+            .filter(|o| s.first_arm_cmd.is_none_or(|t| o.0 >= t))
+            .map(|o| (o.1[1], o.1[0]))
+            .collect(),
         color: BLUE,
         dots: false,
     }];
