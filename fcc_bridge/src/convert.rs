@@ -379,6 +379,7 @@ pub fn mode_code(m: link::FlightMode) -> (u8, &'static str) {
         link::FlightMode::Hold => (Status::MODE_HOLD, "hold"),
         link::FlightMode::Velocity => (Status::MODE_VELOCITY, "velocity"),
         link::FlightMode::Land => (Status::MODE_LAND, "land"),
+        link::FlightMode::Pilot => (Status::MODE_PILOT, "pilot"),
     }
 }
 
@@ -401,6 +402,7 @@ pub fn reject_name(r: link::CommandResult) -> &'static str {
         link::CommandResult::Disarmed => "disarmed",
         link::CommandResult::InvalidSetpoint => "invalid_setpoint",
         link::CommandResult::Incompatible => "incompatible",
+        link::CommandResult::PilotOverride => "pilot_override",
     }
 }
 

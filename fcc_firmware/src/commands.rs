@@ -36,6 +36,8 @@ pub enum CommandError {
     Disarmed,
     /// Setpoint with NaN/inf or absurd values.
     InvalidSetpoint,
+    /// The pilot's override switch is on: the R/C pilot has the vehicle ([`crate::pilot`]).
+    PilotOverride,
 }
 
 impl core::fmt::Display for CommandError {
@@ -46,6 +48,7 @@ impl core::fmt::Display for CommandError {
             CommandError::NotLanded => "vehicle is not landed",
             CommandError::Disarmed => "vehicle is disarmed",
             CommandError::InvalidSetpoint => "setpoint is not finite or out of range",
+            CommandError::PilotOverride => "the pilot's override switch is on",
         })
     }
 }
@@ -57,6 +60,8 @@ pub enum Mode {
     Hold,
     Velocity,
     Land,
+    /// The R/C pilot flies (override switch on): sticks → velocity, limits enforced.
+    Pilot,
 }
 
 /// Why the core left the mode the operator asked for.

@@ -13,6 +13,7 @@ use crate::control::vertical::VerticalController;
 use crate::geometry::MOTOR_COUNT;
 use crate::nav::{NavNotReady, NavState, Navigator};
 use crate::params::{ParamError, Params};
+use crate::pilot::{PilotInput, PilotReceiver};
 use crate::sensors::SensorInputs;
 use fcc_nav::ground_altitude::GroundSource;
 use fcc_nav::observer::AccelObserver;
@@ -32,6 +33,11 @@ const FENCE_BRAKE_MPS2: f32 = 1.0;
 const FENCE_REPORT_M: f32 = 2.0;
 /// Largest velocity component a setpoint may carry before it is refused as absurd.
 const SETPOINT_ABS_LIMIT_MPS: f32 = 50.0;
+/// Pilot mode, sticks centred: brake (zero velocity) until slower than this, then hold the
+/// position reached (PX4 Position mode's brake-then-lock), m/s.
+const PILOT_LOCK_SPEED_MPS: f32 = 0.5;
+/// Pilot mode: the heading command leads the heading by at most this much, rad.
+const PILOT_YAW_LEAD_RAD: f32 = 0.5;
 
 /// What one step did, for telemetry and tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -84,6 +90,11 @@ pub struct FlightCore {
     last_step_us: Option<u64>,
     motors: [f32; MOTOR_COUNT],
     telemetry: StepTelemetry,
+    /// The R/C receiver ([`crate::pilot`]).
+    pilot: PilotReceiver,
+    /// The pilot handed the vehicle back: hold until the Linux side commands velocity mode
+    /// (a setpoint alone does not resume).
+    pilot_released: bool,
 }
 
 impl FlightCore {
@@ -158,6 +169,8 @@ impl FlightCore {
             last_step_us: None,
             motors: [0.0; MOTOR_COUNT],
             telemetry: StepTelemetry::default(),
+            pilot: PilotReceiver::new(),
+            pilot_released: false,
         }
     }
 
@@ -273,10 +286,29 @@ impl FlightCore {
     pub fn motors(&self) -> &[f32; MOTOR_COUNT] {
         &self.motors
     }
+    pub fn pilot_receiver(&self) -> &PilotReceiver {
+        &self.pilot
+    }
+
+    /// A frame from the R/C receiver (the board's S.BUS, ~every 10–14 ms). Takes effect at the
+    /// next [`Self::step`]: switch on and armed → [`Mode::Pilot`]; switch off, receiver
+    /// failsafe or no frame for [`crate::pilot::RX_TIMEOUT_US`] → hold.
+    pub fn pilot(&mut self, now_us: u64, p: &PilotInput) {
+        let _ = now_us;
+        self.pilot.input(p);
+    }
 
     /// Apply an operator command.
     pub fn command(&mut self, now_us: u64, cmd: Command) -> Result<(), CommandError> {
         let nav = *self.nav.state();
+        if self.mode == Mode::Pilot {
+            match cmd {
+                Command::Arm => return Ok(()),
+                // On the ground the Linux side may still disarm.
+                Command::Disarm if self.landed => {}
+                _ => return Err(CommandError::PilotOverride),
+            }
+        }
         match cmd {
             Command::Arm => {
                 if self.armed() {
@@ -295,6 +327,7 @@ impl FlightCore {
                 self.enter_hold(&nav);
                 self.failsafe = FailsafeCause::None;
                 self.last_setpoint_us = Some(now_us);
+                self.pilot_released = false;
             }
             Command::Disarm => {
                 self.mode = Mode::Disarmed;
@@ -321,6 +354,7 @@ impl FlightCore {
                 self.mode = Mode::Velocity;
                 self.failsafe = FailsafeCause::None;
                 self.last_setpoint_us = Some(now_us);
+                self.pilot_released = false;
             }
         }
         Ok(())
@@ -339,6 +373,9 @@ impl FlightCore {
         }
         if !self.armed() {
             return Err(CommandError::Disarmed);
+        }
+        if self.mode == Mode::Pilot {
+            return Err(CommandError::PilotOverride);
         }
         let l = &self.params.limits;
         let mut v = sp.vel_ned_mps;
@@ -359,7 +396,7 @@ impl FlightCore {
         ));
         self.last_setpoint_us = Some(now_us);
         // A fresh setpoint resumes velocity mode from hold (but never overrides a landing).
-        if self.mode == Mode::Hold {
+        if self.mode == Mode::Hold && !self.pilot_released {
             self.mode = Mode::Velocity;
             self.failsafe = FailsafeCause::None;
         }
@@ -421,7 +458,7 @@ impl FlightCore {
             self.motors = [0.0; MOTOR_COUNT];
             return self.motors;
         }
-        let (v_cmd_ne, vz_cmd_down, yaw_cmd) = self.guidance(now_us, &nav);
+        let (v_cmd_ne, vz_cmd_down, yaw_cmd) = self.guidance(now_us, dt_s, &nav);
         self.control(dt_s, &nav, v_cmd_ne, vz_cmd_down, yaw_cmd);
         if self.mode == Mode::Land {
             self.detect_touchdown(dt_s, &nav, vz_cmd_down);
@@ -434,6 +471,20 @@ impl FlightCore {
         let since_sp_s = self
             .last_setpoint_us
             .map_or(f32::MAX, |t| now_us.saturating_sub(t) as f32 * 1e-6);
+        // The pilot's switch wins over the Linux side's modes (not over a GPS-loss landing:
+        // the assisted mode needs the horizontal estimate).
+        let pilot_on = self.pilot.active(now_us);
+        if pilot_on && self.mode != Mode::Pilot && self.failsafe != FailsafeCause::GpsLost {
+            self.enter_hold(nav);
+            self.mode = Mode::Pilot;
+            self.failsafe = FailsafeCause::None;
+            self.setpoint = None;
+        } else if !pilot_on && self.mode == Mode::Pilot {
+            // Switch off or receiver failsafe: hold here until the Linux side re-commands.
+            self.enter_hold(nav);
+            self.failsafe = FailsafeCause::None;
+            self.pilot_released = true;
+        }
         match self.mode {
             Mode::Velocity => {
                 let stale = match self.setpoint {
@@ -461,7 +512,7 @@ impl FlightCore {
     }
 
     /// Velocity command (NED north/east, down) and heading command for the current mode.
-    fn guidance(&mut self, now_us: u64, nav: &NavState) -> ([f32; 2], f32, f32) {
+    fn guidance(&mut self, now_us: u64, dt_s: f32, nav: &NavState) -> ([f32; 2], f32, f32) {
         let l = self.params.limits;
         let c = self.params.control;
         let alt = -nav.pos_ned_m[2];
@@ -504,6 +555,43 @@ impl FlightCore {
                     l.land_final_speed_mps
                 };
                 (hold_ne(self), v, self.yaw_hold_rad)
+            }
+            Mode::Pilot => {
+                let d =
+                    self.pilot
+                        .demand(l.max_horiz_speed_mps, l.max_climb_mps, l.max_descent_mps);
+                let (sy, cy) = fcc_nav::math::sincosf(nav.euler.yaw_rad);
+                let pos = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
+                let speed = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
+                let v = match d.vel_fr_mps {
+                    Some(v) => {
+                        self.hold_ne_m = pos;
+                        [cy * v[0] - sy * v[1], sy * v[0] + cy * v[1]]
+                    }
+                    None if speed > PILOT_LOCK_SPEED_MPS => {
+                        self.hold_ne_m = pos;
+                        [0.0; 2]
+                    }
+                    None => hold_ne(self),
+                };
+                let vz = match d.climb_mps {
+                    Some(up) => {
+                        self.hold_alt_m = alt;
+                        -up
+                    }
+                    None => fcc_nav::math::clampf(
+                        -(c.alt_p_per_s * (self.hold_alt_m - alt)),
+                        -l.max_climb_mps,
+                        l.max_descent_mps,
+                    ),
+                };
+                let lead = fcc_nav::math::clampf(
+                    wrap_pi(self.yaw_hold_rad + d.yaw_rate_radps * dt_s - nav.euler.yaw_rad),
+                    -PILOT_YAW_LEAD_RAD,
+                    PILOT_YAW_LEAD_RAD,
+                );
+                self.yaw_hold_rad = wrap_pi(nav.euler.yaw_rad + lead);
+                (v, vz, self.yaw_hold_rad)
             }
             Mode::Disarmed => ([0.0; 2], 0.0, nav.euler.yaw_rad),
         };
@@ -731,6 +819,10 @@ fn clamp_norm(v: [f32; 2], max: f32) -> [f32; 2] {
     } else {
         v
     }
+}
+
+fn wrap_pi(a: f32) -> f32 {
+    fcc_nav::complementary::wrap_pi(a)
 }
 
 fn sign_or_zero(x: f32) -> f32 {

@@ -13,6 +13,7 @@
 //! - [`flight`]: [`flight::FlightCore::step`]`(now_us, &SensorInputs) -> [f32; 8]` — modes
 //!   (disarmed, hold, velocity, land), setpoint time-to-live, failsafes, limits, geofence.
 //! - [`scheduler`]: the 500 Hz tick that polls a board and drives the ESCs.
+//! - [`pilot`]: the R/C pilot override (switch, receiver failsafe, sticks → velocity).
 //! - [`params`]: every gain and limit, documented defaults for the paper's vehicle.
 //!
 //! Inputs: sensor samples, velocity setpoints with time-to-live and commands
@@ -29,6 +30,7 @@ pub mod geometry;
 pub mod link;
 pub mod nav;
 pub mod params;
+pub mod pilot;
 pub mod scheduler;
 pub mod sensors;
 

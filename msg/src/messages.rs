@@ -49,6 +49,8 @@ pub enum FlightMode {
     Hold,
     Velocity,
     Land,
+    /// The R/C pilot flies (override switch on; `fcc_firmware::pilot`).
+    Pilot,
 }
 
 /// Why the core left the operator's mode (mirror of `fcc_firmware::commands::FailsafeCause`).
@@ -88,6 +90,8 @@ pub enum CommandResult {
     InvalidSetpoint,
     /// The peer announced a protocol version or schema hash the MCU does not share.
     Incompatible,
+    /// The pilot's override switch is on: setpoints and mode commands are refused.
+    PilotOverride,
 }
 
 /// Outcome of a [`ParamSet`] on the MCU.
@@ -558,10 +562,10 @@ impl Message {
 pub const SCHEMA: &str = "\
 enum RangeSensor { Laser, Sonar }
 enum AltitudeSource { None, Laser, Sonar, Both, Predicted }
-enum FlightMode { Disarmed, Hold, Velocity, Land }
+enum FlightMode { Disarmed, Hold, Velocity, Land, Pilot }
 enum FailsafeCause { None, SetpointStale, SetpointLost, Geofence, GpsLost }
 enum CommandKind { Arm, Disarm, Hold, Land, Velocity }
-enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible }
+enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible, PilotOverride }
 enum ParamResult { Accepted, UnknownId, NotFinite, OutOfRange, Incompatible }
 params 1=limits.max_horiz_speed_mps 2=limits.max_tilt_deg 3=control.cross_track_k_per_s 4=control.vel_p_per_s 5=limits.max_climb_mps 6=limits.max_descent_mps
 struct LinkCounters max=60 { rx_bytes: u32, rx_frames: u32, crc_errors: u32, framing_errors: u32, overruns: u32, resyncs: u32, decode_errors: u32, unknown_ids: u32, version_errors: u32, seq_gaps: u32, frames_lost: u32, seq_resets: u32 }

@@ -491,7 +491,8 @@ fn version_and_schema_mismatch_are_readable() {
     );
     let text = std::format!("{e}");
     assert!(
-        text.contains("version mismatch") && text.contains("v2"),
+        text.contains("version mismatch")
+            && text.contains(&std::format!("v{}", PROTOCOL_VERSION + 1)),
         "{text}"
     );
     // Same version, other schema.

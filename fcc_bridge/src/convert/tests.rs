@@ -304,6 +304,21 @@ fn status_carries_sensor_health() {
     assert_eq!(s.mag_rejects, 42);
 }
 
+#[test]
+fn status_pilot_mode_and_reject() {
+    let m = link::Status {
+        mode: link::FlightMode::Pilot,
+        last_reject: link::CommandResult::PilotOverride,
+        ..Default::default()
+    };
+    let s = status(&m, st(), &cfg());
+    assert_eq!(
+        (s.mode, s.mode_name.as_str()),
+        (Status::MODE_PILOT, "pilot")
+    );
+    assert_eq!(s.last_reject, "pilot_override");
+}
+
 /// Sensor-health rules and `/rosout` transitions: one WARN per episode (a flickering flag does
 /// not repeat it), an INFO after 2 s healthy; rangefinders only count in the air within range.
 #[test]

@@ -87,6 +87,7 @@ impl Status {
     pub const MODE_HOLD: u8 = 1;
     pub const MODE_VELOCITY: u8 = 2;
     pub const MODE_LAND: u8 = 3;
+    pub const MODE_PILOT: u8 = 4;
     pub const FAILSAFE_NONE: u8 = 0;
     pub const FAILSAFE_SETPOINT_STALE: u8 = 1;
     pub const FAILSAFE_SETPOINT_LOST: u8 = 2;

@@ -540,6 +540,7 @@ fn core_status(core: &FlightCore, mut s: Status) -> Status {
         Mode::Hold => FlightMode::Hold,
         Mode::Velocity => FlightMode::Velocity,
         Mode::Land => FlightMode::Land,
+        Mode::Pilot => FlightMode::Pilot,
     };
     s.armed = core.armed();
     s.landed = core.landed();
@@ -602,6 +603,7 @@ fn to_result(r: Result<(), CommandError>) -> CommandResult {
         Err(CommandError::NotLanded) => CommandResult::NotLanded,
         Err(CommandError::Disarmed) => CommandResult::Disarmed,
         Err(CommandError::InvalidSetpoint) => CommandResult::InvalidSetpoint,
+        Err(CommandError::PilotOverride) => CommandResult::PilotOverride,
     }
 }
 

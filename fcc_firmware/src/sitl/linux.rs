@@ -33,6 +33,9 @@ pub struct LinuxSide {
     armed_once: bool,
     done: bool,
     events: Vec<(f64, String)>,
+    /// Setpoints the MCU refused, and of those, refused because the pilot had the vehicle.
+    pub setpoint_rejects: u32,
+    pub pilot_rejects: u32,
 }
 
 impl LinuxSide {
@@ -68,6 +71,8 @@ impl LinuxSide {
             armed_once: false,
             done: false,
             events: Vec::new(),
+            setpoint_rejects: 0,
+            pilot_rejects: 0,
         })
     }
 
@@ -149,7 +154,8 @@ impl LinuxSide {
                 let alt = -nav.pos_ned_m[2];
                 let err = alt_m - alt;
                 let vz_up = (0.8 * err).clamp(-1.0, 1.5);
-                let _ = core.setpoint(t_us, sp([0.0, 0.0, -vz_up], None));
+                let r = core.setpoint(t_us, sp([0.0, 0.0, -vz_up], None));
+                count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
                 self.phase = PlanPhase::Climbing;
                 if err.abs() < 0.3 && nav.vel_ned_mps[2].abs() < 0.3 {
                     *settle_s += 0.05;
@@ -211,9 +217,20 @@ impl LinuxSide {
                     self.events.push((t_s, what));
                 }
                 if core.armed() {
-                    let _ = core.setpoint(t_us, sp(g.vel_ned_mps, g.yaw_rad));
+                    let r = core.setpoint(t_us, sp(g.vel_ned_mps, g.yaw_rad));
+                    count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
                 }
             }
+        }
+    }
+}
+
+/// Count a refused setpoint (and whether the pilot's override refused it).
+fn count(all: &mut u32, pilot: &mut u32, r: Result<(), crate::commands::CommandError>) {
+    if let Err(e) = r {
+        *all += 1;
+        if e == crate::commands::CommandError::PilotOverride {
+            *pilot += 1;
         }
     }
 }

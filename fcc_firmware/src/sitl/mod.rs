@@ -4,7 +4,8 @@
 //! - [`physics`]: 6-DOF rigid body, per-motor lag, drag, ground contact.
 //! - [`wind`]: mean wind + Dryden turbulence (MIL-F-8785C).
 //! - [`sensor_models`]: MPU-9250, AK8963, MS5611, GPS, battery with datasheet noise.
-//! - [`scenario`]: YAML scenario files; [`linux`]: the in-process mission computer.
+//! - [`scenario`]: YAML scenario files; [`linux`]: the in-process mission computer;
+//!   [`pilot`]: a scripted R/C pilot behind a simulated S.BUS receiver.
 //! - [`pty`]: the board's UART as a pseudo-terminal the bridge opens like a serial port.
 //! - [`sim`]: the lockstep loop; [`log`] and [`metrics`]: what a flight leaves and its figures.
 
@@ -12,6 +13,7 @@ pub mod linux;
 pub mod log;
 pub mod metrics;
 pub mod physics;
+pub mod pilot;
 pub mod pty;
 pub mod rangefinders;
 pub mod scenario;

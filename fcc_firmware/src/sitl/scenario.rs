@@ -25,6 +25,10 @@ pub struct Scenario {
     pub flight: FlightPlan,
     #[serde(default)]
     pub faults: Vec<Fault>,
+    /// A scripted R/C pilot: timed switch/stick/receiver events, fed to the core through a
+    /// simulated S.BUS receiver ([`super::pilot`]). Empty → no receiver.
+    #[serde(default)]
+    pub pilot: Vec<super::pilot::PilotEvent>,
     /// Overrides of the flight core's parameters (any subset).
     #[serde(default)]
     pub params: Params,
@@ -267,6 +271,7 @@ impl Scenario {
                 return Err((format!("faults[{i}]"), "needs 0 ≤ start_s < end_s".into()));
             }
         }
+        super::pilot::validate(&self.pilot)?;
         self.params
             .validate()
             .map_err(|e| (format!("params.{}", e.field), e.reason.to_string()))?;
@@ -297,6 +302,16 @@ mod tests {
         );
         let y = "name: x\nduration_s: ten\nflight: {kind: hover, alt_m: 5, hold_s: 10}\n";
         assert_eq!(Scenario::from_yaml_str(y).unwrap_err().0, "duration_s");
+        let y = "name: x\nduration_s: 10\nflight: {kind: hover, alt_m: 5, hold_s: 10}\npilot: [{at_s: 2, override_on: true, sticks: [0, 2, 0, 0]}]\n";
+        assert_eq!(
+            Scenario::from_yaml_str(y).unwrap_err().0,
+            "pilot[0].sticks[1]"
+        );
+        let y = "name: x\nduration_s: 10\nflight: {kind: hover, alt_m: 5, hold_s: 10}\npilot: [{at_s: 2, receiver: lost}]\n";
+        assert_eq!(
+            Scenario::from_yaml_str(y).unwrap_err().0,
+            "pilot[0].receiver"
+        );
     }
 
     #[test]

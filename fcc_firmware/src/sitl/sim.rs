@@ -119,6 +119,8 @@ pub struct Sim {
     wind_ned: Vector3<f64>,
     motors: MotorLatch,
     linux: LinuxSide,
+    /// The scripted R/C pilot's receiver (scenario `pilot:`).
+    receiver: super::pilot::SimReceiver,
     carried: Option<Carried>,
     ticks: u64,
     pub log: FlightLog,
@@ -207,6 +209,7 @@ impl Sim {
             wind_ned: Vector3::zeros(),
             motors: MotorLatch([0.0; MOTOR_COUNT]),
             linux,
+            receiver: super::pilot::SimReceiver::new(&scenario.pilot),
             carried,
             t_us: 0,
             ticks: 0,
@@ -233,6 +236,11 @@ impl Sim {
     /// The served link, if any.
     pub fn link(&self) -> Option<&(crate::link::LinkEndpoint, super::pty::PtyLink)> {
         self.link.as_ref()
+    }
+
+    /// The in-process mission computer (its refusal counters).
+    pub fn linux(&self) -> &LinuxSide {
+        &self.linux
     }
 
     /// 2 ms ticks run so far.
@@ -326,6 +334,10 @@ impl Sim {
         self.board.truth.current_a = self.body.electrical_power_w() / 18.5;
 
         let t0 = std::time::Instant::now();
+        // The R/C receiver's frame (50 Hz), before the tick that uses it.
+        if let Some(p) = self.receiver.poll(self.t_us) {
+            self.core.pilot(self.t_us, &p);
+        }
         if let Some((ep, pty)) = self.link.as_mut() {
             // The UART: whatever the Linux side wrote since the last tick (unless the wire is cut).
             let mut rx = [0u8; 1024];

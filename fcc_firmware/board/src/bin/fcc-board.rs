@@ -27,8 +27,18 @@
 //!   38400 baud a 16-byte RX FIFO lasts 16.7 / 4.2 ms, longer than the 2 ms tick, so those UARTs
 //!   are drained by polling in the tick (no interrupts).
 //!   A sensor whose initialisation fails is left out (its samples stay `None`: without the IMU
-//!   the core refuses to arm). Not wired: S.BUS (the core takes no pilot input yet) and the
-//!   battery monitor (no ADC driver).
+//!   the core refuses to arm). Not wired: the battery monitor (no ADC driver).
+//! - The R/C receiver: S.BUS on UART7 (PC4 = U7RX, AF1), 100000 baud 8E2 (IBRD 75, exact at
+//!   120 MHz). S.BUS is an inverted signal (idle low) and the TM4C's UART has no RX inversion,
+//!   so the usual practice applies: an external inverter (one 74HC14 gate or an NPN stage, as
+//!   on F1/F4 flight controllers) between the receiver and PC4. A 25-byte frame arrives in a
+//!   3 ms burst, more than the 16-byte FIFO holds over one 2 ms tick, so the UART7 interrupt
+//!   (same priority as the link's) moves bytes into a 64-byte ring; the tick decodes them
+//!   (`fcc_board::drivers::sbus`), maps channels 1–4 (AETR: roll, pitch, throttle, yaw; ±100 %
+//!   → ±1) and the override switch on channel 5 to a `fcc_firmware::pilot::PilotInput`, and
+//!   hands it to `FlightCore::pilot`. A frame flagged failsafe by the receiver turns the
+//!   override off; frames flagged frame-lost are not passed on (a run of them longer than the
+//!   core's 0.5 s receiver timeout turns it off too).
 #![no_std]
 #![no_main]
 
@@ -45,10 +55,12 @@ use fcc_board::drivers::laser::LaserParser;
 use fcc_board::drivers::mpu9250::{Mpu9250, Mpu9250Config};
 use fcc_board::drivers::ms5611::{Ms5611, Osr};
 use fcc_board::drivers::pwm::{tm4c::Pwm0Esc, EscOutputs, PwmConfig};
+use fcc_board::drivers::sbus::{self, SbusDecoder, SbusFrame};
 use fcc_board::drivers::sonar::{SonarConfig, SonarParser};
 use fcc_firmware::flight::FlightCore;
 use fcc_firmware::link::LinkEndpoint;
 use fcc_firmware::params::Params;
+use fcc_firmware::pilot::PilotInput;
 use fcc_firmware::scheduler::{self, TICK_US};
 use fcc_firmware::sensors::{SensorBoard, SensorInputs};
 use tm4c129x_hal::{
@@ -59,7 +71,7 @@ use tm4c129x_hal::{
     serial::{NewlineMode, Serial},
     tm4c129x::{
         Interrupt, GPIO_PORTD_AHB, GPIO_PORTJ_AHB, GPIO_PORTP, GPIO_PORTQ, SSI2, SSI3, UART0,
-        UART2, UART3, UART6,
+        UART2, UART3, UART6, UART7,
     },
 };
 
@@ -73,6 +85,17 @@ const LINK_BAUD: u32 = 921_600;
 /// step can take longer than the 174 µs a 16-byte FIFO lasts at 921600 baud.
 const PRIO_UART: u8 = 0x20;
 const PRIO_SYSTICK: u8 = 0x80;
+/// S.BUS line rate (8E2, inverted by the external inverter).
+const SBUS_BAUD: u32 = 100_000;
+/// S.BUS channels (1-based), AETR order (FrSky/OpenTX default): roll (aileron), pitch
+/// (elevator, +100 % = stick pushed forward), throttle, yaw (rudder), and the override switch.
+const SBUS_CH_ROLL: usize = 1;
+const SBUS_CH_PITCH: usize = 2;
+const SBUS_CH_THROTTLE: usize = 3;
+const SBUS_CH_YAW: usize = 4;
+const SBUS_CH_OVERRIDE: usize = 5;
+/// Override on above this raw value (a 2- or 3-position switch: only the top position).
+const SBUS_OVERRIDE_ON_RAW: u16 = 1500;
 
 /// A single-producer single-consumer byte ring in static memory. `N` is a power of two; the
 /// indices run freely and wrap (`head − tail` = bytes stored).
@@ -166,6 +189,45 @@ static LINK_TX: ByteRing<2048> = ByteRing::new();
 /// Received bytes dropped: RX ring full, or a framing/parity/break/overrun error on the line.
 static LINK_RX_DROPPED: AtomicU32 = AtomicU32::new(0);
 static LINK_RX_LINE_ERRORS: AtomicU32 = AtomicU32::new(0);
+
+/// UART7 interrupt (S.BUS) → SysTick.
+static SBUS_RX: ByteRing<64> = ByteRing::new();
+static SBUS_RX_DROPPED: AtomicU32 = AtomicU32::new(0);
+
+/// UART7: drain the S.BUS bytes into `SBUS_RX` (bytes with a framing, parity or break error are
+/// dropped; the decoder resynchronises on the next header).
+#[interrupt]
+fn UART7() {
+    // SAFETY: after set-up this handler is the only user of UART7's data and flag registers.
+    let u = unsafe { &*UART7::ptr() };
+    u.icr
+        .write(|w| w.rxic().set_bit().rtic().set_bit().oeic().set_bit());
+    while u.fr.read().rxfe().bit_is_clear() {
+        let dr = u.dr.read().bits();
+        if dr & 0x700 != 0 {
+            continue;
+        }
+        if !SBUS_RX.push(dr as u8) {
+            SBUS_RX_DROPPED.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+}
+
+/// An S.BUS frame as the flight core's pilot input.
+fn pilot_input(f: &SbusFrame, now_us: u64) -> PilotInput {
+    let ch = |n: usize| f.channel(n).map_or(0.0, sbus::to_unit);
+    PilotInput {
+        override_on: sbus::pilot_override(Some(f), SBUS_CH_OVERRIDE, SBUS_OVERRIDE_ON_RAW),
+        failsafe: f.failsafe,
+        sticks: [
+            ch(SBUS_CH_ROLL),
+            ch(SBUS_CH_PITCH),
+            ch(SBUS_CH_THROTTLE),
+            ch(SBUS_CH_YAW),
+        ],
+        t_us: now_us,
+    }
+}
 
 /// UART0: drain the RX FIFO into `LINK_RX`, refill the TX FIFO from `LINK_TX`.
 #[interrupt]
@@ -441,6 +503,7 @@ struct Board {
     link: LinkEndpoint,
     sensors: Tm4cSensors,
     escs: EscOutputs<Pwm0Esc>,
+    sbus: SbusDecoder,
     now_us: u64,
 }
 
@@ -649,6 +712,43 @@ fn main() -> ! {
         u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
     }
 
+    // The S.BUS receiver: UART7 RX on PC4, 100000 baud 8E2 (the HAL configures 8N1; parity
+    // and two stop bits are set in LCRH with the UART disabled, as the datasheet requires).
+    let mut portc = p.GPIO_PORTC_AHB.split(&sc.power_control);
+    let sbus_rx = portc.pc4.into_af_push_pull::<AF1>(&mut portc.control);
+    let _sbus_uart = Serial::uart7(
+        p.UART7,
+        (),
+        sbus_rx,
+        (),
+        (),
+        SBUS_BAUD.bps(),
+        NewlineMode::Binary,
+        &clocks,
+        &sc.power_control,
+    );
+    {
+        // SAFETY: UART7 is configured and its interrupt is not yet unmasked in the NVIC.
+        let u = unsafe { &*UART7::ptr() };
+        u.ctl.modify(|_, w| w.uarten().clear_bit());
+        u.lcrh.write(|w| {
+            w.wlen()
+                ._8()
+                .fen()
+                .set_bit()
+                .pen()
+                .set_bit()
+                .eps()
+                .set_bit()
+                .stp2()
+                .set_bit()
+        });
+        u.ctl.modify(|_, w| w.uarten().set_bit());
+        u.ifls.write(|w| w.rx().rx4_8());
+        u.icr.write(|w| unsafe { w.bits(0x7FF) });
+        u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
+    }
+
     let sensors = setup_sensors(
         p.SSI2,
         p.SSI3,
@@ -670,6 +770,7 @@ fn main() -> ! {
             link: LinkEndpoint::default(),
             sensors,
             escs,
+            sbus: SbusDecoder::new(),
             now_us: 0,
         }));
     });
@@ -682,7 +783,9 @@ fn main() -> ! {
     unsafe {
         cp.SCB.set_priority(SystemHandler::SysTick, PRIO_SYSTICK);
         cp.NVIC.set_priority(Interrupt::UART0, PRIO_UART);
+        cp.NVIC.set_priority(Interrupt::UART7, PRIO_UART);
         NVIC::unmask(Interrupt::UART0);
+        NVIC::unmask(Interrupt::UART7);
     }
 
     let syst = &mut cp.SYST;
@@ -716,6 +819,16 @@ fn SysTick() {
             break;
         }
         b.link.on_bytes(b.now_us, &rx[..n], &mut b.core);
+    }
+
+    // 1b. Pilot: the S.BUS frames received since the last tick (frame-lost frames repeat old
+    //     channels and are not passed on; the core times the receiver out after 0.5 s).
+    while let Some(byte) = SBUS_RX.pop() {
+        if let Some(f) = b.sbus.push(byte) {
+            if f.failsafe || !f.frame_lost {
+                b.core.pilot(b.now_us, &pilot_input(&f, b.now_us));
+            }
+        }
     }
 
     // 2. Sensors → core → ESCs.
