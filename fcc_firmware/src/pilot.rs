@@ -18,7 +18,7 @@ pub const RX_TIMEOUT_US: u64 = 500_000;
 pub const DEADBAND: f32 = 0.05;
 /// Yaw rate at full yaw stick, rad/s (45 °/s; PX4's `MPC_MAN_Y_MAX` defaults to 150 °/s, an
 /// octorotor of paper A's size is flown gentler).
-pub const MAX_YAW_RATE_RADPS: f32 = 0.785_398_2;
+pub const MAX_YAW_RATE_RADPS: f32 = core::f32::consts::FRAC_PI_4;
 
 /// Index of each stick in [`PilotInput::sticks`].
 pub const ROLL: usize = 0;
@@ -81,7 +81,7 @@ pub fn shape(x: f32) -> f32 {
     if !x.is_finite() {
         return 0.0;
     }
-    let x = x.max(-1.0).min(1.0);
+    let x = fcc_nav::math::clampf(x, -1.0, 1.0);
     let a = fcc_nav::math::fabsf(x);
     if a <= DEADBAND {
         0.0
