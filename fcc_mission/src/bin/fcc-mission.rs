@@ -260,6 +260,14 @@ impl Log {
     }
 }
 
+/// The mission's view of a pilot override: paused while the MCU is in Pilot mode; after it,
+/// `cmd/mode` "velocity" is re-sent (at most once a second) until the MCU flies velocity again.
+#[derive(Default)]
+struct PilotPause {
+    paused: bool,
+    last_resume_s: Option<f64>,
+}
+
 /// The MCU's mode and whether a failsafe is active, from `status`.
 fn mcu_mode(st: &Status) -> (McuMode, bool) {
     let mode = match st.mode {
@@ -379,6 +387,7 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
     let mut end = EndSequence::new(o.hover_s);
     let mut last_report = Instant::now() - Duration::from_secs(10);
     let mut setpoints = 0u64;
+    let mut pilot = PilotPause::default();
     let mut track = Track::default();
     let mut last_reject = String::new();
     let started = Instant::now();
@@ -511,6 +520,56 @@ async fn run(o: Options) -> Result<(), (i32, String)> {
                 "disarmed in flight after {flight_s:.1} s (phase {:?}, end {:?}, mode {}, failsafe {}, landed {})",
                 last_phase, end.phase(), st.mode_name, st.failsafe_name, st.landed
             )));
+        }
+        // ---- pilot override (S.BUS switch on the MCU): the pilot flies, the MCU refuses our
+        // setpoints and commands, so send none. When the pilot hands back (the MCU holds), the
+        // mission resumes from where the vehicle is: `cmd/mode` "velocity", re-sent each second
+        // until the MCU reports it (best effort, as the other commands).
+        if st.mode == Status::MODE_PILOT {
+            if !pilot.paused {
+                log.warn(
+                    Some(now_ns),
+                    &format!("t={tr:.2} s pilot override: mission paused, no setpoints"),
+                );
+                pilot.paused = true;
+            }
+            report(
+                &status_pub,
+                &mut last_report,
+                "pilot",
+                None,
+                n_wp,
+                None,
+                st,
+                t_s,
+                true,
+            );
+            continue;
+        }
+        if pilot.paused {
+            let (mode, _) = mcu_mode(st);
+            if mode == McuMode::Velocity {
+                log.info(
+                    Some(now_ns),
+                    &format!("t={tr:.2} s pilot released control: mission resumed"),
+                );
+                pilot.paused = false;
+            } else if pilot.last_resume_s.is_none_or(|t| t_s - t >= 1.0) {
+                if pilot.last_resume_s.is_none() {
+                    log.info(
+                        Some(now_ns),
+                        &format!("t={tr:.2} s pilot released control (MCU {}): resuming with cmd/mode velocity", st.mode_name),
+                    );
+                }
+                let _ = mode_pub.publish(StringMsg {
+                    data: "velocity".into(),
+                });
+                pilot.last_resume_s = Some(t_s);
+            }
+            if !pilot.paused {
+                pilot.last_resume_s = None;
+            }
+            // Setpoints flow meanwhile (the MCU holds and keeps them; none is stale on resume).
         }
         let g = f.update(t_s, pos, vel);
         let (name, idx) = phase_name(g.phase);
