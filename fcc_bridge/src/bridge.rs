@@ -88,6 +88,8 @@ pub enum BridgeError {
     Handshake(link::HandshakeError),
     /// DDS / ROS setup failed.
     Ros(String),
+    /// The DDS set-up did not finish in time (see [`start_dds`]).
+    DdsStalled(String),
 }
 
 impl std::fmt::Display for BridgeError {
@@ -95,6 +97,7 @@ impl std::fmt::Display for BridgeError {
         match self {
             BridgeError::Handshake(e) => write!(f, "{e}"),
             BridgeError::Ros(e) => write!(f, "ROS 2 setup failed: {e}"),
+            BridgeError::DdsStalled(e) => write!(f, "{e}"),
         }
     }
 }
@@ -488,11 +491,96 @@ where
     Ok(())
 }
 
-/// Run the bridge until a fatal error (the serial device is retried forever).
+/// How long the DDS set-up (participant, node, publishers, subscriptions, services) may take
+/// before the bridge gives up on it (normally some tens of ms; `FCC_BRIDGE_DDS_STARTUP_TIMEOUT_MS`
+/// overrides it).
+pub const DDS_STARTUP_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// The DDS side, created by [`setup_dds`].
+struct Dds {
+    _ctx: Context,
+    node: Node,
+    pubs: Publishers,
+    rx: mpsc::Receiver<Inbound>,
+    lrx: mpsc::Receiver<LinkRequest>,
+    shared: Arc<ParamShared>,
+}
+
+/// The step the DDS set-up is at (named in the stall error).
+#[derive(Clone, Default)]
+struct Step(Arc<std::sync::Mutex<&'static str>>);
+
+impl Step {
+    fn set(&self, s: &'static str) {
+        *self.0.lock().unwrap_or_else(|e| e.into_inner()) = s;
+    }
+    fn get(&self) -> &'static str {
+        *self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+fn startup_timeout() -> Duration {
+    std::env::var("FCC_BRIDGE_DDS_STARTUP_TIMEOUT_MS")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .map(Duration::from_millis)
+        .unwrap_or(DDS_STARTUP_TIMEOUT)
+}
+
+/// Create the DDS side on a thread of its own, under a watchdog.
 ///
-/// `tap` counts every message published and received and records them when recording.
-pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
-    let ctx = context(&opts)?;
+/// rustdds 0.15.1 can deadlock while endpoints are created when other participants are being
+/// discovered at the same moment (several nodes starting together): its discovery thread holds
+/// the DiscoveryDB read lock while it blocks on the full 32-slot notification channel to the
+/// participant's event loop (`Discovery::add_local_reader`), the event loop waits for that read
+/// lock behind our thread's queued write lock (`create_datareader`/`create_datawriter`, std's
+/// RwLock lets no new reader past a waiting writer), and our thread waits for the discovery
+/// thread's read lock. Nothing moves again. Run on the tokio thread, that also starved the
+/// signal handling. Here the runtime stays free (SIGTERM is served), and a set-up that does not
+/// finish in [`DDS_STARTUP_TIMEOUT`] is reported as [`BridgeError::DdsStalled`].
+async fn start_dds(opts: &Options) -> Result<Dds, BridgeError> {
+    let handle = tokio::runtime::Handle::current();
+    let (tx, rx) = tokio::sync::oneshot::channel();
+    let step = Step::default();
+    let (o, st) = (opts.clone(), step.clone());
+    std::thread::Builder::new()
+        .name("dds-setup".into())
+        .spawn(move || {
+            // tokio::spawn (subscriptions, services) needs the runtime's context.
+            let _rt = handle.enter();
+            if std::env::var_os("FCC_BRIDGE_TEST_STALL_DDS").is_some() {
+                // Test hook: behave as the rustdds deadlock does (block for good).
+                st.set("creating the DDS participant (FCC_BRIDGE_TEST_STALL_DDS)");
+                loop {
+                    std::thread::park();
+                }
+            }
+            let r = setup_dds(&o, &st);
+            if let Err(Ok(dds)) = tx.send(r) {
+                // Too late: the bridge has given up. Never drop DDS entities here (rustdds
+                // joins its threads on drop); the process is exiting anyway.
+                std::mem::forget(dds);
+            }
+        })
+        .map_err(ros_err)?;
+    let limit = startup_timeout();
+    match tokio::time::timeout(limit, rx).await {
+        Ok(Ok(r)) => r,
+        Ok(Err(_)) => Err(BridgeError::Ros("the DDS set-up thread failed".into())),
+        Err(_) => Err(BridgeError::DdsStalled(format!(
+            "DDS start-up stalled for {:.1} s while {} (rustdds deadlock when several \
+             participants start together)",
+            limit.as_secs_f64(),
+            step.get()
+        ))),
+    }
+}
+
+/// The DDS participant, the node (its spinner and /rosout threads), publishers, subscriptions
+/// and services. Blocking: called on the `dds-setup` thread.
+fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
+    step.set("creating the DDS participant");
+    let ctx = context(opts)?;
     let (ltx, lrx) = mpsc::channel::<LinkRequest>(64);
     let shared = Arc::new(ParamShared {
         live: Default::default(),
@@ -562,6 +650,7 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
             }
             Ok(())
         }));
+    step.set("creating the ROS node");
     let mut node = ctx
         .new_node(
             NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?,
@@ -608,8 +697,10 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
             })
             .map_err(ros_err)?;
     }
-    let pubs = Publishers::new(&mut node, &opts)?;
-    let (tx, mut rx) = mpsc::channel::<Inbound>(64);
+    step.set("creating the publishers");
+    let pubs = Publishers::new(&mut node, opts)?;
+    step.set("creating the subscriptions");
+    let (tx, rx) = mpsc::channel::<Inbound>(64);
     subscribe::<TwistStamped>(
         &mut node,
         &opts.name("setpoint/velocity"),
@@ -621,6 +712,7 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
     if opts.use_sim_time && opts.clock == ClockSource::Sync {
         subscribe::<Clock>(&mut node, &opts.name("/clock"), tx, Inbound::Clock)?;
     }
+    step.set("creating the services");
     use link::CommandKind as K;
     use ros_api::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
     command_service::<SetBoolRequest, SetBoolResponse>(
@@ -659,6 +751,28 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         opts.device,
         opts.baud
     );
+    Ok(Dds {
+        _ctx: ctx,
+        node,
+        pubs,
+        rx,
+        lrx,
+        shared,
+    })
+}
+
+/// Run the bridge until a fatal error (the serial device is retried forever).
+///
+/// `tap` counts every message published and received and records them when recording.
+pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
+    let Dds {
+        _ctx,
+        node,
+        pubs,
+        mut rx,
+        lrx,
+        shared,
+    } = start_dds(&opts).await?;
     let mut ros = RosSide {
         node: &node,
         rx: lrx,
