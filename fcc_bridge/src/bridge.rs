@@ -8,6 +8,7 @@ use crate::params;
 use crate::record::{QosInfo, Tap};
 use crate::ros_api::{self, LinkRequest, ParamShared};
 use crate::ros_types::*;
+use crate::startup::{self, Step};
 use crate::state::{ClockSource, Fatal, Handshake, LinkState, Out};
 use fcc_msgs as link;
 use futures::StreamExt;
@@ -494,7 +495,13 @@ where
 /// How long the DDS set-up (participant, node, publishers, subscriptions, services) may take
 /// before the bridge gives up on it (normally some tens of ms; `FCC_BRIDGE_DDS_STARTUP_TIMEOUT_MS`
 /// overrides it).
-pub const DDS_STARTUP_TIMEOUT: Duration = Duration::from_secs(5);
+pub const DDS_STARTUP_TIMEOUT: Duration = startup::DDS_STARTUP_TIMEOUT;
+
+/// The bridge, for [`startup`] (messages and environment variables).
+pub const APP: startup::App = startup::App {
+    name: "fcc-bridge",
+    env_prefix: "FCC_BRIDGE",
+};
 
 /// The DDS side, created by [`setup_dds`].
 struct Dds {
@@ -506,73 +513,16 @@ struct Dds {
     shared: Arc<ParamShared>,
 }
 
-/// The step the DDS set-up is at (named in the stall error).
-#[derive(Clone, Default)]
-struct Step(Arc<std::sync::Mutex<&'static str>>);
-
-impl Step {
-    fn set(&self, s: &'static str) {
-        *self.0.lock().unwrap_or_else(|e| e.into_inner()) = s;
-    }
-    fn get(&self) -> &'static str {
-        *self.0.lock().unwrap_or_else(|e| e.into_inner())
-    }
-}
-
-fn startup_timeout() -> Duration {
-    std::env::var("FCC_BRIDGE_DDS_STARTUP_TIMEOUT_MS")
-        .ok()
-        .and_then(|v| v.trim().parse::<u64>().ok())
-        .map(Duration::from_millis)
-        .unwrap_or(DDS_STARTUP_TIMEOUT)
-}
-
-/// Create the DDS side on a thread of its own, under a watchdog.
-///
-/// rustdds 0.15.1 can deadlock while endpoints are created when other participants are being
-/// discovered at the same moment (several nodes starting together): its discovery thread holds
-/// the DiscoveryDB read lock while it blocks on the full 32-slot notification channel to the
-/// participant's event loop (`Discovery::add_local_reader`), the event loop waits for that read
-/// lock behind our thread's queued write lock (`create_datareader`/`create_datawriter`, std's
-/// RwLock lets no new reader past a waiting writer), and our thread waits for the discovery
-/// thread's read lock. Nothing moves again. Run on the tokio thread, that also starved the
-/// signal handling. Here the runtime stays free (SIGTERM is served), and a set-up that does not
-/// finish in [`DDS_STARTUP_TIMEOUT`] is reported as [`BridgeError::DdsStalled`].
+/// Create the DDS side on a thread of its own, under a watchdog ([`startup::App::setup_dds`]:
+/// rustdds 0.15.1 can deadlock there when several participants start together). Run on the
+/// tokio thread, that also starved the signal handling. A set-up that does not finish in
+/// [`DDS_STARTUP_TIMEOUT`] is reported as [`BridgeError::DdsStalled`].
 async fn start_dds(opts: &Options) -> Result<Dds, BridgeError> {
-    let handle = tokio::runtime::Handle::current();
-    let (tx, rx) = tokio::sync::oneshot::channel();
-    let step = Step::default();
-    let (o, st) = (opts.clone(), step.clone());
-    std::thread::Builder::new()
-        .name("dds-setup".into())
-        .spawn(move || {
-            // tokio::spawn (subscriptions, services) needs the runtime's context.
-            let _rt = handle.enter();
-            if std::env::var_os("FCC_BRIDGE_TEST_STALL_DDS").is_some() {
-                // Test hook: behave as the rustdds deadlock does (block for good).
-                st.set("creating the DDS participant (FCC_BRIDGE_TEST_STALL_DDS)");
-                loop {
-                    std::thread::park();
-                }
-            }
-            let r = setup_dds(&o, &st);
-            if let Err(Ok(dds)) = tx.send(r) {
-                // Too late: the bridge has given up. Never drop DDS entities here (rustdds
-                // joins its threads on drop); the process is exiting anyway.
-                std::mem::forget(dds);
-            }
-        })
-        .map_err(ros_err)?;
-    let limit = startup_timeout();
-    match tokio::time::timeout(limit, rx).await {
-        Ok(Ok(r)) => r,
-        Ok(Err(_)) => Err(BridgeError::Ros("the DDS set-up thread failed".into())),
-        Err(_) => Err(BridgeError::DdsStalled(format!(
-            "DDS start-up stalled for {:.1} s while {} (rustdds deadlock when several \
-             participants start together)",
-            limit.as_secs_f64(),
-            step.get()
-        ))),
+    let o = opts.clone();
+    match APP.setup_dds(move |st| setup_dds(&o, st)).await {
+        Ok(r) => r,
+        Err(startup::SetupError::Stalled(e)) => Err(BridgeError::DdsStalled(e)),
+        Err(startup::SetupError::Thread(e)) => Err(BridgeError::Ros(e)),
     }
 }
 

@@ -22,6 +22,7 @@ pub mod report;
 pub mod ros_api;
 pub mod ros_node;
 pub mod ros_types;
+pub mod startup;
 pub mod state;
 pub mod timesync;
 

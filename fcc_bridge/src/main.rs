@@ -9,6 +9,7 @@ use clap::Parser;
 use fcc_bridge::bridge::{self, BridgeError, Options};
 use fcc_bridge::params::{self, parse_bool};
 use fcc_bridge::record::{RecordOptions, Tap};
+use fcc_bridge::startup::Stop;
 use fcc_bridge::state::ClockSource;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -190,95 +191,6 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
     .map_err(|e| ros_ref.locate(e))
 }
 
-/// How often the bridge restarts itself after a stalled DDS start-up before giving up.
-const DDS_START_ATTEMPTS: u32 = 3;
-
-/// Re-execute the bridge after a stalled DDS start-up (at most [`DDS_START_ATTEMPTS`] in all,
-/// counted in `FCC_BRIDGE_DDS_ATTEMPT`); returns when no attempt is left or exec fails.
-fn restart_after_stall(e: &str) {
-    use std::os::unix::process::CommandExt;
-    let attempt: u32 = std::env::var("FCC_BRIDGE_DDS_ATTEMPT")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(1);
-    if attempt >= DDS_START_ATTEMPTS {
-        return;
-    }
-    eprintln!(
-        "fcc-bridge: {e}; restarting (attempt {} of {DDS_START_ATTEMPTS})",
-        attempt + 1
-    );
-    let exe = std::env::current_exe().unwrap_or_else(|_| "/proc/self/exe".into());
-    let err = std::process::Command::new(exe)
-        .args(std::env::args_os().skip(1))
-        .env("FCC_BRIDGE_DDS_ATTEMPT", (attempt + 1).to_string())
-        .exec();
-    eprintln!("fcc-bridge: cannot restart: {err}");
-}
-
-/// SIGTERM / SIGINT, served by a thread of their own (not by the tokio runtime, which a
-/// blocking call could hold up). The first signal asks the bridge to stop; if it has not begun
-/// stopping within [`Stop::GRACE`] — or at a second signal — the process exits at once.
-struct Stop {
-    rx: tokio::sync::watch::Receiver<bool>,
-    stopping: std::sync::Arc<std::sync::atomic::AtomicBool>,
-}
-
-impl Stop {
-    const GRACE: Duration = Duration::from_millis(1500);
-
-    fn install() -> std::io::Result<Stop> {
-        use signal_hook::consts::{SIGINT, SIGTERM};
-        use std::sync::atomic::{AtomicBool, Ordering};
-        let mut signals = signal_hook::iterator::Signals::new([SIGTERM, SIGINT])?;
-        let (tx, rx) = tokio::sync::watch::channel(false);
-        let stopping = std::sync::Arc::new(AtomicBool::new(false));
-        let st = stopping.clone();
-        std::thread::Builder::new()
-            .name("signals".into())
-            .spawn(move || {
-                let name = |s: i32| if s == SIGINT { "SIGINT" } else { "SIGTERM" };
-                let mut first = true;
-                for sig in signals.forever() {
-                    if !first {
-                        eprintln!("fcc-bridge: second {}: exiting now", name(sig));
-                        std::process::exit(1);
-                    }
-                    first = false;
-                    let _ = tx.send(true);
-                    let st = st.clone();
-                    let _ = std::thread::Builder::new()
-                        .name("stop-deadline".into())
-                        .spawn(move || {
-                            std::thread::sleep(Stop::GRACE);
-                            if !st.load(Ordering::SeqCst) {
-                                eprintln!(
-                                    "fcc-bridge: {} but the bridge did not stop within {} ms: \
-                                     exiting now",
-                                    name(sig),
-                                    Stop::GRACE.as_millis()
-                                );
-                                std::process::exit(1);
-                            }
-                        });
-                }
-            })?;
-        Ok(Stop { rx, stopping })
-    }
-
-    /// Resolves at the first SIGTERM / SIGINT.
-    async fn wait(&self) {
-        let mut rx = self.rx.clone();
-        let _ = rx.wait_for(|s| *s).await;
-    }
-
-    /// The bridge has stopped running (it finishes the recording and exits).
-    fn stopping(&self) {
-        self.stopping
-            .store(true, std::sync::atomic::Ordering::SeqCst);
-    }
-}
-
 fn main() -> ExitCode {
     use tracing_subscriber::layer::SubscriberExt;
     use tracing_subscriber::util::SubscriberInitExt;
@@ -305,7 +217,7 @@ fn main() -> ExitCode {
         }
     };
     // SIGTERM / SIGINT from now on, whatever the DDS start-up does.
-    let stop = match Stop::install() {
+    let stop = match Stop::install(bridge::APP) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("fcc-bridge: cannot install the signal handlers: {e}");
@@ -334,7 +246,7 @@ fn main() -> ExitCode {
     if let Err(BridgeError::DdsStalled(e)) = &r {
         // The stalled participant cannot be recovered in this process: start afresh (same
         // pid, arguments and environment), a few times.
-        restart_after_stall(e);
+        bridge::APP.restart_after_stall(e);
     }
     // Per-topic counts (published / received / raw frames), one JSON line on stderr; the
     // recording is finished (summary, footer, PATH.counts.json).

@@ -10,8 +10,11 @@
 //! hovers S seconds of ROS time in the MCU's HOLD mode (`cmd/mode` "hold", no setpoints; paper A
 //! Fig. 16), then lands; the sequencing is `fcc_mission::EndSequence`.
 //!
-//! Exit codes: 0 when the vehicle is landed and disarmed after the mission; 1 on a failure
-//! (timeout, disarmed in flight, DDS setup); 2 on a bad mission file or bad arguments.
+//! Exit codes: 0 when the vehicle is landed and disarmed after the mission, or on SIGTERM/SIGINT
+//! (served by a thread of their own; a second signal, or a stop not begun within 1.5 s, exits
+//! at once); 1 on a failure (timeout, disarmed in flight, DDS setup; also when the DDS start-up
+//! stalled on each of 3 attempts: it restarts itself after a stall, see
+//! `fcc_bridge::startup`); 2 on a bad mission file or bad arguments.
 
 use clap::Parser;
 use fcc_bridge::frames;
@@ -20,6 +23,7 @@ use fcc_bridge::ros_node::{self, DdsEnv, RosClock};
 use fcc_bridge::ros_types::{
     Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
 };
+use fcc_bridge::startup;
 use fcc_mission::{EndPhase, EndSequence, McuMode, Mission, Phase, Request, WaypointFollower};
 use futures::StreamExt;
 use ros2_client::log::LogLevel;
@@ -37,7 +41,8 @@ Parameters: mission (file; or --mission), rate_hz (50), use_sim_time (false: sta
   timeout_s (600, from start), arm_timeout_s (60), localhost_only (true),\n\
   hover_s (0: land right after the last waypoint; S > 0: hover S s of ROS time in the MCU's\n\
   HOLD mode first, then land).\n\
-Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE."
+Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE,\n\
+  FCC_MISSION_DDS_STARTUP_TIMEOUT_MS (5000: restart when the DDS set-up takes longer)."
 )]
 struct Cli {
     /// Mission YAML (launch_configs/missions/*.yaml).
@@ -279,65 +284,168 @@ fn mcu_mode(st: &Status) -> (McuMode, bool) {
     (mode, st.failsafe != Status::FAILSAFE_NONE)
 }
 
+/// fcc-mission, for `fcc_bridge::startup` (messages and environment variables).
+const APP: startup::App = startup::App {
+    name: "fcc-mission",
+    env_prefix: "FCC_MISSION",
+};
+
 #[tokio::main(flavor = "current_thread")]
 async fn main() {
     let o = options();
-    match run(o).await {
+    // SIGTERM / SIGINT from now on, whatever the DDS start-up does.
+    let stop = startup::Stop::install(APP)
+        .unwrap_or_else(|e| fail(1, format!("cannot install the signal handlers: {e}")));
+    let mut run = Box::pin(run(o));
+    let r = tokio::select! {
+        r = &mut run => r,
+        _ = stop.wait() => Ok(()),
+    };
+    stop.stopping();
+    // Exit without tearing down DDS entity by entity (rustdds joins its threads on drop).
+    std::mem::forget(run);
+    match r {
         Ok(()) => std::process::exit(0),
-        Err((code, msg)) => fail(code, msg),
+        Err(Failure::Stalled(e)) => {
+            // The stalled participant cannot be recovered in this process: start afresh (same
+            // pid, arguments and environment), a few times.
+            APP.restart_after_stall(&e);
+            fail(1, e)
+        }
+        Err(Failure::Exit(code, msg)) => fail(code, msg),
     }
 }
 
-async fn run(o: Options) -> Result<(), (i32, String)> {
-    let e1 = |e: String| (1, e);
-    let ctx = ros_node::context(o.dds).map_err(e1)?;
-    let mut node = ros_node::node(&ctx, &o.namespace, &o.node_name).map_err(e1)?;
-    let odom_sub = ros_node::subscription::<Odometry>(
-        &mut node,
-        &o.name("state/odom"),
-        &ros_node::best_effort_qos(1),
-    )
-    .map_err(e1)?;
-    let status_sub = ros_node::subscription::<Status>(
-        &mut node,
-        &o.name("status"),
-        &ros_node::best_effort_qos(5),
-    )
-    .map_err(e1)?;
+/// Why [`run`] ended without success.
+enum Failure {
+    Exit(i32, String),
+    /// The DDS start-up stalled (rustdds' deadlock): restart.
+    Stalled(String),
+}
+
+impl From<(i32, String)> for Failure {
+    fn from((code, msg): (i32, String)) -> Self {
+        Failure::Exit(code, msg)
+    }
+}
+
+/// The DDS side, created by [`setup_dds`] on the `dds-setup` thread.
+struct Dds {
+    _ctx: ros2_client::Context,
+    node: ros2_client::Node,
+    odom_sub: ros2_client::Subscription<Odometry>,
+    status_sub: ros2_client::Subscription<Status>,
+    clock_sub: Option<ros2_client::Subscription<Clock>>,
+    sp_pub: ros2_client::Publisher<TwistStamped>,
+    arm_pub: ros2_client::Publisher<Bool>,
+    mode_pub: ros2_client::Publisher<StringMsg>,
+    status_pub: ros2_client::Publisher<StringMsg>,
+}
+
+/// The participant, node, subscriptions and publishers. Blocking (rustdds can deadlock here
+/// when several participants start together): run under `startup::App::setup_dds`.
+fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
+    step.set("creating the DDS participant");
+    let ctx = ros_node::context(o.dds)?;
+    step.set("creating the ROS node");
+    let mut node = ros_node::node(&ctx, &o.namespace, &o.node_name)?;
+    step.set("creating the subscriptions");
+    let odom_sub =
+        ros_node::subscription::<Odometry>(&mut node, &o.topics[0], &ros_node::best_effort_qos(1))?;
+    let status_sub =
+        ros_node::subscription::<Status>(&mut node, &o.topics[1], &ros_node::best_effort_qos(5))?;
     let clock_sub = if o.use_sim_time {
-        Some(
-            ros_node::subscription::<Clock>(
-                &mut node,
-                &o.name("/clock"),
-                &ros_node::best_effort_qos(1),
-            )
-            .map_err(e1)?,
-        )
+        Some(ros_node::subscription::<Clock>(
+            &mut node,
+            &o.topics[2],
+            &ros_node::best_effort_qos(1),
+        )?)
     } else {
         None
     };
-    let sp_pub = ros_node::publisher::<TwistStamped>(
-        &mut node,
-        &o.name("setpoint/velocity"),
-        &ros_node::reliable_qos(10),
-    )
-    .map_err(e1)?;
+    step.set("creating the publishers");
+    let sp_pub =
+        ros_node::publisher::<TwistStamped>(&mut node, &o.topics[3], &ros_node::reliable_qos(10))?;
     let arm_pub =
-        ros_node::publisher::<Bool>(&mut node, &o.name("cmd/arm"), &ros_node::reliable_qos(10))
-            .map_err(e1)?;
-    let mode_pub = ros_node::publisher::<StringMsg>(
-        &mut node,
-        &o.name("cmd/mode"),
-        &ros_node::reliable_qos(10),
-    )
-    .map_err(e1)?;
-    let status_pub = ros_node::publisher::<StringMsg>(
-        &mut node,
-        &o.name("mission/status"),
-        &ros_node::reliable_qos(10),
-    )
-    .map_err(e1)?;
+        ros_node::publisher::<Bool>(&mut node, &o.topics[4], &ros_node::reliable_qos(10))?;
+    let mode_pub =
+        ros_node::publisher::<StringMsg>(&mut node, &o.topics[5], &ros_node::reliable_qos(10))?;
+    let status_pub =
+        ros_node::publisher::<StringMsg>(&mut node, &o.topics[6], &ros_node::reliable_qos(10))?;
+    Ok(Dds {
+        _ctx: ctx,
+        node,
+        odom_sub,
+        status_sub,
+        clock_sub,
+        sp_pub,
+        arm_pub,
+        mode_pub,
+        status_pub,
+    })
+}
 
+/// What [`setup_dds`] needs (owned: it runs on a thread of its own).
+struct DdsSetup {
+    dds: DdsEnv,
+    namespace: String,
+    node_name: String,
+    use_sim_time: bool,
+    /// state/odom, status, /clock, setpoint/velocity, cmd/arm, cmd/mode, mission/status.
+    topics: [String; 7],
+}
+
+async fn run(o: Options) -> Result<(), Failure> {
+    let setup = DdsSetup {
+        dds: o.dds,
+        namespace: o.namespace.clone(),
+        node_name: o.node_name.clone(),
+        use_sim_time: o.use_sim_time,
+        topics: [
+            "state/odom",
+            "status",
+            "/clock",
+            "setpoint/velocity",
+            "cmd/arm",
+            "cmd/mode",
+            "mission/status",
+        ]
+        .map(|t| o.name(t)),
+    };
+    let Dds {
+        _ctx,
+        node,
+        odom_sub,
+        status_sub,
+        clock_sub,
+        sp_pub,
+        arm_pub,
+        mode_pub,
+        status_pub,
+    } = match APP.setup_dds(move |st| setup_dds(&setup, st)).await {
+        Ok(r) => r.map_err(|e| Failure::Exit(1, e))?,
+        Err(startup::SetupError::Stalled(e)) => return Err(Failure::Stalled(e)),
+        Err(startup::SetupError::Thread(e)) => return Err(Failure::Exit(1, e)),
+    };
+    let run_result: Result<(), (i32, String)> = fly(
+        o, node, odom_sub, status_sub, clock_sub, sp_pub, arm_pub, mode_pub, status_pub,
+    )
+    .await;
+    run_result.map_err(Failure::from)
+}
+
+#[allow(clippy::too_many_arguments)]
+async fn fly(
+    o: Options,
+    node: ros2_client::Node,
+    odom_sub: ros2_client::Subscription<Odometry>,
+    status_sub: ros2_client::Subscription<Status>,
+    clock_sub: Option<ros2_client::Subscription<Clock>>,
+    sp_pub: ros2_client::Publisher<TwistStamped>,
+    arm_pub: ros2_client::Publisher<Bool>,
+    mode_pub: ros2_client::Publisher<StringMsg>,
+    status_pub: ros2_client::Publisher<StringMsg>,
+) -> Result<(), (i32, String)> {
     let log = Log {
         handle: node.logging_handle(),
         name: fcc_bridge::ros_api::logger_name(&o.namespace, &o.node_name),
