@@ -35,8 +35,6 @@ pub fn sqrtf(x: f32) -> f32 {
     }
 }
 
-/// `|x|`.
-#[inline(always)]
 /// `x` limited to `[lo, hi]`, like `f32::clamp` (NaN stays NaN), but without `clamp`'s panic
 /// on `lo > hi` or NaN bounds, so the MCU image has no panic path here (bounds come from
 /// range-checked parameters; an inverted pair gives `lo` below it and `hi` above it).
@@ -51,6 +49,8 @@ pub fn clampf(x: f32, lo: f32, hi: f32) -> f32 {
     }
 }
 
+/// `|x|`.
+#[inline(always)]
 pub fn fabsf(x: f32) -> f32 {
     x.abs()
 }
