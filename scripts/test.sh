@@ -53,6 +53,9 @@ run cargo build --offline --locked --release -p fcc_mission --features ros --bin
 # Unit tests beside the code, the scenario tests in tests/ (optimised: whole flights), the DDS
 # peer and recorder tests.
 run cargo test --offline --locked --workspace --release
+# The ROS 2 side of fcc_mission (feature `ros`): fcc-mission's and fcc-launch's own tests, and the
+# mission node's start-up protection (stalled DDS set-up, SIGTERM during start-up).
+run cargo test --offline --locked --release -p fcc_mission --features ros
 # The board's sensor/actuator drivers (MPU-9250, MS5611, UBX, laser, sonar, S.BUS, ESC PWM) on the
 # host, against datasheet byte sequences (the board crate is not a workspace member).
 run cargo test --offline --locked --manifest-path fcc_firmware/board/Cargo.toml --features std
