@@ -17,16 +17,8 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 py="${1:-${FCC_DDS_PYTHON:-python3}}"
-if [ -z "${FCC_IN_NETNS:-}" ]; then
-  for c in "$root/../shared/tools/netns-run" /work/shared/tools/netns-run; do
-    if [ -x "$c" ]; then exec env FCC_IN_NETNS=1 "$c" "$0" "$py"; fi
-  done
-  echo "run_stack.sh: netns-run not found; refusing to run DDS outside a loopback-only namespace" >&2
-  exit 3
-fi
-if ip -o link show | awk -F': ' '{print $2}' | grep -qv '^lo$'; then
-  echo "run_stack.sh: not in a loopback-only namespace; refusing" >&2; exit 3
-fi
+. "$root/tests/lib/loopback_only.sh"
+loopback_only "$0" "$py"
 bin="${FCC_BIN_DIR:-$root/target/release}"
 speed="${FCC_E2E_SPEED:-2}"
 tmp="$(mktemp -d)"

@@ -13,16 +13,8 @@ here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 out="$(mkdir -p "$1" && cd "$1" && pwd)"
 py="${2:-${FCC_DDS_PYTHON:-python3}}"
-if [ -z "${FCC_IN_NETNS:-}" ]; then
-  for c in "$root/../shared/tools/netns-run" /work/shared/tools/netns-run; do
-    if [ -x "$c" ]; then exec env FCC_IN_NETNS=1 "$c" "$0" "$out" "$py"; fi
-  done
-  echo "sitl_flight.sh: netns-run not found; refusing to run DDS outside a loopback-only namespace" >&2
-  exit 3
-fi
-if ip -o link show | awk -F': ' '{print $2}' | grep -qv '^lo$'; then
-  echo "sitl_flight.sh: not in a loopback-only namespace; refusing" >&2; exit 3
-fi
+. "$root/tests/lib/loopback_only.sh"
+loopback_only "$0" "$out" "$py"
 bin="${FCC_BIN_DIR:-$root/target/release}"
 hover_s="${FCC_HOVER_S:-30}"   # HOLD after the square (paper A Fig. 16), s of sim time
 cd "$root"
