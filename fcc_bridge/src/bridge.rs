@@ -143,10 +143,7 @@ fn publisher<T: RosMsg>(
     name: &str,
     qos: &QosProfile,
 ) -> Result<Publisher<T>, BridgeError> {
-    let topic = node
-        .create_topic(&Name::parse(name).map_err(ros_err)?, T::type_name(), qos)
-        .map_err(ros_err)?;
-    node.create_publisher::<T>(&topic, None).map_err(ros_err)
+    crate::ros_node::publisher(node, name, qos).map_err(BridgeError::Ros)
 }
 
 impl Publishers {

@@ -79,19 +79,27 @@ pub fn best_effort_qos(depth: usize) -> QosProfile {
     QosProfile::subscription_default().history(History::KeepLast { depth })
 }
 
+/// The topic of a ROS name (relative names go under the node's namespace) for type `T`.
+fn topic<T: RosMsg>(
+    node: &mut Node,
+    name: &str,
+    qos: &QosProfile,
+) -> Result<rustdds::Topic, String> {
+    node.create_topic(
+        &Name::parse(name).map_err(|e| format!("topic {name}: {e:?}"))?,
+        T::type_name(),
+        qos,
+    )
+    .map_err(|e| format!("topic {name}: {e:?}"))
+}
+
 /// Publisher on a ROS name (relative names go under the node's namespace).
 pub fn publisher<T: RosMsg>(
     node: &mut Node,
     name: &str,
     qos: &QosProfile,
 ) -> Result<Publisher<T>, String> {
-    let topic = node
-        .create_topic(
-            &Name::parse(name).map_err(|e| format!("topic {name}: {e:?}"))?,
-            T::type_name(),
-            qos,
-        )
-        .map_err(|e| format!("topic {name}: {e:?}"))?;
+    let topic = topic::<T>(node, name, qos)?;
     node.create_publisher::<T>(&topic, None)
         .map_err(|e| format!("publisher {name}: {e:?}"))
 }
@@ -102,13 +110,7 @@ pub fn subscription<T: RosMsg>(
     name: &str,
     qos: &QosProfile,
 ) -> Result<Subscription<T>, String> {
-    let topic = node
-        .create_topic(
-            &Name::parse(name).map_err(|e| format!("topic {name}: {e:?}"))?,
-            T::type_name(),
-            qos,
-        )
-        .map_err(|e| format!("topic {name}: {e:?}"))?;
+    let topic = topic::<T>(node, name, qos)?;
     node.create_subscription::<T>(&topic, None)
         .map_err(|e| format!("subscription {name}: {e:?}"))
 }

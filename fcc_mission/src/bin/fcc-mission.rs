@@ -412,6 +412,17 @@ async fn run(o: Options) -> Result<(), Failure> {
         ]
         .map(|t| o.name(t)),
     };
+    let dds = match APP.setup_dds(move |st| setup_dds(&setup, st)).await {
+        Ok(r) => r.map_err(|e| Failure::Exit(1, e))?,
+        Err(startup::SetupError::Stalled(e)) => return Err(Failure::Stalled(e)),
+        Err(startup::SetupError::Thread(e)) => return Err(Failure::Exit(1, e)),
+    };
+    let run_result: Result<(), (i32, String)> = fly(o, dds).await;
+    run_result.map_err(Failure::from)
+}
+
+async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
+    // `_ctx` stays bound (the DDS participant lives as long as the flight).
     let Dds {
         _ctx,
         node,
@@ -422,30 +433,7 @@ async fn run(o: Options) -> Result<(), Failure> {
         arm_pub,
         mode_pub,
         status_pub,
-    } = match APP.setup_dds(move |st| setup_dds(&setup, st)).await {
-        Ok(r) => r.map_err(|e| Failure::Exit(1, e))?,
-        Err(startup::SetupError::Stalled(e)) => return Err(Failure::Stalled(e)),
-        Err(startup::SetupError::Thread(e)) => return Err(Failure::Exit(1, e)),
-    };
-    let run_result: Result<(), (i32, String)> = fly(
-        o, node, odom_sub, status_sub, clock_sub, sp_pub, arm_pub, mode_pub, status_pub,
-    )
-    .await;
-    run_result.map_err(Failure::from)
-}
-
-#[allow(clippy::too_many_arguments)]
-async fn fly(
-    o: Options,
-    node: ros2_client::Node,
-    odom_sub: ros2_client::Subscription<Odometry>,
-    status_sub: ros2_client::Subscription<Status>,
-    clock_sub: Option<ros2_client::Subscription<Clock>>,
-    sp_pub: ros2_client::Publisher<TwistStamped>,
-    arm_pub: ros2_client::Publisher<Bool>,
-    mode_pub: ros2_client::Publisher<StringMsg>,
-    status_pub: ros2_client::Publisher<StringMsg>,
-) -> Result<(), (i32, String)> {
+    } = dds;
     let log = Log {
         handle: node.logging_handle(),
         name: fcc_bridge::ros_api::logger_name(&o.namespace, &o.node_name),
