@@ -136,6 +136,16 @@ pub struct LinkState {
     pub ground_height_m: Option<f32>,
     /// Sensor-health transitions (WARN / INFO on `/rosout`).
     pub sensors: crate::diag::SensorWatch,
+    /// The current decoder's (seq_gaps, frames_lost, seq_resets) before the frame being decoded.
+    seq_before: [u32; 3],
+    /// Gaps and lost frames the current decoder counted on `Hello` frames (the MCU's new
+    /// session: a rebooted MCU counts from 0 again), taken out of [`LinkState::link_totals`],
+    /// and the resets counted for them instead.
+    seq_forgiven: [u32; 3],
+}
+
+fn seq_counters(c: &link::LinkCounters) -> [u32; 3] {
+    [c.seq_gaps, c.frames_lost, c.seq_resets]
 }
 
 impl LinkState {
@@ -156,6 +166,8 @@ impl LinkState {
             acks: Vec::new(),
             ground_height_m: None,
             sensors: Default::default(),
+            seq_before: [0; 3],
+            seq_forgiven: [0; 3],
         }
     }
 
@@ -163,14 +175,22 @@ impl LinkState {
     pub fn reconnect(&mut self) {
         self.counters.link_prev = self.link_totals();
         self.decoder = link::FrameDecoder::new();
+        self.seq_before = [0; 3];
+        self.seq_forgiven = [0; 3];
         self.handshake = Handshake::Waiting;
         self.timesync.reset();
         self.counters.reconnects += 1;
     }
 
-    /// Link receive totals over all connections.
+    /// Link receive totals over all connections. A sequence jump onto the MCU's `Hello` (a new
+    /// session) counts as one sequence reset, not as lost frames.
     pub fn link_totals(&self) -> LinkTotals {
-        self.counters.link_prev.add(self.decoder.counters())
+        let mut c = *self.decoder.counters();
+        let [gaps, lost, resets] = self.seq_forgiven;
+        c.seq_gaps = c.seq_gaps.wrapping_sub(gaps);
+        c.frames_lost = c.frames_lost.wrapping_sub(lost);
+        c.seq_resets = c.seq_resets.wrapping_add(resets);
+        self.counters.link_prev.add(&c)
     }
 
     /// ROS stamp (ns) for an MCU time, given the Linux clock now.
@@ -200,11 +220,26 @@ impl LinkState {
     pub fn on_bytes(&mut self, bytes: &[u8], now_ns: i64) -> Result<Vec<Out>, Fatal> {
         let mut out = Vec::new();
         let mut frames = Vec::new();
-        for r in self.decoder.push_slice(bytes) {
+        for &b in bytes {
+            let Some(r) = self.decoder.push(b) else {
+                continue;
+            };
+            let after = seq_counters(self.decoder.counters());
             // Errors are counted by the decoder.
             if let Ok(f) = r {
+                if matches!(f.message, link::Message::Hello(_)) {
+                    let gaps = after[0].wrapping_sub(self.seq_before[0]);
+                    if gaps != 0 {
+                        let lost = after[1].wrapping_sub(self.seq_before[1]);
+                        let fg = &mut self.seq_forgiven;
+                        fg[0] = fg[0].wrapping_add(gaps);
+                        fg[1] = fg[1].wrapping_add(lost);
+                        fg[2] = fg[2].wrapping_add(1);
+                    }
+                }
                 frames.push(f);
             }
+            self.seq_before = after;
         }
         for f in frames {
             self.on_frame(&f, now_ns, &mut out)?;

@@ -386,3 +386,54 @@ fn sensor_watch_transitions() {
     s.armed = false;
     assert_eq!(unhealthy(&s, Some(5.0), &c), [false; 4]);
 }
+
+/// A rebooted MCU says Hello again with its sequence from 0: one sequence reset, not thousands
+/// of lost frames; real gaps are still counted, and a reconnect starts the tracking afresh.
+#[test]
+fn state_new_mcu_session_is_not_loss() {
+    use crate::state::{ClockSource, LinkState};
+    let mut s = LinkState::new(cfg(), SetpointLimits::default(), ClockSource::Sync);
+    let frame = |m: link::Message, seq: u16| {
+        let mut buf = [0u8; link::MAX_FRAME_LEN];
+        let n = link::encode(&m, seq, 1, &mut buf).unwrap();
+        buf[..n].to_vec()
+    };
+    let hello = || link::Message::Hello(link::Hello::ours([0, 1, 0]));
+    let imu = || link::Message::ImuRaw(link::ImuRaw::default());
+    // First MCU session: seq 44530…, one real gap of 2 frames.
+    let mut bytes = frame(hello(), 44_530);
+    for seq in [44_531, 44_532, 44_535] {
+        bytes.extend(frame(imu(), seq));
+    }
+    s.on_bytes(&bytes, 0).unwrap();
+    let t = s.link_totals();
+    assert_eq!((t.seq_gaps, t.frames_lost, t.seq_resets), (1, 2, 0));
+    // The MCU reboots: Hello from seq 0 (20999 "missing" by the numbers), then one real loss.
+    let mut bytes = frame(hello(), 0);
+    for seq in [1, 3] {
+        bytes.extend(frame(imu(), seq));
+    }
+    for b in &bytes {
+        s.on_bytes(std::slice::from_ref(b), 0).unwrap();
+    }
+    let t = s.link_totals();
+    assert_eq!(
+        (t.seq_gaps, t.frames_lost, t.seq_resets),
+        (2, 3, 1),
+        "{t:?}"
+    );
+    assert_eq!(s.fill_status(Default::default()).frames_lost, 3);
+    // Reconnect: totals kept, the new decoder starts with nothing forgiven.
+    s.reconnect();
+    let t2 = s.link_totals();
+    assert_eq!((t2.seq_gaps, t2.frames_lost, t2.seq_resets), (2, 3, 1));
+    let mut bytes = frame(hello(), 7);
+    bytes.extend(frame(imu(), 9));
+    s.on_bytes(&bytes, 0).unwrap();
+    let t3 = s.link_totals();
+    assert_eq!(
+        (t3.seq_gaps, t3.frames_lost, t3.seq_resets),
+        (3, 4, 1),
+        "{t3:?}"
+    );
+}

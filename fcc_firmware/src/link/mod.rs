@@ -9,7 +9,10 @@
 //! - `TimeSyncPing` is answered with `TimeSyncPong` (receive and transmit MCU µs).
 //! - `HelloRequest` is answered with `Hello` (protocol version, schema hash, firmware version);
 //!   a `Hello` is also sent once at start-up. If the peer announced another version or schema,
-//!   its setpoints and commands are refused (`CommandResult::Incompatible`).
+//!   its setpoints and commands are refused (`CommandResult::Incompatible`). A `HelloRequest`
+//!   starts a new session: a jump of the Linux side's sequence number onto it (a restarted
+//!   bridge counts from 0 again) is a sequence reset, not lost frames (see
+//!   [`LinkEndpoint::rx_counters`]).
 //! - Telemetry streams go out at [`StreamRates`], phase-staggered so they do not all fall on one
 //!   tick. Raw sensor streams send the newest sample (never the same one twice) with the
 //!   sample's own time in the header.
@@ -88,6 +91,38 @@ pub struct LinkStats {
     pub unexpected: u32,
 }
 
+/// The decoder's sequence-tracking counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct SeqCounters {
+    seq_gaps: u32,
+    frames_lost: u32,
+    seq_resets: u32,
+}
+
+impl SeqCounters {
+    fn of(c: &LinkCounters) -> Self {
+        Self {
+            seq_gaps: c.seq_gaps,
+            frames_lost: c.frames_lost,
+            seq_resets: c.seq_resets,
+        }
+    }
+
+    /// A new session began with the frame that moved the decoder's counters from `before` to
+    /// `after`: forgive the gap it counted (if any) and count one reset instead (unless the
+    /// decoder already counted the jump as one).
+    fn new_session(&mut self, before: &Self, after: &Self) {
+        let gaps = after.seq_gaps.wrapping_sub(before.seq_gaps);
+        if gaps != 0 {
+            self.seq_gaps = self.seq_gaps.wrapping_add(gaps);
+            self.frames_lost = self
+                .frames_lost
+                .wrapping_add(after.frames_lost.wrapping_sub(before.frames_lost));
+            self.seq_resets = self.seq_resets.wrapping_add(1);
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, Default)]
 struct Latest<T> {
     sample: Option<T>,
@@ -136,6 +171,11 @@ pub struct LinkEndpoint {
     param_acks: [Option<ParamAck>; ACK_QUEUE],
     peer: PeerState,
     stats: LinkStats,
+    /// The decoder's sequence counters before the frame being decoded.
+    seq_before: SeqCounters,
+    /// Sequence gaps / lost frames the decoder counted on `HelloRequest` frames (new sessions),
+    /// taken out of [`LinkEndpoint::rx_counters`], and the resets counted for them instead.
+    seq_forgiven: SeqCounters,
     loop_max_us: u32,
     loop_sum_us: u64,
     loop_n: u32,
@@ -161,6 +201,8 @@ impl LinkEndpoint {
             param_acks: [None; ACK_QUEUE],
             peer: PeerState::Unknown,
             stats: LinkStats::default(),
+            seq_before: SeqCounters::default(),
+            seq_forgiven: SeqCounters::default(),
             loop_max_us: 0,
             loop_sum_us: 0,
             loop_n: 0,
@@ -179,8 +221,17 @@ impl LinkEndpoint {
         &self.stats
     }
     /// Receive-side counters (CRC errors, resyncs, lost frames, …) of the Linux → MCU direction.
-    pub fn rx_counters(&self) -> &LinkCounters {
-        self.decoder.counters()
+    ///
+    /// A sequence jump onto a `HelloRequest` (the peer's new session, e.g. a restarted bridge
+    /// whose sequence starts at 0 again) counts as one `seq_resets`, not as a gap with lost
+    /// frames.
+    pub fn rx_counters(&self) -> LinkCounters {
+        let mut c = *self.decoder.counters();
+        let f = &self.seq_forgiven;
+        c.seq_gaps = c.seq_gaps.wrapping_sub(f.seq_gaps);
+        c.frames_lost = c.frames_lost.wrapping_sub(f.frames_lost);
+        c.seq_resets = c.seq_resets.wrapping_add(f.seq_resets);
+        c
     }
     pub fn peer(&self) -> PeerState {
         self.peer
@@ -200,9 +251,17 @@ impl LinkEndpoint {
         while let Some((&b, tail)) = rest.split_first() {
             rest = tail;
             // Errors are counted by the decoder and reported in `Status`.
-            if let Some(Ok(frame)) = self.decoder.push(b) {
+            let Some(r) = self.decoder.push(b) else {
+                continue;
+            };
+            let after = SeqCounters::of(self.decoder.counters());
+            if let Ok(frame) = r {
+                if matches!(frame.message, Message::HelloRequest(_)) {
+                    self.seq_forgiven.new_session(&self.seq_before, &after);
+                }
                 self.handle(now_us, frame.message, core);
             }
+            self.seq_before = after;
         }
     }
 
@@ -518,7 +577,7 @@ impl LinkEndpoint {
         let s = Status {
             loop_time_max_us: self.loop_max_us,
             loop_time_avg_us: avg,
-            link_rx: *self.decoder.counters(),
+            link_rx: self.rx_counters(),
             tx_frames: self.stats.tx_frames,
             tx_dropped: self.stats.tx_dropped,
             setpoint_rejects: self.stats.setpoint_rejects,

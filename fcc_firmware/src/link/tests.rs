@@ -512,3 +512,92 @@ fn param_set_is_applied_refused_with_a_reason_and_acknowledged() {
         Params::default().control.cross_track_k_per_s
     );
 }
+
+/// A frame with the given sequence number (the Linux side's encoder at any point).
+fn frame_seq(m: Message, seq: u16) -> Vec<u8> {
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    let n = fcc_msgs::encode(&m, seq, 42, &mut buf).unwrap();
+    buf[..n].to_vec()
+}
+
+fn ping() -> Message {
+    Message::TimeSyncPing(TimeSyncPing { linux_time_ns: 1 })
+}
+
+/// A restarted bridge handshakes again with its sequence counting from 0: the jump is one
+/// sequence reset, not ~21,000 lost frames; real gaps before and after are still counted.
+#[test]
+fn second_handshake_with_a_fresh_sequence_counts_no_loss() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let hello = || Message::HelloRequest(HelloRequest::ours());
+    // First bridge: its session began long ago (seq 44530), one real gap of 2 frames.
+    let mut bytes = frame_seq(hello(), 44_530);
+    for seq in [44_531, 44_532, 44_533, 44_536] {
+        bytes.extend(frame_seq(ping(), seq));
+    }
+    link.on_bytes(0, &bytes, &mut core);
+    let c = link.rx_counters();
+    assert_eq!((c.seq_gaps, c.frames_lost, c.seq_resets), (1, 2, 0));
+
+    // It is killed; a new bridge flushes, handshakes from seq 0 and pings (one real loss: 3).
+    let mut bytes = std::vec![0u8];
+    bytes.extend(frame_seq(hello(), 0));
+    for seq in [1, 2, 4] {
+        bytes.extend(frame_seq(ping(), seq));
+    }
+    // Byte by byte, as the UART interrupt delivers them.
+    for b in &bytes {
+        link.on_bytes(1_000, core::slice::from_ref(b), &mut core);
+    }
+    let c = link.rx_counters();
+    assert_eq!(c.rx_frames, 9);
+    assert_eq!(
+        (c.seq_gaps, c.frames_lost, c.seq_resets),
+        (2, 3, 1),
+        "the new session's jump (44536 -> 0, 20999 frames by the numbers) is not loss: {c:?}"
+    );
+    assert_eq!(link.peer(), PeerState::Compatible);
+
+    // Status carries the same figures.
+    let mut linux = Linux::new();
+    let frames = linux.receive(&tx(&mut link, 2_000, &core, &SensorInputs::default()));
+    let status = frames
+        .iter()
+        .find_map(|f| match f.message {
+            Message::Status(s) => Some(s),
+            _ => None,
+        })
+        .expect("status is due at start");
+    assert_eq!(status.link_rx, c);
+
+    // A repeated HelloRequest within the session (seq continues) changes nothing.
+    link.on_bytes(3_000, &frame_seq(hello(), 5), &mut core);
+    let c2 = link.rx_counters();
+    assert_eq!(
+        (c2.seq_gaps, c2.frames_lost, c2.seq_resets),
+        (2, 3, 1),
+        "{c2:?}"
+    );
+}
+
+/// A jump onto a new session that the decoder already counts as a reset (≥ 32768 back) stays
+/// one reset.
+#[test]
+fn handshake_after_a_backward_jump_is_one_reset() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let hello = || Message::HelloRequest(HelloRequest::ours());
+    let mut bytes = frame_seq(hello(), 0);
+    bytes.extend(frame_seq(ping(), 1));
+    bytes.extend(frame_seq(ping(), 2));
+    bytes.extend(frame_seq(hello(), 0));
+    bytes.extend(frame_seq(ping(), 1));
+    link.on_bytes(0, &bytes, &mut core);
+    let c = link.rx_counters();
+    assert_eq!(
+        (c.seq_gaps, c.frames_lost, c.seq_resets),
+        (0, 0, 1),
+        "{c:?}"
+    );
+}
