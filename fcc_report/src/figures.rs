@@ -462,8 +462,9 @@ pub struct Figures {
     pub vertical_noise_m: Option<[f64; 2]>,
     /// ground height − laser, − sonar RMS (m), where both are valid.
     pub ground_vs_laser_sonar_rms_m: Option<[f64; 2]>,
-    /// k1 (m/s² per rad), k2 (1/s), R², samples.
-    pub k1_k2_fit: Option<(f64, f64, f64, u32)>,
+    /// Paper A Fig. 12: k1/k2 with the wind, uncertainty, and the suggestion or why not
+    /// ([`crate::sysid`]).
+    pub sysid: Option<crate::sysid::SysId>,
     pub missing: Vec<String>,
 }
 
@@ -566,32 +567,10 @@ pub fn compute(s: &Series, mission: Option<&fcc_mission::Mission>) -> Figures {
     if !gl.is_empty() || !gs.is_empty() {
         f.ground_vs_laser_sonar_rms_m = Some([rms(&gl), rms(&gs)]);
     }
-    // k1/k2 fit (paper A Fig. 12): a = k1·tilt − k2·v per horizontal body-heading axis.
-    let mut fit = fcc_nav::sysid::PlaneFit::new();
-    let o = &s.odom;
-    for i in 5..o.len().saturating_sub(5) {
-        let dt = o[i + 5].0 - o[i - 5].0;
-        if dt <= 0.0 || !armed_at(o[i].0).0 || -o[i].1[2] < 1.0 {
-            continue;
-        }
-        let yaw = o[i].3[2];
-        let (c, sn) = (yaw.cos(), yaw.sin());
-        let h = |v: [f64; 3]| [c * v[0] + sn * v[1], -sn * v[0] + c * v[1]];
-        let v = h(o[i].2);
-        let a0 = h(o[i - 5].2);
-        let a1 = h(o[i + 5].2);
-        let acc = [(a1[0] - a0[0]) / dt, (a1[1] - a0[1]) / dt];
-        let (roll, pitch) = (o[i].3[0], o[i].3[1]);
-        fit.add(-pitch as f32, v[0] as f32, acc[0] as f32);
-        fit.add(roll as f32, v[1] as f32, acc[1] as f32);
-    }
-    if let Some(r) = fit.solve() {
-        f.k1_k2_fit = Some((
-            r.k1_mps2_per_rad as f64,
-            r.k2_per_s as f64,
-            r.r_squared as f64,
-            fit.count(),
-        ));
+    // k1/k2 fit (paper A Fig. 12) with the wind estimated from the log (crate::sysid).
+    match crate::sysid::from_series(s) {
+        Ok(x) => f.sysid = Some(x),
+        Err(why) => f.missing.push(format!("k1/k2 fit (Fig. 12): {why}")),
     }
     match observer(s) {
         Ok(o) => f.observer = Some(o),
@@ -654,8 +633,8 @@ impl std::fmt::Display for Figures {
         if let Some(o) = &self.observer {
             writeln!(w, "acceleration observer vs measured (in flight, {} samples): high-pass (1 s) σ observer {:.3} m/s² vs measured {:.3} m/s², ratio {:.3} (flight core goal on est − truth: < 0.3)", o.samples, o.observer_hp_std_mps2, o.measured_hp_std_mps2, o.ratio)?;
         }
-        if let Some((k1, k2, r2, n)) = self.k1_k2_fit {
-            writeln!(w, "k1/k2 fit (a = k1·tilt − k2·v, {n} samples): k1 = {k1:.3} m/s²/rad, k2 = {k2:.3} 1/s, R² = {r2:.3} → suggested params: k1_mps2_per_rad = {k1:.2}, k2_per_s = {k2:.3}")?;
+        if let Some(x) = &self.sysid {
+            write!(w, "{x}")?;
         }
         for m in &self.missing {
             writeln!(w, "missing: {m}")?;

@@ -386,41 +386,43 @@ fn main() -> anyhow::Result<()> {
             panels(&p("observer.png"), "t s", pan),
         ));
     }
-    // Fig. 12: k1/k2 fit — measured acceleration vs the fitted model along the flight.
-    if let Some((k1, k2, _, _)) = f.k1_k2_fit {
+    // Fig. 12: k1/k2 fit — measured north acceleration vs the fitted model with each window's
+    // wind intercept, along the flight.
+    if let Some(x) = &f.sysid {
+        let (k1, k2) = (x.k1_mps2_per_rad, x.k2_per_s);
+        let (samples, _) = fcc_report::sysid::samples(&s);
         let mut meas = Vec::new();
         let mut model = Vec::new();
-        let o = &s.odom;
-        for i in 5..o.len().saturating_sub(5) {
-            let dt = o[i + 5].0 - o[i - 5].0;
-            if dt <= 0.0 || -o[i].1[2] < 1.0 {
-                continue;
+        let mut wi = 0;
+        let wl = &x.window_list;
+        for q in &samples {
+            while wi + 1 < wl.len() && q.t_s > wl[wi].t1_s {
+                wi += 1;
             }
-            let yaw = o[i].3[2];
-            let v = yaw.cos() * o[i].2[0] + yaw.sin() * o[i].2[1];
-            let a = (yaw.cos() * (o[i + 5].2[0] - o[i - 5].2[0])
-                + yaw.sin() * (o[i + 5].2[1] - o[i - 5].2[1]))
-                / dt;
-            meas.push((o[i].0 - t0, a));
-            model.push((o[i].0 - t0, k1 * -o[i].3[1] - k2 * v));
+            let Some(w) = wl.get(wi) else { break };
+            let c = w.means.intercept_ne_mps2(k1 as f32, k2 as f32)[0] as f64;
+            meas.push((q.t_s - t0, q.accel_ne_mps2[0]));
+            model.push((q.t_s - t0, k1 * q.tilt_ne_rad[0] - k2 * q.vel_ne_mps[0] + c));
         }
         plots.push((
             "k_fit.png",
-            "k1/k2 fit (paper A Fig. 12)",
+            "k1/k2 fit with the wind (paper A Fig. 12)",
             chart(
                 &p("k_fit.png"),
-                &format!("Forward acceleration: measured vs k1·θ − k2·v (k1 {k1:.2}, k2 {k2:.3})"),
+                &format!(
+                    "North acceleration: measured vs k1·θ − k2·(v − w) (k1 {k1:.2}, k2 {k2:.3})"
+                ),
                 "t s",
                 "m/s²",
                 vec![
                     Line {
-                        name: "measured (d v/dt)",
+                        name: "measured",
                         pts: meas,
                         color: c(150, 150, 150),
                         dots: true,
                     },
                     Line {
-                        name: "fit",
+                        name: "fit (wind per window)",
                         pts: model,
                         color: MAGENTA,
                         dots: false,

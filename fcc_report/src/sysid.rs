@@ -1,0 +1,439 @@
+//! Paper A's system identification (Fig. 12) on a recorded flight, honest in a wind.
+//!
+//! Paper A's horizontal model, per axis of the heading frame, is
+//!
+//! ```text
+//! a_mps2 = k1_mps2_per_rad·θ_rad − k2_per_s·(v_mps − w_mps)
+//! ```
+//!
+//! with θ the tilt that accelerates along the axis (forward: `−pitch`, right: `roll`), `v` the
+//! ground velocity and `w` the wind: the drag is about the **air-relative** velocity. A bag has
+//! no wind estimate, and fitting `a = k1·θ − k2·v` to a windy flight reads the tilt that holds
+//! the vehicle against the wind (`θ = −k2·w/k1` at `v = a = 0`) as tilt without acceleration,
+//! which drags k1 towards 0 (3 m/s of wind: k1 ≈ 2.9 instead of 9.2). So the wind is estimated
+//! from the log itself, as an intercept per N/E axis that is constant within windows of
+//! [`WIND_WINDOW_S`] (the slowly varying part of the wind; [`fcc_nav::sysid::WindPlaneFit`]):
+//!
+//! ```text
+//! a_ne_mps2(t) = k1·θ_ne_rad(t) − k2·v_ne_mps(t) + c_ne_mps2[m],   w_ne_mps[m] = c_ne_mps2[m] / k2
+//! ```
+//!
+//! for every sample t of window m (θ_ne = the heading-frame tilt rotated by the yaw; fitting
+//! in N, E is the heading-frame model with the N/E wind rotated into it, since the rotation is
+//! orthogonal and k1, k2 are the same on both axes).
+//!
+//! The acceleration is the bag's `accel/measured` — the gravity-compensated accelerometer, the
+//! quantity the calm-air fit in `tests/tests/sysid.rs` uses — with the estimated attitude and
+//! velocity of `state/odom` at the same stamp; bags without it fall back to the odometry's
+//! velocity differenced over ±[`DIFF_HALF_SPAN_S`] (smoother and delayed by nothing, but a
+//! derivative of the estimate rather than a measurement).
+//!
+//! Uncertainty: the standard errors `σ²·(XᵀX)⁻¹` assume white residuals; flight residuals
+//! (turbulence, unmodelled dynamics) are strongly correlated from one sample to the next, so the
+//! 95 % intervals are widened by [`fcc_nav::sysid::ar1_inflation`] of the residuals' lag-1
+//! correlation. A fit is only suggested as parameters when it passes [`judge`].
+
+use crate::figures::Series;
+use fcc_nav::sysid::{ar1_inflation, PlaneFit, WindPlaneFit, WindowMeans};
+use serde::Serialize;
+
+/// Length of a wind window (s). Long enough that each window holds manoeuvres (accelerating
+/// and braking take 1–3 s at the vehicle's limits), short enough that the slow part of the
+/// wind (its mean and gust periods of tens of seconds) is constant within it. Shorter windows
+/// absorb more of the gusts but also more of the manoeuvres (less excitation, wider intervals).
+pub const WIND_WINDOW_S: f64 = 5.0;
+/// A gap in the airborne samples longer than this (s) ends the window (no wind is assumed to
+/// persist across it).
+pub const MAX_GAP_S: f64 = 0.5;
+/// Samples count from this altitude above the take-off point (m), as the calm-air fit (ground
+/// contact and the take-off's thrust transient are not the model).
+pub const MIN_ALT_M: f64 = 2.0;
+/// Half-span of the central difference of the odometry velocity when the bag has no
+/// `accel/measured` (s).
+pub const DIFF_HALF_SPAN_S: f64 = 0.1;
+/// Largest 95 % confidence half-width, relative to the value, for k1 and for k2 to be
+/// suggested: the controller's feed-forward tolerates about 10 % error in either (the
+/// acceptance of the calm-air fit), so a parameter not known to 10 % is no improvement over
+/// the default.
+pub const MAX_REL_CI95: f64 = 0.10;
+/// Smallest within-window R²: below it the model explains less than half of the acceleration
+/// that is not wind; the rest is unmodelled dynamics or gusts the controller answers with tilt,
+/// which biases least squares in a way no confidence interval shows.
+pub const MIN_R_SQUARED: f64 = 0.5;
+/// Smallest within-window tilt standard deviation (rad, ≈ 1.1°): the tilt excursions of a
+/// flight with manoeuvres; a hover's tilt is mostly the controller's answer to noise.
+pub const MIN_TILT_STD_RAD: f64 = 0.02;
+/// Smallest within-window velocity standard deviation (m/s): k2 is the acceleration per m/s,
+/// it needs velocity changes of a fair fraction of the cruise speed.
+pub const MIN_VEL_STD_MPS: f64 = 0.3;
+/// Largest condition number of the tilt/velocity correlation matrix: above 10 (|r| > 0.82)
+/// tilt and velocity move together and k1 and k2 trade off against each other.
+pub const MAX_CONDITION: f64 = 10.0;
+
+/// One fit sample: N, E components (fixed frame).
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    pub t_s: f64,
+    /// The tilt that accelerates north, east (rad).
+    pub tilt_ne_rad: [f64; 2],
+    /// Ground velocity N, E (m/s).
+    pub vel_ne_mps: [f64; 2],
+    /// Acceleration N, E (m/s²).
+    pub accel_ne_mps2: [f64; 2],
+}
+
+/// Heading-frame tilt `[−pitch, roll]` rotated into N, E by the yaw.
+pub fn tilt_ne_rad(roll_rad: f64, pitch_rad: f64, yaw_rad: f64) -> [f64; 2] {
+    let (f, r) = (-pitch_rad, roll_rad);
+    let (s, c) = yaw_rad.sin_cos();
+    [c * f - s * r, s * f + c * r]
+}
+
+/// The airborne samples of a bag and where their acceleration comes from.
+pub fn samples(s: &Series) -> (Vec<Sample>, &'static str) {
+    let airborne = |t: f64| -> bool {
+        let i = s.status.partition_point(|x| x.0 <= t);
+        i > 0 && s.status[i - 1].1 && !s.status[i - 1].3
+    };
+    let o = &s.odom;
+    let measured = !s.accel_meas.is_empty();
+    let mut out = Vec::new();
+    for (i, x) in o.iter().enumerate() {
+        let (t, p, v, e) = *x;
+        if -p[2] < MIN_ALT_M || !airborne(t) {
+            continue;
+        }
+        let a = if measured {
+            // accel/measured carries the odometry's stamp (same navigation state).
+            let j = s.accel_meas.partition_point(|m| m.0 < t - 1e-6);
+            match s.accel_meas.get(j) {
+                Some(m) if (m.0 - t).abs() <= 1e-3 => [m.1[0], m.1[1]],
+                _ => continue,
+            }
+        } else {
+            let j0 = o[..i].partition_point(|y| y.0 < t - DIFF_HALF_SPAN_S);
+            let j1 = i + o[i..].partition_point(|y| y.0 <= t + DIFF_HALF_SPAN_S) - 1;
+            let dt = o[j1].0 - o[j0].0;
+            if j0 >= i || j1 <= i || dt <= 0.0 {
+                continue;
+            }
+            [
+                (o[j1].2[0] - o[j0].2[0]) / dt,
+                (o[j1].2[1] - o[j0].2[1]) / dt,
+            ]
+        };
+        out.push(Sample {
+            t_s: t,
+            tilt_ne_rad: tilt_ne_rad(e[0], e[1], e[2]),
+            vel_ne_mps: [v[0], v[1]],
+            accel_ne_mps2: a,
+        });
+    }
+    let src = if measured {
+        "accel/measured (accelerometer)"
+    } else {
+        "state/odom velocity, differenced"
+    };
+    (out, src)
+}
+
+/// A window of the fit: [t0, t1] and its means (for its wind and the plot's model line).
+#[derive(Clone, Copy, Debug)]
+pub struct Window {
+    pub t0_s: f64,
+    pub t1_s: f64,
+    pub means: WindowMeans,
+}
+
+/// The fit with the wind and what it is worth.
+#[derive(Clone, Debug, Serialize)]
+pub struct SysId {
+    pub accel_source: String,
+    pub samples: usize,
+    pub window_s: f64,
+    pub windows: u32,
+    pub dof: u32,
+    pub k1_mps2_per_rad: f64,
+    pub k2_per_s: f64,
+    /// 95 % half-widths, widened for correlated residuals.
+    pub k1_ci95_mps2_per_rad: f64,
+    pub k2_ci95_per_s: f64,
+    /// The same from `σ²·(XᵀX)⁻¹` alone (white residuals).
+    pub k1_ci95_white_mps2_per_rad: f64,
+    pub k2_ci95_white_per_s: f64,
+    /// Lag-1 correlation of the residuals and the resulting widening factor.
+    pub residual_lag1_corr: f64,
+    pub ci_inflation: f64,
+    /// Within-window R² and residual RMS (m/s²).
+    pub r_squared: f64,
+    pub rms_residual_mps2: f64,
+    /// Excitation (within windows).
+    pub tilt_std_rad: f64,
+    pub vel_std_mps: f64,
+    pub condition_number: f64,
+    /// Wind estimated from the intercepts, mean over windows (weighted by samples) N, E (m/s),
+    /// and the RMS spread of the windows' winds about it.
+    pub wind_mean_ne_mps: [f64; 2],
+    pub wind_spread_mps: f64,
+    /// Paper A's fit without the wind (heading frame, as before): k1, k2, R².
+    pub no_wind_fit: Option<[f64; 3]>,
+    /// `Some([k1, k2])` when the fit passes [`judge`].
+    pub suggested: Option<[f64; 2]>,
+    /// Why not, otherwise.
+    pub no_suggestion: Option<String>,
+    #[serde(skip)]
+    pub window_list: Vec<Window>,
+}
+
+/// Fit the model with the wind to `samples` (time-ordered), windows of `window_s`.
+pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysId, String> {
+    let mut wf = WindPlaneFit::new();
+    let mut plain = PlaneFit::new();
+    let mut windows: Vec<Window> = Vec::new();
+    // Window of each sample (index into `windows`, filled as they close).
+    let mut win_of = Vec::with_capacity(samples.len());
+    let mut start: Option<(f64, f64)> = None; // (t0 of the window, t of the last sample)
+    let f32x2 = |x: [f64; 2]| [x[0] as f32, x[1] as f32];
+    for x in samples {
+        if let Some((t0, last)) = start {
+            if x.t_s - t0 >= window_s || x.t_s - last > MAX_GAP_S {
+                // Always pushed (`win_of` counts on it), even if every sample was non-finite.
+                windows.push(Window {
+                    t0_s: t0,
+                    t1_s: last,
+                    means: wf.end_window().unwrap_or_default(),
+                });
+                start = None;
+            }
+        }
+        let t0 = start.map_or(x.t_s, |s| s.0);
+        start = Some((t0, x.t_s));
+        wf.add(
+            f32x2(x.tilt_ne_rad),
+            f32x2(x.vel_ne_mps),
+            f32x2(x.accel_ne_mps2),
+        );
+        win_of.push(windows.len());
+        // Paper A's plain fit, heading frame (k1, k2 are rotation-invariant, so N/E is the
+        // same plane).
+        for j in 0..2 {
+            plain.add(
+                x.tilt_ne_rad[j] as f32,
+                x.vel_ne_mps[j] as f32,
+                x.accel_ne_mps2[j] as f32,
+            );
+        }
+    }
+    let r = wf.solve().ok_or_else(|| {
+        format!(
+            "no fit: {} airborne samples, tilt and velocity constant or collinear within the windows",
+            samples.len()
+        )
+    })?;
+    if let Some((t0, last)) = start {
+        windows.push(Window {
+            t0_s: t0,
+            t1_s: last,
+            means: wf.end_window().unwrap_or_default(),
+        });
+    }
+    let (k1, k2) = (r.k1_mps2_per_rad, r.k2_per_s);
+    // Residual lag-1 correlation (consecutive samples of one window and axis).
+    let (mut s00, mut s01) = (0.0f64, 0.0f64);
+    let mut prev: Option<(usize, [f64; 2])> = None;
+    for (x, &w) in samples.iter().zip(&win_of) {
+        let c = windows[w].means.intercept_ne_mps2(k1, k2);
+        let e = [0, 1].map(|j| {
+            x.accel_ne_mps2[j] - k1 as f64 * x.tilt_ne_rad[j] + k2 as f64 * x.vel_ne_mps[j]
+                - c[j] as f64
+        });
+        if let Some((_, pe)) = prev.filter(|p| p.0 == w) {
+            for j in 0..2 {
+                s00 += pe[j] * pe[j];
+                s01 += pe[j] * e[j];
+            }
+        }
+        prev = Some((w, e));
+    }
+    let rho = if s00 > 0.0 { s01 / s00 } else { f64::NAN };
+    let infl = ar1_inflation(rho as f32);
+    let (c1, c2) = r.ci95(infl);
+    let (w1, w2) = r.ci95(1.0);
+    // Wind per window.
+    let (mut wsum, mut n) = ([0.0f64; 2], 0.0f64);
+    let winds: Vec<([f32; 2], f64)> = windows
+        .iter()
+        .map(|w| (w.means.wind_ne_mps(k1, k2), w.means.samples as f64))
+        .collect();
+    for (w, m) in winds
+        .iter()
+        .filter(|(w, _)| w[0].is_finite() && w[1].is_finite())
+    {
+        wsum[0] += w[0] as f64 * m;
+        wsum[1] += w[1] as f64 * m;
+        n += m;
+    }
+    let wmean = [wsum[0] / n, wsum[1] / n];
+    let spread = (winds
+        .iter()
+        .filter(|(w, _)| w[0].is_finite() && w[1].is_finite())
+        .map(|(w, m)| m * ((w[0] as f64 - wmean[0]).powi(2) + (w[1] as f64 - wmean[1]).powi(2)))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let mut out = SysId {
+        accel_source: accel_source.to_string(),
+        samples: samples.len(),
+        window_s,
+        windows: windows.len() as u32,
+        dof: r.dof,
+        k1_mps2_per_rad: k1 as f64,
+        k2_per_s: k2 as f64,
+        k1_ci95_mps2_per_rad: c1 as f64,
+        k2_ci95_per_s: c2 as f64,
+        k1_ci95_white_mps2_per_rad: w1 as f64,
+        k2_ci95_white_per_s: w2 as f64,
+        residual_lag1_corr: rho,
+        ci_inflation: infl as f64,
+        r_squared: r.r_squared as f64,
+        rms_residual_mps2: r.rms_residual_mps2 as f64,
+        tilt_std_rad: r.tilt_std_rad as f64,
+        vel_std_mps: r.vel_std_mps as f64,
+        condition_number: r.condition_number as f64,
+        wind_mean_ne_mps: wmean,
+        wind_spread_mps: spread,
+        no_wind_fit: plain.solve().map(|p| {
+            [
+                p.k1_mps2_per_rad as f64,
+                p.k2_per_s as f64,
+                p.r_squared as f64,
+            ]
+        }),
+        suggested: None,
+        no_suggestion: None,
+        window_list: windows,
+    };
+    match judge(&out) {
+        Ok(()) => out.suggested = Some([out.k1_mps2_per_rad, out.k2_per_s]),
+        Err(why) => out.no_suggestion = Some(why),
+    }
+    Ok(out)
+}
+
+/// Whether the fit may be suggested as parameters: every reason it may not, joined by "; ".
+pub fn judge(f: &SysId) -> Result<(), String> {
+    let mut why = Vec::new();
+    let rel = |ci: f64, v: f64| if v > 0.0 { ci / v } else { f64::INFINITY };
+    if f.k1_mps2_per_rad <= 0.0 || f.k2_per_s <= 0.0 {
+        why.push(format!(
+            "k1 = {:.3}, k2 = {:.4} not both positive",
+            f.k1_mps2_per_rad, f.k2_per_s
+        ));
+    }
+    let (r1, r2) = (
+        rel(f.k1_ci95_mps2_per_rad, f.k1_mps2_per_rad),
+        rel(f.k2_ci95_per_s, f.k2_per_s),
+    );
+    if r1 > MAX_REL_CI95 {
+        why.push(format!(
+            "k1's 95 % interval ±{:.0} % > ±{:.0} %",
+            100.0 * r1,
+            100.0 * MAX_REL_CI95
+        ));
+    }
+    if r2 > MAX_REL_CI95 {
+        why.push(format!(
+            "k2's 95 % interval ±{:.0} % > ±{:.0} %",
+            100.0 * r2,
+            100.0 * MAX_REL_CI95
+        ));
+    }
+    if f.r_squared.is_nan() || f.r_squared < MIN_R_SQUARED {
+        why.push(format!(
+            "R² {:.2} < {MIN_R_SQUARED} (the model explains too little)",
+            f.r_squared
+        ));
+    }
+    if f.tilt_std_rad.is_nan() || f.tilt_std_rad < MIN_TILT_STD_RAD {
+        why.push(format!(
+            "tilt σ {:.3} rad < {MIN_TILT_STD_RAD} rad (too little excitation)",
+            f.tilt_std_rad
+        ));
+    }
+    if f.vel_std_mps.is_nan() || f.vel_std_mps < MIN_VEL_STD_MPS {
+        why.push(format!(
+            "velocity σ {:.2} m/s < {MIN_VEL_STD_MPS} m/s (too little excitation)",
+            f.vel_std_mps
+        ));
+    }
+    if f.condition_number.is_nan() || f.condition_number > MAX_CONDITION {
+        why.push(format!(
+            "condition number {:.1} > {MAX_CONDITION} (tilt and velocity collinear)",
+            f.condition_number
+        ));
+    }
+    if why.is_empty() {
+        Ok(())
+    } else {
+        Err(why.join("; "))
+    }
+}
+
+/// The fit on a bag's decoded series ([`samples`], [`WIND_WINDOW_S`]).
+pub fn from_series(s: &Series) -> Result<SysId, String> {
+    let (x, src) = samples(s);
+    fit(&x, src, WIND_WINDOW_S)
+}
+
+impl std::fmt::Display for SysId {
+    fn fmt(&self, w: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            w,
+            "k1/k2 fit (a = k1·tilt − k2·(v − wind), wind per N/E axis constant over {:.0} s windows; {} samples, {} windows, acceleration from {}):",
+            self.window_s, self.samples, self.windows, self.accel_source
+        )?;
+        writeln!(
+            w,
+            "  k1 = {:.3} ± {:.3} m/s²/rad, k2 = {:.4} ± {:.4} 1/s (95 %, widened ×{:.1} for residual lag-1 correlation {:.3}; white-noise ± {:.3}, ± {:.4}); R² (within windows) = {:.3}, residual RMS {:.3} m/s²",
+            self.k1_mps2_per_rad,
+            self.k1_ci95_mps2_per_rad,
+            self.k2_per_s,
+            self.k2_ci95_per_s,
+            self.ci_inflation,
+            self.residual_lag1_corr,
+            self.k1_ci95_white_mps2_per_rad,
+            self.k2_ci95_white_per_s,
+            self.r_squared,
+            self.rms_residual_mps2
+        )?;
+        let (n, e) = (self.wind_mean_ne_mps[0], self.wind_mean_ne_mps[1]);
+        // Direction the wind blows from, degrees clockwise from north.
+        let from_deg = ((-e).atan2(-n).to_degrees() + 360.0) % 360.0;
+        writeln!(
+            w,
+            "  excitation: tilt σ {:.3} rad, velocity σ {:.2} m/s, condition number {:.2}; estimated wind {:.2} m/s from {:.0}° (N {:.2}, E {:.2} m/s; windows spread {:.2} m/s)",
+            self.tilt_std_rad,
+            self.vel_std_mps,
+            self.condition_number,
+            n.hypot(e),
+            from_deg,
+            n,
+            e,
+            self.wind_spread_mps
+        )?;
+        if let Some([k1, k2, r2]) = self.no_wind_fit {
+            writeln!(
+                w,
+                "  without the wind term (paper A's plain fit, biased in wind): k1 = {k1:.3}, k2 = {k2:.4}, R² = {r2:.3}"
+            )?;
+        }
+        match (&self.suggested, &self.no_suggestion) {
+            (Some([k1, k2]), _) => writeln!(
+                w,
+                "  → suggested params: model_k1_mps2_per_rad = {k1:.2}, model_k2_per_s = {k2:.3}"
+            ),
+            (None, Some(why)) => writeln!(w, "  → no suggestion: {why}"),
+            (None, None) => writeln!(w, "  → no suggestion"),
+        }
+    }
+}
