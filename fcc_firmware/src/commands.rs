@@ -30,7 +30,7 @@ pub enum CommandError {
     NotCalibrated,
     /// Arm refused: no GPS home yet.
     NoHome,
-    /// Arm refused: already flying / not on the ground.
+    /// Arm or disarm refused: flying / not confirmed on the ground (land detector).
     NotLanded,
     /// The command needs the vehicle armed.
     Disarmed,

@@ -11,6 +11,7 @@ use crate::control::mixer::{Mixer, MixerSaturation};
 use crate::control::velocity::{CrossTrack, VelocityController};
 use crate::control::vertical::VerticalController;
 use crate::geometry::MOTOR_COUNT;
+use crate::land_detector::{LandDetector, LandInputs, LandState};
 use crate::nav::{NavNotReady, NavState, Navigator};
 use crate::params::{ParamError, Params};
 use crate::pilot::{PilotInput, PilotReceiver};
@@ -19,14 +20,8 @@ use fcc_nav::ground_altitude::GroundSource;
 use fcc_nav::observer::AccelObserver;
 use fcc_nav::GRAVITY_MPS2;
 
-/// Above this height over the take-off point the horizontal loops are active (below, on the
-/// ground, tilting would only scrape the legs).
-const AIRBORNE_ALT_M: f32 = 0.3;
 /// A fused ground height with a larger variance than this is not trusted for landing (m²).
 const GROUND_MAX_VAR_M2: f32 = 0.25;
-/// Above the rangefinders' height when standing on the gear, this margin (m) still counts as
-/// touching the ground: touchdown then does not need the thrust to have wound down as far.
-const CONTACT_MARGIN_M: f32 = 0.1;
 /// Deceleration planned for stopping at the geofence, m/s².
 const FENCE_BRAKE_MPS2: f32 = 1.0;
 /// Closer to the fence than this while being held back by it → reported as a geofence event.
@@ -60,6 +55,8 @@ pub struct StepTelemetry {
     pub torque_nm: [f32; 3],
     pub cross_track_m: f32,
     pub saturation: MixerSaturation,
+    /// The attitude (and horizontal) loops ran this step (not landed).
+    pub attitude_active: bool,
 }
 
 pub struct FlightCore {
@@ -73,8 +70,8 @@ pub struct FlightCore {
     hold_alt_m: f32,
     yaw_hold_rad: f32,
     takeoff_alt_m: f32,
-    landed: bool,
-    touchdown_s: f32,
+    /// On the ground or in the air ([`crate::land_detector`]).
+    land: LandDetector,
     cross_track: CrossTrack,
     vel_ctrl: VelocityController,
     accel_ctrl: [AccelController; 2],
@@ -121,8 +118,7 @@ impl FlightCore {
             hold_alt_m: 0.0,
             yaw_hold_rad: 0.0,
             takeoff_alt_m: 0.0,
-            landed: true,
-            touchdown_s: 0.0,
+            land: LandDetector::new(),
             cross_track: CrossTrack::new(c.cross_track_k_per_s),
             vel_ctrl: VelocityController::new(
                 c.vel_p_per_s,
@@ -272,7 +268,10 @@ impl FlightCore {
         self.mode != Mode::Disarmed
     }
     pub fn landed(&self) -> bool {
-        self.landed
+        self.land.landed()
+    }
+    pub fn land_state(&self) -> LandState {
+        self.land.state()
     }
     pub fn nav(&self) -> &NavState {
         self.nav.state()
@@ -305,7 +304,7 @@ impl FlightCore {
             match cmd {
                 Command::Arm => return Ok(()),
                 // On the ground the Linux side may still disarm.
-                Command::Disarm if self.landed => {}
+                Command::Disarm if self.land.landed() => {}
                 _ => return Err(CommandError::PilotOverride),
             }
         }
@@ -319,7 +318,7 @@ impl FlightCore {
                     Err(NavNotReady::NoGpsHome) => return Err(CommandError::NoHome),
                     Ok(()) => {}
                 }
-                if !self.landed {
+                if !self.land.landed() {
                     return Err(CommandError::NotLanded);
                 }
                 self.reset_controllers();
@@ -330,8 +329,11 @@ impl FlightCore {
                 self.pilot_released = false;
             }
             Command::Disarm => {
+                // Never in the air: cutting the motors there is a free fall.
+                if !self.land.landed() {
+                    return Err(CommandError::NotLanded);
+                }
                 self.mode = Mode::Disarmed;
-                self.landed = true;
                 self.setpoint = None;
             }
             Command::Hold => {
@@ -432,7 +434,6 @@ impl FlightCore {
         self.mode = Mode::Land;
         self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         self.yaw_hold_rad = nav.euler.yaw_rad;
-        self.touchdown_s = 0.0;
         self.cross_track.reset();
     }
 
@@ -443,7 +444,7 @@ impl FlightCore {
             _ => 0.002,
         };
         self.last_step_us = Some(now_us);
-        let still = self.mode == Mode::Disarmed && self.landed;
+        let still = self.mode == Mode::Disarmed && self.land.landed();
         let nav = *self.nav.step(now_us, inputs, still);
         self.telemetry = StepTelemetry {
             t_us: now_us,
@@ -460,9 +461,7 @@ impl FlightCore {
         }
         let (v_cmd_ne, vz_cmd_down, yaw_cmd) = self.guidance(now_us, dt_s, &nav);
         self.control(dt_s, &nav, v_cmd_ne, vz_cmd_down, yaw_cmd);
-        if self.mode == Mode::Land {
-            self.detect_touchdown(dt_s, &nav, vz_cmd_down);
-        }
+        self.detect_touchdown(dt_s, &nav, vz_cmd_down);
         self.motors
     }
 
@@ -505,7 +504,7 @@ impl FlightCore {
             _ => {}
         }
         // GPS lost in flight: the horizontal estimate will drift → land on baro/accel.
-        if nav.home_set && !nav.gps_ok && !self.landed && self.mode != Mode::Land {
+        if nav.home_set && !nav.gps_ok && !self.land.landed() && self.mode != Mode::Land {
             self.enter_land(nav);
             self.failsafe = FailsafeCause::GpsLost;
         }
@@ -634,11 +633,12 @@ impl FlightCore {
         let c = self.params.control;
         let l = self.params.limits;
         let e = nav.euler;
-        let alt_above_takeoff = -nav.pos_ned_m[2] - self.takeoff_alt_m;
-        if self.landed && vz_cmd_down < -0.2 {
-            self.landed = false;
+        if self.land.landed() && vz_cmd_down < -0.2 {
+            self.land.take_off();
         }
-        let airborne = !self.landed && alt_above_takeoff > AIRBORNE_ALT_M;
+        // Every loop flies until the land detector confirms touchdown (never the estimated
+        // altitude alone: it can be off by more than the gear height).
+        let airborne = !self.land.landed();
 
         // Horizontal: cross-track (velocity mode only) → velocity PI → acceleration command.
         let v_ne = [nav.vel_ned_mps[0], nav.vel_ned_mps[1]];
@@ -705,7 +705,7 @@ impl FlightCore {
         } else {
             -nav.vel_ned_mps[2]
         };
-        let thrust_n = if self.landed {
+        let thrust_n = if self.land.landed() {
             self.vert_ctrl.reset();
             0.0
         } else {
@@ -745,7 +745,7 @@ impl FlightCore {
         };
         let _ = yaw_sat;
         let (mut motors, sat) = self.mixer.mix(thrust_n, torque);
-        if self.landed {
+        if self.land.landed() {
             motors = [self.params.airframe.idle_cmd; MOTOR_COUNT];
         }
         self.motors = motors;
@@ -763,6 +763,7 @@ impl FlightCore {
             torque_nm: torque,
             cross_track_m: self.cross_track.error_m(),
             saturation: sat,
+            attitude_active: airborne,
         };
     }
 
@@ -786,29 +787,46 @@ impl FlightCore {
             && g.variance_m2 < GROUND_MAX_VAR_M2
     }
 
+    /// Run the land detector (every armed mode); in LAND, a confirmed touchdown disarms.
     fn detect_touchdown(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) {
-        let hover_n = self.params.airframe.mass_kg * GRAVITY_MPS2;
-        let descending_cmd = vz_cmd_down > 0.0;
-        let near_ground = self.height_above_ground_m(nav)
-            < self.params.airframe.sensor_height_on_ground_m + CONTACT_MARGIN_M;
-        let vz = if near_ground && self.ground_usable(nav) {
+        if self.land.landed() {
+            if self.mode == Mode::Land {
+                self.disarm_landed();
+            }
+            return;
+        }
+        let on_ground_m = self.params.airframe.sensor_height_on_ground_m;
+        let height_m = self.height_above_ground_m(nav);
+        let near_ground = height_m < on_ground_m + crate::land_detector::CONTACT_MARGIN_M;
+        let climb_rate_mps = if near_ground && self.ground_usable(nav) {
             nav.ground_rate_up_mps
         } else {
-            nav.vel_ned_mps[2]
+            -nav.vel_ned_mps[2]
         };
-        let not_moving = fcc_nav::math::fabsf(vz) < 0.25;
-        let low_thrust = self.telemetry.thrust_n < if near_ground { 0.9 } else { 0.8 } * hover_n;
-        if self.landed || (descending_cmd && not_moving && low_thrust) {
-            self.touchdown_s += dt_s;
-        } else {
-            self.touchdown_s = 0.0;
-        }
-        if self.touchdown_s >= self.params.limits.touchdown_s {
-            self.mode = Mode::Disarmed;
-            self.landed = true;
+        let r = nav.rate_frd_radps;
+        let x = LandInputs {
+            thrust_n: self.telemetry.thrust_n,
+            hover_thrust_n: self.params.airframe.mass_kg * GRAVITY_MPS2,
+            climb_rate_mps,
+            height_agl_m: height_m,
+            height_on_ground_m: on_ground_m,
+            rate_norm_radps: fcc_nav::math::sqrtf(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]),
+            descending: vz_cmd_down > 0.0 || self.mode == Mode::Land,
+        };
+        if self.land.update(dt_s, &x, self.params.limits.touchdown_s) == LandState::Landed {
             self.setpoint = None;
-            self.motors = [0.0; MOTOR_COUNT];
+            if self.mode == Mode::Land {
+                self.disarm_landed();
+            } else {
+                self.motors = [self.params.airframe.idle_cmd; MOTOR_COUNT];
+            }
         }
+    }
+
+    fn disarm_landed(&mut self) {
+        self.mode = Mode::Disarmed;
+        self.setpoint = None;
+        self.motors = [0.0; MOTOR_COUNT];
     }
 }
 

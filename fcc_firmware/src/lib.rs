@@ -27,6 +27,7 @@ pub mod commands;
 pub mod control;
 pub mod flight;
 pub mod geometry;
+pub mod land_detector;
 pub mod link;
 pub mod nav;
 pub mod params;

@@ -15,10 +15,13 @@ use fcc_nav::geodesy::{Lla, LocalNed};
 use fcc_nav::ground_altitude::{GroundAltitude, GroundAltitudeFilter, GroundAltitudeParams};
 use fcc_nav::horizontal::HorizontalEstimator;
 use fcc_nav::lowpass::LowPass2;
+use fcc_nav::range_aid::RangeAid;
 use fcc_nav::vertical::{pressure_to_alt_m, VerticalEstimator};
 
 /// Largest accelerometer bias the navigation filters may attribute (m/s²).
 const ACCEL_BIAS_LIMIT_MPS2: f32 = 1.5;
+/// A fused ground height with a larger variance than this does not aid the height, m².
+const AID_MAX_VAR_M2: f32 = 0.05;
 
 /// The navigation solution, NED relative to home, body FRD.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -85,6 +88,10 @@ pub struct Navigator {
     /// Air temperature for the sonar's speed-of-sound correction: the barometer's sensor
     /// temperature (the MS5611 sits in the airflow on the paper's board), °C.
     air_temp_c: f32,
+    /// Range-aided height: the vertical filter's measurement while the ground is in range.
+    range_aid: RangeAid,
+    vert_aided: bool,
+    last_baro_us: Option<u64>,
     state: NavState,
 }
 
@@ -127,6 +134,9 @@ impl Navigator {
             last_gps_vel: None,
             ground: GroundAltitudeFilter::new(GroundAltitudeParams::default()),
             air_temp_c: 15.0,
+            range_aid: RangeAid::new(),
+            vert_aided: false,
+            last_baro_us: None,
             state: NavState::default(),
         }
     }
@@ -225,8 +235,20 @@ impl Navigator {
             }
             let alt = pressure_to_alt_m(b.pressure_pa, self.p0_pa);
             self.state.baro_alt_m = alt;
+            let dt_s = self
+                .last_baro_us
+                .map_or(0.0, |t| b.t_us.saturating_sub(t) as f32 * 1e-6);
+            self.last_baro_us = Some(b.t_us);
             if self.calibrated {
-                self.vert.baro_alt(alt);
+                let z = self.range_aid.measurement(
+                    dt_s,
+                    self.vert.alt_m(),
+                    alt,
+                    self.aid_height_m(),
+                    self.ground.reinit_count(),
+                );
+                self.vert.baro_alt(z);
+                self.set_vert_aided(self.range_aid.aiding());
             }
         }
         if let Some(g) = s.gps {
@@ -295,6 +317,43 @@ impl Navigator {
         self.state.home_set = self.home.is_some();
         self.state.calibrated = self.calibrated;
         &self.state
+    }
+
+    /// Paper B's fused height when it may aid the vertical filter: fused from a rangefinder
+    /// recently, tight, and below `range_aid_max_m`.
+    fn aid_height_m(&self) -> Option<f32> {
+        use fcc_nav::ground_altitude::GroundSource;
+        let g = &self.state.ground;
+        let fused = !matches!(g.source, GroundSource::None | GroundSource::Predicted);
+        (fused
+            && g.variance_m2.is_finite()
+            && g.variance_m2 < AID_MAX_VAR_M2
+            && g.height_m < self.params.range_aid_max_m)
+            .then_some(g.height_m)
+    }
+
+    /// The vertical filter's crossover follows the measurement's quality: the rangefinder's
+    /// centimetres allow a high one (accelerometer errors then matter little), the
+    /// barometer's prop-wash noise a low one.
+    fn set_vert_aided(&mut self, aided: bool) {
+        if aided == self.vert_aided {
+            return;
+        }
+        self.vert_aided = aided;
+        let g = if aided {
+            self.params.vert_aided_gains()
+        } else {
+            self.params.vert_gains()
+        };
+        self.vert.down.set_gains(g);
+        self.vert
+            .down
+            .set_bias_gain(self.params.vert_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+    }
+
+    /// The range aid (its baro offset, terrain reference, innovation).
+    pub fn range_aid(&self) -> &RangeAid {
+        &self.range_aid
     }
 
     fn calibrate(&mut self, now_us: u64, s: &SensorInputs, still: bool) {

@@ -74,6 +74,12 @@ pub struct NavParams {
     /// bias (vibration rectification, drift); 0 = the paper's plain 2nd-order filter.
     pub vert_bias_pole_radps: f32,
     pub horiz_bias_pole_radps: f32,
+    /// Range-aided height (`fcc_nav::range_aid`): paper B's fused height above ground replaces
+    /// the barometer in the vertical filter below this height, m (the MB7076 sonar reaches
+    /// 10.68 m); 0 turns the aid off.
+    pub range_aid_max_m: f32,
+    /// Vertical filter crossover while range-aided (the measurement is then good to cm).
+    pub vert_aided_omega_radps: f32,
 }
 
 impl Default for NavParams {
@@ -97,6 +103,8 @@ impl Default for NavParams {
             mag_offset_frd_ut: [0.0; 3],
             vert_bias_pole_radps: 0.02,
             horiz_bias_pole_radps: 0.05,
+            range_aid_max_m: 8.0,
+            vert_aided_omega_radps: 1.0,
         }
     }
 }
@@ -113,6 +121,9 @@ impl NavParams {
     }
     pub fn vert_gains(&self) -> CfGains {
         CfGains::new(self.vert_omega_radps, self.vert_zeta)
+    }
+    pub fn vert_aided_gains(&self) -> CfGains {
+        CfGains::new(self.vert_aided_omega_radps, self.vert_zeta)
     }
 }
 
@@ -323,6 +334,8 @@ impl Params {
         check("nav.tilt_accel_lpf_hz", n.tilt_accel_lpf_hz, 0.5, 100.0)?;
         check("nav.calibration_s", n.calibration_s, 0.1, 30.0)?;
         check("nav.vert_bias_pole_radps", n.vert_bias_pole_radps, 0.0, 1.0)?;
+        check("nav.range_aid_max_m", n.range_aid_max_m, 0.0, 150.0)?;
+        check("nav.vert_aided_omega_radps", n.vert_aided_omega_radps, 0.01, 5.0)?;
         check(
             "nav.horiz_bias_pole_radps",
             n.horiz_bias_pole_radps,

@@ -9,6 +9,7 @@
 //! | [`attitude`] | roll/pitch/yaw estimation (eqs. 2–4), frame rotations | gyro \[rad/s] FRD, accel \[m/s²] FRD, mag \[µT] FRD | [`Euler`] \[rad], NED linear acceleration \[m/s²] |
 //! | [`horizontal`] | NE position/velocity from GPS + NED accel | accel NE \[m/s²], GPS NE \[m] + delay steps | pos NE \[m], vel NE \[m/s] |
 //! | [`vertical`] | altitude/vertical speed from baro + accel (eqs. 5–6) | accel down \[m/s²], baro altitude \[m] or pressure \[Pa] | altitude up \[m], vel down \[m/s] |
+//! | [`range_aid`] | range-aided height: the rangefinder altitude replaces the baro in the vertical filter while valid, baro offset learnt, terrain steps re-anchored | altitude estimate, baro altitude \[m], height above ground \[m] | altitude measurement \[m] |
 //! | [`observer`] | Luenberger linear-acceleration observer (eqs. 10–14) | tilt, tilt command \[rad], measured accel \[m/s²] | filtered accel \[m/s²] |
 //! | [`geodesy`] | WGS-84 LLA ↔ ECEF ↔ local NED (`f64`) | lat/lon \[deg], alt \[m] | ECEF \[m], NED \[m] |
 //! | [`math`] | the `f32` elementary functions every module uses (no `f64` on the single-precision FPU) | | |
@@ -43,6 +44,7 @@ pub mod horizontal;
 pub mod lowpass;
 pub mod math;
 pub mod observer;
+pub mod range_aid;
 pub mod sysid;
 pub mod vertical;
 

@@ -70,8 +70,14 @@ pub struct FlightLog {
     pub events: Vec<(f64, String)>,
     /// Every rangefinder reading, at its own rate.
     pub ranges: Vec<RangeRecord>,
-    /// The scenario's flight plan kind: "hover", "mission", "elevator" or "rig".
+    /// The scenario's flight plan kind: "hover", "mission", "velocity", "elevator" or "rig".
     pub plan_kind: &'static str,
+    /// Every ground contact after flight, with its speeds, tilt and outcome (truth).
+    pub contacts: Vec<super::truth::Contact>,
+    /// Truth counters accumulated every tick.
+    pub truth: super::truth::TruthCounters,
+    /// The height the plan commands (hover: its `alt_m` above take-off), m.
+    pub commanded_alt_m: Option<f64>,
 }
 
 /// Write the log as CSV (one row per 50 Hz sample) for plotting elsewhere.

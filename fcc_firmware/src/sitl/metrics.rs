@@ -361,6 +361,9 @@ pub fn summary(log: &FlightLog) -> String {
         )
         .ok();
     }
+    if log.plan_kind != "elevator" && log.plan_kind != "rig" {
+        writeln!(out, "{}", super::truth::report(log)).ok();
+    }
     for (t, e) in &log.events {
         writeln!(out, "  t={t:7.2} s  {e}").ok();
     }

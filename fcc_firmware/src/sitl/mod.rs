@@ -20,4 +20,5 @@ pub mod scenario;
 pub mod sensor_models;
 pub mod sim;
 pub mod terrain;
+pub mod truth;
 pub mod wind;

@@ -13,6 +13,7 @@ use super::scenario::{Fault, FlightPlan, Scenario};
 use super::sensor_models::{BaroModel, BatteryModel, GpsModel, ImuModel, MagModel};
 use super::terrain::Terrain;
 use super::wind::Wind;
+use crate::commands::Mode;
 use crate::flight::FlightCore;
 use crate::geometry::MOTOR_COUNT;
 use crate::scheduler::{self, TICK_US};
@@ -129,6 +130,12 @@ pub struct Sim {
     /// The board's UART served on a pty (`--link-pty`): the Linux side is then a real process
     /// (bridge + mission node) and the in-process stand-in is off.
     link: Option<(crate::link::LinkEndpoint, super::pty::PtyLink)>,
+    /// The gear has been truly airborne since the last ground contact.
+    airborne_since_contact: bool,
+    /// A crash or tip-over ended the flight (truth).
+    crashed: bool,
+    /// The simulator's own events (crashes), merged into the log's at [`Self::finish`].
+    sim_events: Vec<(f64, String)>,
 }
 
 impl Sim {
@@ -214,6 +221,14 @@ impl Sim {
             t_us: 0,
             ticks: 0,
             log: FlightLog {
+                truth: super::truth::TruthCounters {
+                    start_down_m: start_down,
+                    ..Default::default()
+                },
+                commanded_alt_m: match &scenario.flight {
+                    FlightPlan::Hover { alt_m, .. } => Some(*alt_m as f64),
+                    _ => None,
+                },
                 plan_kind: match &scenario.flight {
                     FlightPlan::Hover { .. } => "hover",
                     FlightPlan::Mission { .. } => "mission",
@@ -224,6 +239,9 @@ impl Sim {
             },
             core_wall_ns: 0,
             link: None,
+            airborne_since_contact: false,
+            crashed: false,
+            sim_events: Vec::new(),
             scenario,
         })
     }
@@ -255,7 +273,71 @@ impl Sim {
     /// Whether the run is over (duration reached, or the plan finished and the vehicle is
     /// disarmed on the ground).
     pub fn finished(&self) -> bool {
-        self.t_s() >= self.scenario.duration_s || (self.link.is_none() && self.linux.done())
+        self.crashed
+            || self.t_s() >= self.scenario.duration_s
+            || (self.link.is_none() && self.linux.done())
+    }
+
+    /// A crash or tip-over ended the run.
+    pub fn crashed(&self) -> bool {
+        self.crashed
+    }
+
+    /// One physics substep, watching the gear: the first contact after true flight is scored
+    /// ([`super::truth::classify_contact`]).
+    fn physics_substep(&mut self, ground_down: f64, sub: f64) {
+        let was_on_ground = self.body.on_ground();
+        let v = self.body.state.vel_ned_mps;
+        let q = self.body.state.q_body_to_ned;
+        self.body.step(&self.motors.0, self.wind_ned, ground_down, sub);
+        let clearance = ground_down - self.body.state.pos_ned_m.z;
+        if clearance > super::truth::AIRBORNE_CLEARANCE_M {
+            self.airborne_since_contact = true;
+        }
+        if was_on_ground || !self.body.on_ground() || !self.airborne_since_contact {
+            return;
+        }
+        self.airborne_since_contact = false;
+        let z_body = q.transform_vector(&Vector3::z());
+        let tilt_deg = z_body.z.clamp(-1.0, 1.0).acos().to_degrees();
+        let mode = self.core.mode();
+        let (vz, vh) = (v.z, v.x.hypot(v.y));
+        let outcome = super::truth::classify_contact(vz, vh, tilt_deg, self.body.params.gear_height_m);
+        let t_s = self.t_s();
+        self.log.contacts.push(super::truth::Contact {
+            t_s,
+            vz_down_mps: vz,
+            v_horiz_mps: vh,
+            tilt_deg,
+            mode,
+            planned: matches!(mode, Mode::Land | Mode::Pilot),
+            outcome,
+        });
+        if outcome != super::truth::ContactOutcome::Landed {
+            self.crashed = true;
+            self.sim_events.push((
+                t_s,
+                format!("{outcome:?}: touchdown at {vz:.2} m/s down, {vh:.2} m/s horizontal, tilt {tilt_deg:.1}° — run ended"),
+            ));
+        }
+    }
+
+    /// Truth counters of one tick.
+    fn count_truth(&mut self) {
+        let st = &self.body.state;
+        let p = st.pos_ned_m;
+        let ground = self.board.terrain.ground_down_at(p.x, p.y) - self.body.params.gear_height_m;
+        if ground - p.z <= super::truth::AIRBORNE_CLEARANCE_M || self.carried.is_some() {
+            return;
+        }
+        let c = &mut self.log.truth;
+        let dt = TICK_US as f64 * 1e-6;
+        if self.core.armed() && !self.core.telemetry().attitude_active {
+            c.attitude_off_airborne_s += dt;
+        }
+        let tilt = st.q_body_to_ned.transform_vector(&Vector3::z()).z.clamp(-1.0, 1.0).acos();
+        c.max_tilt_deg = c.max_tilt_deg.max(tilt.to_degrees());
+        c.max_speed_mps = c.max_speed_mps.max(st.vel_ned_mps.x.hypot(st.vel_ned_mps.y));
     }
 
     fn apply_faults(&mut self) -> bool {
@@ -315,8 +397,7 @@ impl Sim {
             let ground_down =
                 self.board.terrain.ground_down_at(p.x, p.y) - self.body.params.gear_height_m;
             for _ in 0..PHYSICS_SUBSTEPS {
-                self.body
-                    .step(&self.motors.0, self.wind_ned, ground_down, sub);
+                self.physics_substep(ground_down, sub);
             }
             self.board.truth.specific_force_frd_mps2 = self.body.specific_force_frd_mps2();
             self.board.truth.accel_ned_mps2 = (self.body.state.vel_ned_mps - prev_vel) / dt;
@@ -365,6 +446,7 @@ impl Sim {
             scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
         }
         self.core_wall_ns += t0.elapsed().as_nanos();
+        self.count_truth();
         let p = self.body.state.pos_ned_m;
         let agl = self.board.terrain.ground_down_at(p.x, p.y) - p.z;
         for (laser, r) in self.board.polled_ranges.drain(..) {
@@ -425,7 +507,10 @@ impl Sim {
 
     /// Close the log (events of the in-process mission computer) after a run driven by hand.
     pub fn finish(&mut self) -> &FlightLog {
-        self.log.events = self.linux.events().to_vec();
+        let mut events = self.linux.events().to_vec();
+        events.extend(self.sim_events.iter().cloned());
+        events.sort_by(|a, b| a.0.total_cmp(&b.0));
+        self.log.events = events;
         &self.log
     }
 }
