@@ -18,6 +18,7 @@ pub mod frames;
 pub mod mcu_params;
 pub mod params;
 pub mod record;
+pub mod recover;
 pub mod report;
 pub mod ros_api;
 pub mod ros_node;

@@ -12,6 +12,10 @@
 //! loss after the kernel wrote its cache) therefore loses at most the open chunk: ≤ 0.5 s plus
 //! the queue, measured 0.3–0.5 s. A SIGINT/SIGTERM finishes the file (summary, footer). Chunks
 //! follow the wall clock (crash safety is about real time); file splits follow log time.
+//! Chunks are built in memory and written whole (`disable_seeking`), so a killed recording
+//! ends at a record boundary: no half chunk with the placeholder length 2^64−1 that makes
+//! readers reject the file. It still has no summary: `fcc-bag-recover` ([`crate::recover`])
+//! rewrites it into a complete MCAP that every reader opens.
 //!
 //! **Files**: the first file is `PATH`; a split (`record_split_s`, `record_split_mb`) or a new
 //! arm period (`record_on_arm`) opens `STEM_1.mcap`, `STEM_2.mcap`, … beside it.
@@ -525,6 +529,9 @@ pub fn write_options(zstd: bool, chunk_bytes: u64) -> mcap::WriteOptions {
         })
         .compression_level(1)
         .chunk_size(Some(chunk_bytes))
+        // Build each chunk in memory and write it whole when it is closed: the file never
+        // holds a chunk header with the placeholder length (see the module doc).
+        .disable_seeking(true)
 }
 
 /// One open MCAP file with its channel mapping.
