@@ -57,15 +57,21 @@ fn main() -> ExitCode {
     if r.input_complete {
         println!("the input was complete (data end found): nothing lost");
     } else {
-        println!(
-            "dropped the last {} of {} B (no complete record: the chunk open at the kill){}",
-            r.torn_bytes,
-            r.input_bytes,
-            r.stopped
-                .as_deref()
-                .map(|s| format!("; reading stopped at: {s}"))
-                .unwrap_or_default()
-        );
+        if r.torn_bytes > 0 {
+            println!(
+                "dropped the last {} of {} B (no complete record: the chunk open at the kill){}",
+                r.torn_bytes,
+                r.input_bytes,
+                r.stopped
+                    .as_deref()
+                    .map(|s| format!("; reading stopped at: {s}"))
+                    .unwrap_or_default()
+            );
+        } else {
+            println!(
+                "the input ends at a record boundary without data end, summary or footer (the recorder was killed between chunks)"
+            );
+        }
         match (cli.killed_at_ns, r.last_log_ns) {
             (Some(k), Some(last)) => println!(
                 "lost before the kill: {:.3} s (killed at {:.3}, last message kept at {:.3} log time)",
