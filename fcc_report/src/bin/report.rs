@@ -390,7 +390,8 @@ fn main() -> anyhow::Result<()> {
     // wind intercept, along the flight.
     if let Some(x) = &f.sysid {
         let (k1, k2) = (x.k1_mps2_per_rad, x.k2_per_s);
-        let (samples, _) = fcc_report::sysid::samples(&s);
+        let samples =
+            fcc_report::sysid::samples(&s, fcc_report::sysid::AccelSource::OdomDifferenced);
         let mut meas = Vec::new();
         let mut model = Vec::new();
         let mut wi = 0;
