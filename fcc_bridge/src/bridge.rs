@@ -1,5 +1,6 @@
 //! Serial IO and DDS: the only place with tokio, tokio-serial and ros2-client.
 
+use crate::bounded;
 use crate::convert::{self, Config, SetpointLimits};
 use crate::diag::{self, RateMeter};
 use crate::mcu_params::{self, MCU_PARAMS};
@@ -238,10 +239,27 @@ enum Inbound {
     Clock(Clock),
 }
 
+impl Inbound {
+    /// Cut over-long strings (the setpoint's `frame_id`, the mode text) to their limits before
+    /// the message is queued, recorded or used; which one was too long, if any.
+    fn bound(&mut self) -> Option<bounded::Oversize> {
+        let (s, field, max) = match self {
+            Inbound::Setpoint(t) => (&mut t.header.frame_id, "frame_id", bounded::MAX_FRAME_ID),
+            Inbound::Mode(m) => (&mut m.data, "cmd/mode text", bounded::MAX_MODE),
+            // No strings in std_msgs/Bool and rosgraph_msgs/Clock.
+            Inbound::Arm(_) | Inbound::Clock(_) => return None,
+        };
+        bounded::cap_string(s, max).map(|len| bounded::Oversize { field, len, max })
+    }
+}
+
+/// A message from a subscription, with the string that was cut on arrival (if any).
+type InboundMsg = (Inbound, Option<bounded::Oversize>);
+
 fn subscribe<T: RosMsg + Sync>(
     node: &mut Node,
     name: &str,
-    tx: mpsc::Sender<Inbound>,
+    tx: mpsc::Sender<InboundMsg>,
     wrap: fn(T) -> Inbound,
 ) -> Result<(), BridgeError> {
     // Best-effort reader: matches both reliable (`ros2 topic pub`) and best-effort writers.
@@ -256,14 +274,20 @@ fn subscribe<T: RosMsg + Sync>(
     tokio::spawn(async move {
         let stream = sub.async_stream();
         tokio::pin!(stream);
+        let mut warn = bounded::WarnLimiter::default();
         while let Some(r) = stream.next().await {
             match r {
                 Ok((m, _info)) => {
-                    if tx.send(wrap(m)).await.is_err() {
+                    let mut m = wrap(m);
+                    let over = m.bound();
+                    if tx.send((m, over)).await.is_err() {
                         break;
                     }
                 }
-                Err(e) => tracing::warn!("{name}: read error {e:?}"),
+                Err(e) => {
+                    let e = bounded::log_value(&format!("{e:?}"), 4 * bounded::LOG_CHARS);
+                    crate::warn_limited!(warn, "read_error", now_ns(), "{name}: read error {e}");
+                }
             }
         }
     });
@@ -505,7 +529,7 @@ struct Dds {
     _ctx: Context,
     node: Node,
     pubs: Publishers,
-    rx: mpsc::Receiver<Inbound>,
+    rx: mpsc::Receiver<InboundMsg>,
     lrx: mpsc::Receiver<LinkRequest>,
     shared: Arc<ParamShared>,
 }
@@ -647,7 +671,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     step.set("creating the publishers");
     let pubs = Publishers::new(&mut node, opts)?;
     step.set("creating the subscriptions");
-    let (tx, rx) = mpsc::channel::<Inbound>(64);
+    let (tx, rx) = mpsc::channel::<InboundMsg>(64);
     subscribe::<TwistStamped>(
         &mut node,
         &opts.name("setpoint/velocity"),
@@ -784,13 +808,13 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
 }
 
 /// While disconnected: refuse (and count) what arrives.
-fn drain_inbound(rx: &mut mpsc::Receiver<Inbound>, st: &mut LinkState, tap: &Tap) {
+fn drain_inbound(rx: &mut mpsc::Receiver<InboundMsg>, st: &mut LinkState, tap: &Tap) {
     while let Ok(m) = rx.try_recv() {
         handle_inbound(m, st, tap);
     }
 }
 
-fn handle_inbound(m: Inbound, st: &mut LinkState, tap: &Tap) -> Option<link::Message> {
+fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Option<link::Message> {
     let t = rec_time(st);
     let q = QosInfo::BEST_EFFORT;
     match &m {
@@ -798,6 +822,18 @@ fn handle_inbound(m: Inbound, st: &mut LinkState, tap: &Tap) -> Option<link::Mes
         Inbound::Arm(x) => tap.received("cmd/arm", q, x, t),
         Inbound::Mode(x) => tap.received("cmd/mode", q, x, t),
         Inbound::Clock(_) => {}
+    }
+    // A string that arrived too long (cut on arrival, recorded cut): refused, counted.
+    match (&m, over) {
+        (Inbound::Setpoint(_), Some(o)) => {
+            st.refuse_setpoint(convert::SetpointReject::Oversize(o), now_ns());
+            return None;
+        }
+        (Inbound::Mode(_), Some(o)) => {
+            st.refuse_oversize_mode(o, now_ns());
+            return None;
+        }
+        _ => {}
     }
     match m {
         Inbound::Setpoint(t) => st.on_setpoint(&t, now_ns()),
@@ -835,7 +871,7 @@ async fn session(
     opts: &Options,
     st: &mut LinkState,
     pubs: &Publishers,
-    rx: &mut mpsc::Receiver<Inbound>,
+    rx: &mut mpsc::Receiver<InboundMsg>,
     ros: &mut RosSide<'_>,
     rates: &mut RateMeter,
     tap: &Tap,

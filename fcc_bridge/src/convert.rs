@@ -2,6 +2,7 @@
 //! messages (with validation). No IO, no clock: stamps and the latest state are arguments.
 //! Frame maths comes from [`crate::frames`].
 
+use crate::bounded;
 use crate::frames::{self, f64x3, frd_to_flu, ned_to_enu};
 use crate::ros_types::*;
 use fcc_msgs as link;
@@ -469,6 +470,9 @@ impl Default for SetpointLimits {
 pub enum SetpointReject {
     NotFinite,
     TooLarge(f64),
+    /// `header.frame_id` over [`bounded::MAX_FRAME_ID`] bytes.
+    Oversize(bounded::Oversize),
+    /// An unknown frame (the name as received, at most [`bounded::MAX_FRAME_ID`] bytes).
     UnknownFrame(String),
     /// `base_link` setpoint but no navigation state yet (heading unknown).
     NoHeading,
@@ -480,14 +484,31 @@ pub enum SetpointReject {
     },
 }
 
+impl SetpointReject {
+    /// The kind of refusal (for rate-limiting its warnings).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            SetpointReject::NotFinite => "setpoint_not_finite",
+            SetpointReject::TooLarge(_) => "setpoint_too_large",
+            SetpointReject::Oversize(_) => "setpoint_oversize",
+            SetpointReject::UnknownFrame(_) => "setpoint_unknown_frame",
+            SetpointReject::NoHeading => "setpoint_no_heading",
+            SetpointReject::Stale { .. } => "setpoint_stale",
+            SetpointReject::Future { .. } => "setpoint_future",
+        }
+    }
+}
+
 impl std::fmt::Display for SetpointReject {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             SetpointReject::NotFinite => write!(f, "non-finite value"),
             SetpointReject::TooLarge(v) => write!(f, "speed {v:.1} m/s over the limit"),
+            SetpointReject::Oversize(o) => write!(f, "{o}"),
             SetpointReject::UnknownFrame(s) => write!(
                 f,
-                "unknown frame_id '{s}' (use map, odom, empty = ENU, or base_link = FLU)"
+                "unknown frame_id '{}' (use map, odom, empty = ENU, or base_link = FLU)",
+                bounded::log_value(s, bounded::LOG_CHARS)
             ),
             SetpointReject::NoHeading => {
                 write!(f, "base_link setpoint before any navigation state")
@@ -514,6 +535,14 @@ pub fn setpoint(
     cfg: &Config,
     lim: &SetpointLimits,
 ) -> Result<(link::VelocitySetpoint, bool), SetpointReject> {
+    let id_len = m.header.frame_id.len();
+    if id_len > bounded::MAX_FRAME_ID {
+        return Err(SetpointReject::Oversize(bounded::Oversize {
+            field: "frame_id",
+            len: id_len,
+            max: bounded::MAX_FRAME_ID,
+        }));
+    }
     let lin = m.twist.linear.to_array();
     let ang = m.twist.angular.to_array();
     if lin.iter().chain(ang.iter()).any(|v| !v.is_finite()) {
@@ -566,8 +595,12 @@ pub fn arm_command(m: &Bool) -> link::Command {
     }
 }
 
-/// `cmd/mode`: `hold`, `land`, `velocity` (also `arm`/`disarm`), case-insensitive.
+/// `cmd/mode`: `hold`, `land`, `velocity` (also `arm`/`disarm`), case-insensitive; a text over
+/// [`bounded::MAX_MODE`] bytes is no mode.
 pub fn mode_command(m: &StringMsg) -> Option<link::Command> {
+    if m.data.len() > bounded::MAX_MODE {
+        return None;
+    }
     let c = match m.data.trim().to_ascii_lowercase().as_str() {
         "hold" | "loiter" | "position" => link::CommandKind::Hold,
         "land" => link::CommandKind::Land,

@@ -10,6 +10,7 @@
 //! IO and DDS), [`record`] (the MCAP flight recorder), [`fake_mcu`] (a scripted MCU on a pty,
 //! for tests).
 
+pub mod bounded;
 pub mod bridge;
 pub mod convert;
 pub mod diag;

@@ -2,6 +2,7 @@
 //! ROS setpoints/commands in → link messages out, plus every counter. The IO layer
 //! ([`crate::bridge`]) only moves bytes and publishes what this returns.
 
+use crate::bounded;
 use crate::convert::{self, Config, SetpointLimits};
 use crate::ros_types::*;
 use crate::timesync::TimeSync;
@@ -142,6 +143,8 @@ pub struct LinkState {
     /// session: a rebooted MCU counts from 0 again), taken out of [`LinkState::link_totals`],
     /// and the resets counted for them instead.
     seq_forgiven: [u32; 3],
+    /// Rate limit of the warnings about input (per kind, 1 s).
+    pub warn: bounded::WarnLimiter,
 }
 
 fn seq_counters(c: &link::LinkCounters) -> [u32; 3] {
@@ -168,6 +171,7 @@ impl LinkState {
             sensors: Default::default(),
             seq_before: [0; 3],
             seq_forgiven: [0; 3],
+            warn: bounded::WarnLimiter::default(),
         }
     }
 
@@ -301,7 +305,10 @@ impl LinkState {
                 let key = format!("{:?}:{}", a.command, convert::reject_name(a.result));
                 *self.counters.command_acks.entry(key).or_default() += 1;
                 if a.result != link::CommandResult::Accepted {
-                    tracing::warn!(
+                    crate::warn_limited!(
+                        self.warn,
+                        "mcu_refused",
+                        now_ns,
                         "MCU refused {:?}: {}",
                         a.command,
                         convert::reject_name(a.result)
@@ -393,12 +400,18 @@ impl LinkState {
         s
     }
 
-    /// A velocity setpoint from ROS: the link message to send, or `None` (refused, counted).
+    /// A velocity setpoint from ROS: the link message to send, or `None` (refused, counted;
+    /// the warning is rate-limited per kind of refusal).
     pub fn on_setpoint(&mut self, m: &TwistStamped, now_ns: i64) -> Option<link::Message> {
         if self.handshake == Handshake::Waiting {
             self.counters.setpoint_rejects += 1;
             self.counters.last_setpoint_reject = "link not connected".into();
-            tracing::warn!("setpoint refused: link not connected");
+            crate::warn_limited!(
+                self.warn,
+                "setpoint_not_connected",
+                now_ns,
+                "setpoint refused: link not connected"
+            );
             return None;
         }
         let now = self.ros_now_ns(now_ns);
@@ -414,30 +427,59 @@ impl LinkState {
                 Some(link::Message::VelocitySetpoint(sp))
             }
             Err(e) => {
-                self.counters.setpoint_rejects += 1;
-                self.counters.last_setpoint_reject = e.to_string();
-                tracing::warn!("setpoint refused: {e}");
+                self.refuse_setpoint(e, now_ns);
                 None
             }
         }
     }
 
-    /// A command from ROS.
+    /// Count a refused setpoint and warn (rate-limited per kind; the text is bounded: see
+    /// [`crate::bounded`]).
+    pub fn refuse_setpoint(&mut self, e: convert::SetpointReject, now_ns: i64) {
+        self.counters.setpoint_rejects += 1;
+        self.counters.last_setpoint_reject = e.to_string();
+        crate::warn_limited!(self.warn, e.kind(), now_ns, "setpoint refused: {e}");
+    }
+
+    /// A `cmd/mode` text over [`bounded::MAX_MODE`] bytes: refused, counted, warned (bounded).
+    pub fn refuse_oversize_mode(&mut self, o: bounded::Oversize, now_ns: i64) {
+        self.counters.command_rejects += 1;
+        crate::warn_limited!(self.warn, "mode_oversize", now_ns, "cmd/mode refused: {o}");
+    }
+
+    /// A command from ROS (`what`: the text it came from, shown escaped and cut). Logs are
+    /// rate-limited per kind.
     pub fn on_command(&mut self, c: Option<link::Command>, what: &str) -> Option<link::Message> {
+        let now = crate::now_ns();
+        let what = || bounded::log_value(what, bounded::LOG_CHARS);
         match c {
             Some(c) if self.handshake != Handshake::Waiting => {
                 self.counters.commands_forwarded += 1;
-                tracing::info!("command {:?}", c.command);
+                if let Some(n) = self.warn.check("command", now) {
+                    tracing::info!("command {:?}{}", c.command, bounded::suppressed_note(n));
+                }
                 Some(link::Message::Command(c))
             }
             Some(_) => {
                 self.counters.command_rejects += 1;
-                tracing::warn!("command '{what}' refused: link not connected");
+                crate::warn_limited!(
+                    self.warn,
+                    "command_not_connected",
+                    now,
+                    "command '{}' refused: link not connected",
+                    what()
+                );
                 None
             }
             None => {
                 self.counters.command_rejects += 1;
-                tracing::warn!("unknown mode '{what}' (hold, land, velocity)");
+                crate::warn_limited!(
+                    self.warn,
+                    "unknown_mode",
+                    now,
+                    "unknown mode '{}' (hold, land, velocity)",
+                    what()
+                );
                 None
             }
         }

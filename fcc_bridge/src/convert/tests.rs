@@ -437,3 +437,65 @@ fn state_new_mcu_session_is_not_loss() {
         "{t3:?}"
     );
 }
+
+/// Hostile setpoints: a 1 MB frame_id is refused with its size, never echoed whole; control
+/// characters in an unknown frame are escaped; a NaN flood is counted in full while its warning
+/// goes out once per second with the number suppressed.
+#[test]
+fn state_bounded_refusals_and_rate_limited_warnings() {
+    use crate::bounded::{LOG_CHARS, MAX_FRAME_ID};
+    use crate::state::{ClockSource, Handshake, LinkState};
+    let mut s = LinkState::new(cfg(), SetpointLimits::default(), ClockSource::Sync);
+    s.handshake = Handshake::Ok {
+        firmware: [0, 1, 0],
+    };
+    let sp = |frame: &str, vx: f64| TwistStamped {
+        header: Header {
+            stamp: Time::default(),
+            frame_id: frame.into(),
+        },
+        twist: Twist {
+            linear: Vector3 {
+                x: vx,
+                y: 0.0,
+                z: 0.0,
+            },
+            angular: Vector3::default(),
+        },
+    };
+    let t0 = 1_000_000_000_000i64;
+    assert!(s.on_setpoint(&sp("map", 1.0), t0).is_some());
+    // 1 MB frame_id: refused by size (also without the arrival cut), the reason stays small.
+    let big = "A".repeat(1 << 20);
+    assert!(s.on_setpoint(&sp(&big, 1.0), t0).is_none());
+    assert_eq!(
+        s.counters.last_setpoint_reject,
+        format!("frame_id too long (1048576 B > {MAX_FRAME_ID} B)")
+    );
+    // Unknown frame with terminal escapes and a newline: shown escaped and cut.
+    let evil = format!("x\n\x1b[2J{}", "z".repeat(200));
+    assert!(s.on_setpoint(&sp(&evil, 1.0), t0).is_none());
+    let r = &s.counters.last_setpoint_reject;
+    assert!(!r.contains(['\n', '\x1b']), "{r:?}");
+    assert!(r.contains("x\\n\\u{1b}[2J"), "{r}");
+    assert!(r.len() < 2 * LOG_CHARS + 100, "{} B: {r}", r.len());
+    // NaN flood: 1000 setpoints over 2 s (every 2 ms).
+    let before = s.counters.setpoint_rejects;
+    for i in 0..1000 {
+        assert!(s
+            .on_setpoint(&sp("map", f64::NAN), t0 + i * 2_000_000)
+            .is_none());
+    }
+    assert_eq!(s.counters.setpoint_rejects - before, 1000);
+    // Logged at t0, t0 + 1 s; the 499 after the second one are waiting to be reported.
+    assert_eq!(s.warn.pending("setpoint_not_finite"), 499);
+    assert_eq!(
+        s.warn.check("setpoint_not_finite", t0 + 3_000_000_000),
+        Some(499)
+    );
+    // A long or odd mode text is no mode.
+    let m = |t: &str| mode_command(&StringMsg { data: t.into() });
+    assert!(m(&"hold ".repeat(1000)).is_none());
+    assert!(s.on_command(None, "\u{1b}]0;pwned\u{7}").is_none());
+    assert_eq!(s.counters.command_rejects, 1);
+}
