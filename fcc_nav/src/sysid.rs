@@ -23,6 +23,15 @@
 //!   gives their covariance is the inverse of the centred normal matrix. So only per-window
 //!   and pooled centred sums are kept: heap-free and O(1) per sample.
 //!
+//! * [`WindIvFit`]: the same model and windows, estimated with instrumental variables. In
+//!   closed loop the controller tilts against every gust, so the tilt is correlated with the
+//!   part of the wind a window's constant does not hold (`k2·(w(t) − w_m)`, which stays in
+//!   the residual), and least squares reads "tilt without acceleration" again: k1 and k2 come
+//!   out low by the gusts' share. Instruments `z` that move tilt and velocity but not the
+//!   wind — the velocity setpoints of the mission, now and delayed — give
+//!   `[k1, −k2] = (ZᵀX)⁻¹·Zᵀa` (X = [θ, v], all centred per window and axis), consistent
+//!   because `E[z·(residual)] = 0`, with covariance `σ²·(ZᵀX)⁻¹·ZᵀZ·(XᵀZ)⁻¹`.
+//!
 //! Sums are kept in `f64` (host tools and tests; the flight core does not link this module).
 
 use libm::sqrt;
@@ -252,6 +261,11 @@ pub struct WindFitResult {
     /// of tilt and velocity): `(1 + |r|)/(1 − |r|)`; independent of units, 1 = orthogonal,
     /// large = tilt and velocity move together and k1, k2 trade off.
     pub condition_number: f32,
+    /// [`WindIvFit`] only (NaN for least squares): the smaller singular value of the
+    /// correlation matrix between the instruments and (tilt, velocity), within windows. 1 =
+    /// the instruments span the regressors, → 0 = weak instruments (the estimate is then
+    /// biased towards least squares and its interval unreliable).
+    pub instrument_strength: f32,
 }
 
 impl WindFitResult {
@@ -380,6 +394,218 @@ impl WindPlaneFit {
             accel_std_mps2: sqrt(w.s_aa / n) as f32,
             tilt_vel_corr: r as f32,
             condition_number: ((1.0 + r.abs()) / (1.0 - r.abs()).max(1e-12)) as f32,
+            instrument_strength: f32::NAN,
+        })
+    }
+}
+
+/// Sums of one axis's samples for [`WindIvFit`]: instruments `z` (2), regressors `x` =
+/// (tilt, velocity), acceleration `a`.
+#[derive(Clone, Copy, Debug, Default)]
+struct IvMoments {
+    n: u32,
+    s_z: [f64; 2],
+    s_x: [f64; 2],
+    s_a: f64,
+    /// Σ z_p·z_q, Σ z_p·x_q, Σ x_p·x_q, Σ z_p·a, Σ x_p·a, Σ a².
+    zz: [[f64; 2]; 2],
+    zx: [[f64; 2]; 2],
+    xx: [[f64; 2]; 2],
+    za: [f64; 2],
+    xa: [f64; 2],
+    aa: f64,
+}
+
+impl IvMoments {
+    fn add(&mut self, z: [f64; 2], x: [f64; 2], a: f64) {
+        self.n = self.n.saturating_add(1);
+        for p in 0..2 {
+            self.s_z[p] += z[p];
+            self.s_x[p] += x[p];
+            self.za[p] += z[p] * a;
+            self.xa[p] += x[p] * a;
+            for q in 0..2 {
+                self.zz[p][q] += z[p] * z[q];
+                self.zx[p][q] += z[p] * x[q];
+                self.xx[p][q] += x[p] * x[q];
+            }
+        }
+        self.s_a += a;
+        self.aa += a * a;
+    }
+
+    /// Adds `o`'s products centred on `o`'s means.
+    fn add_centred(&mut self, o: &IvMoments) {
+        if o.n == 0 {
+            return;
+        }
+        let n = o.n as f64;
+        self.n = self.n.saturating_add(o.n);
+        for p in 0..2 {
+            self.za[p] += o.za[p] - o.s_z[p] * o.s_a / n;
+            self.xa[p] += o.xa[p] - o.s_x[p] * o.s_a / n;
+            for q in 0..2 {
+                self.zz[p][q] += o.zz[p][q] - o.s_z[p] * o.s_z[q] / n;
+                self.zx[p][q] += o.zx[p][q] - o.s_z[p] * o.s_x[q] / n;
+                self.xx[p][q] += o.xx[p][q] - o.s_x[p] * o.s_x[q] / n;
+            }
+        }
+        self.aa += o.aa - o.s_a * o.s_a / n;
+    }
+}
+
+/// 2×2 inverse; `None` when singular.
+fn inv2(m: [[f64; 2]; 2]) -> Option<[[f64; 2]; 2]> {
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let scale = libm::fabs(m[0][0] * m[1][1]) + libm::fabs(m[0][1] * m[1][0]);
+    if !det.is_finite() || scale <= 0.0 || libm::fabs(det) <= 1e-9 * scale {
+        return None;
+    }
+    Some([
+        [m[1][1] / det, -m[0][1] / det],
+        [-m[1][0] / det, m[0][0] / det],
+    ])
+}
+
+fn mul2(a: [[f64; 2]; 2], b: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
+    let mut c = [[0.0; 2]; 2];
+    for i in 0..2 {
+        for j in 0..2 {
+            c[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j];
+        }
+    }
+    c
+}
+
+fn transpose2(a: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
+    [[a[0][0], a[1][0]], [a[0][1], a[1][1]]]
+}
+
+/// Streaming instrumental-variable fit of `a = k1·θ − k2·v + c` per N/E axis, `c` constant
+/// within windows closed with [`WindIvFit::end_window`], with two instruments per axis (see
+/// the module doc). Heap-free.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WindIvFit {
+    win: [IvMoments; 2],
+    within: IvMoments,
+    intercepts: u32,
+    windows: u32,
+}
+
+impl WindIvFit {
+    /// Empty fit.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Add one sample: instruments per axis `[[z1_n, z2_n], [z1_e, z2_e]]` (e.g. velocity
+    /// setpoints \[m/s]), tilt N, E \[rad], ground velocity N, E \[m/s], acceleration N, E
+    /// \[m/s²]. Non-finite samples are skipped.
+    pub fn add(
+        &mut self,
+        instr_ne: [[f32; 2]; 2],
+        tilt_ne_rad: [f32; 2],
+        vel_ne_mps: [f32; 2],
+        accel_ne_mps2: [f32; 2],
+    ) {
+        let ok = instr_ne
+            .iter()
+            .flatten()
+            .chain(&tilt_ne_rad)
+            .chain(&vel_ne_mps)
+            .chain(&accel_ne_mps2)
+            .all(|x| x.is_finite());
+        if !ok {
+            return;
+        }
+        for j in 0..2 {
+            self.win[j].add(
+                [instr_ne[j][0] as f64, instr_ne[j][1] as f64],
+                [tilt_ne_rad[j] as f64, vel_ne_mps[j] as f64],
+                accel_ne_mps2[j] as f64,
+            );
+        }
+    }
+
+    /// Close the current window (a new wind from the next sample on); `false` if it was empty.
+    pub fn end_window(&mut self) -> bool {
+        if self.win[0].n == 0 {
+            return false;
+        }
+        for j in 0..2 {
+            self.within.add_centred(&self.win[j]);
+        }
+        self.win = [IvMoments::default(); 2];
+        self.intercepts = self.intercepts.saturating_add(2);
+        self.windows = self.windows.saturating_add(1);
+        true
+    }
+
+    /// Samples added.
+    pub fn count(&self) -> u32 {
+        self.within.n / 2 + self.win[0].n
+    }
+
+    /// Solve over all windows. `None` without a degree of freedom, or when `ZᵀX` is singular
+    /// (instruments constant within the windows or not moving the regressors).
+    pub fn solve(&self) -> Option<WindFitResult> {
+        let mut all = *self;
+        all.end_window();
+        let w = &all.within;
+        let eq = w.n;
+        let dof = eq.checked_sub(2 + all.intercepts).filter(|&d| d > 0)?;
+        let zx_inv = inv2(w.zx)?;
+        let b = [
+            zx_inv[0][0] * w.za[0] + zx_inv[0][1] * w.za[1],
+            zx_inv[1][0] * w.za[0] + zx_inv[1][1] * w.za[1],
+        ];
+        // SSR = aᵀa − 2·bᵀXᵀa + bᵀ·XᵀX·b
+        let mut ssr = w.aa - 2.0 * (b[0] * w.xa[0] + b[1] * w.xa[1]);
+        for p in 0..2 {
+            for q in 0..2 {
+                ssr += b[p] * w.xx[p][q] * b[q];
+            }
+        }
+        let ssr = ssr.max(0.0);
+        let var = ssr / dof as f64;
+        let cov = mul2(mul2(zx_inv, w.zz), transpose2(zx_inv));
+        let n = eq as f64;
+        let (sxx, svv, stv) = (w.xx[0][0], w.xx[1][1], w.xx[0][1]);
+        let r = if sxx > 0.0 && svv > 0.0 {
+            stv / sqrt(sxx * svv)
+        } else {
+            f64::NAN
+        };
+        // Correlation matrix of instruments and regressors; its smaller singular value.
+        let mut c = [[0.0; 2]; 2];
+        for p in 0..2 {
+            for q in 0..2 {
+                c[p][q] = w.zx[p][q] / sqrt(w.zz[p][p] * w.xx[q][q]);
+            }
+        }
+        let ctc = mul2(transpose2(c), c);
+        let (tr, det) = (
+            ctc[0][0] + ctc[1][1],
+            ctc[0][0] * ctc[1][1] - ctc[0][1] * ctc[1][0],
+        );
+        let lmin = 0.5 * (tr - sqrt((tr * tr - 4.0 * det).max(0.0)));
+        Some(WindFitResult {
+            k1_mps2_per_rad: b[0] as f32,
+            k2_per_s: -b[1] as f32,
+            k1_se_mps2_per_rad: sqrt(var * cov[0][0].max(0.0)) as f32,
+            k2_se_per_s: sqrt(var * cov[1][1].max(0.0)) as f32,
+            rms_residual_mps2: sqrt(ssr / n) as f32,
+            residual_var_mps2_sq: var as f32,
+            r_squared: if w.aa > 0.0 { 1.0 - ssr / w.aa } else { 1.0 } as f32,
+            equations: eq,
+            intercepts: all.intercepts,
+            dof,
+            tilt_std_rad: sqrt(sxx / n) as f32,
+            vel_std_mps: sqrt(svv / n) as f32,
+            accel_std_mps2: sqrt(w.aa / n) as f32,
+            tilt_vel_corr: r as f32,
+            condition_number: ((1.0 + libm::fabs(r)) / (1.0 - libm::fabs(r)).max(1e-12)) as f32,
+            instrument_strength: sqrt(lmin.max(0.0)) as f32,
         })
     }
 }
@@ -507,7 +733,7 @@ mod tests {
         assert!((r.k2_per_s - 0.28).abs() < c2 && c2 < 0.01, "{r:?} ±{c2}");
         assert!((r.rms_residual_mps2 - 0.3).abs() < 0.01, "{r:?}");
         assert!(r.r_squared > 0.65 && r.r_squared < 0.8, "{r:?}"); // signal var ≈ 0.23, noise 0.09
-        // The window's wind comes back (true mean wind vs estimate, m/s).
+                                                                   // The window's wind comes back (true mean wind vs estimate, m/s).
         for j in 0..2 {
             assert!((wind[0][j] - wind[1][j]).abs() < 0.3, "{wind:?}");
         }
@@ -656,5 +882,133 @@ mod tests {
         let white = 1.0 / (1.0 - 0.81) / n as f64; // variance of the mean of white samples
         let got = libm::sqrt(var / white) as f32;
         assert!((got / ar1_inflation(rho) - 1.0).abs() < 0.15, "{got}");
+    }
+
+    /// Closed loop with gusts: a PI velocity controller tracks a setpoint square wave and
+    /// leans into the wind; the gusts inside a window stay in the residual and the tilt
+    /// answers them. Returns (least squares, IV) fits.
+    fn closed_loop(seed: u64, gust_mps: f32) -> (WindPlaneFit, WindIvFit) {
+        let (k1, k2, dt) = (9.2f32, 0.28f32, 0.01f32);
+        let mut rng = Rng::new(seed);
+        let (mut ls, mut iv) = (WindPlaneFit::new(), WindIvFit::new());
+        let (mut v, mut th, mut integ, mut gust) =
+            ([0.0f32; 2], [0.0f32; 2], [0.0f32; 2], [0.0f32; 2]);
+        let mut hist = [[0.0f32; 2]; 100]; // setpoints of the last 1 s
+        for i in 0..60_000 {
+            let t = i as f32 * dt;
+            let vc = [
+                if (t / 8.0) as i32 % 2 == 0 { 3.0 } else { 0.0 },
+                if (t / 11.0) as i32 % 2 == 0 {
+                    -2.0
+                } else {
+                    1.0
+                },
+            ];
+            let delayed = hist[i % 100];
+            hist[i % 100] = vc;
+            let mut a = [0.0f32; 2];
+            for j in 0..2 {
+                gust[j] +=
+                    -gust[j] * dt / 1.5 + gust_mps * libm::sqrtf(2.0 * dt / 1.5) * rng.normal(1.0);
+                let w = [3.0, -1.0][j] + gust[j];
+                let e = vc[j] - v[j];
+                integ[j] = (integ[j] + 0.5 * e * dt).clamp(-2.0, 2.0);
+                let th_cmd = ((1.5 * e + integ[j] + 0.25 * v[j]) / 9.0).clamp(-0.35, 0.35);
+                th[j] += (th_cmd - th[j]) * dt / 0.1;
+                a[j] = k1 * th[j] - k2 * (v[j] - w);
+                v[j] += a[j] * dt;
+            }
+            let am = [a[0] + rng.normal(0.2), a[1] + rng.normal(0.2)];
+            ls.add(th, v, am);
+            iv.add([[vc[0], delayed[0]], [vc[1], delayed[1]]], th, v, am);
+            if i % 500 == 499 {
+                ls.end_window();
+                iv.end_window();
+            }
+        }
+        (ls, iv)
+    }
+
+    #[test]
+    fn instruments_remove_the_gust_bias_of_least_squares() {
+        let (ls, iv) = closed_loop(9, 0.8);
+        let l = ls.solve().unwrap();
+        let r = iv.solve().unwrap();
+        assert_eq!(iv.count(), 60_000);
+        assert_eq!((r.intercepts, r.dof), (240, 120_000 - 242));
+        // Least squares is biased low by the gusts the controller answers, beyond its interval.
+        assert!(9.2 - l.k1_mps2_per_rad > 3.0 * l.ci95(1.0).0, "{l:?}");
+        assert!(l.k1_mps2_per_rad < 0.985 * 9.2, "{l:?}");
+        // IV: the truth within 2 %, a fraction of least squares' error.
+        assert!((r.k1_mps2_per_rad - 9.2).abs() < 0.02 * 9.2, "{r:?}");
+        assert!(
+            (r.k2_per_s - 0.28).abs() < 0.02 * 0.28 + r.ci95(1.0).1,
+            "{r:?}"
+        );
+        // (Not inside the white-noise interval: the gusts make the residual correlated.)
+        assert!(
+            (r.k1_mps2_per_rad - 9.2).abs() < 0.25 * (l.k1_mps2_per_rad - 9.2).abs(),
+            "{r:?}"
+        );
+        assert!(
+            r.instrument_strength > 0.1 && r.instrument_strength <= 1.0,
+            "{r:?}"
+        );
+        assert!(l.instrument_strength.is_nan());
+        // Without gusts both agree with the truth.
+        let (ls, iv) = closed_loop(10, 0.0);
+        let (l, r) = (ls.solve().unwrap(), iv.solve().unwrap());
+        assert!((l.k1_mps2_per_rad - 9.2).abs() < 0.01 * 9.2, "{l:?}");
+        assert!((r.k1_mps2_per_rad - 9.2).abs() < 0.01 * 9.2, "{r:?}");
+    }
+
+    #[test]
+    fn iv_with_the_regressors_as_instruments_is_least_squares() {
+        let mut rng = Rng::new(4);
+        let (mut ls, mut iv) = (WindPlaneFit::new(), WindIvFit::new());
+        for i in 0..3000 {
+            let th = [rng.normal(0.05), rng.normal(0.05)];
+            let v = [rng.normal(1.0), rng.normal(1.0)];
+            let a = [
+                9.0 * th[0] - 0.3 * v[0] + 0.5 + rng.normal(0.3),
+                9.0 * th[1] - 0.3 * v[1] + rng.normal(0.3),
+            ];
+            ls.add(th, v, a);
+            iv.add([[th[0], v[0]], [th[1], v[1]]], th, v, a);
+            if i % 300 == 299 {
+                ls.end_window();
+                iv.end_window();
+            }
+        }
+        let (l, r) = (ls.solve().unwrap(), iv.solve().unwrap());
+        for (x, y) in [
+            (l.k1_mps2_per_rad, r.k1_mps2_per_rad),
+            (l.k2_per_s, r.k2_per_s),
+            (l.k1_se_mps2_per_rad, r.k1_se_mps2_per_rad),
+            (l.k2_se_per_s, r.k2_se_per_s),
+            (l.r_squared, r.r_squared),
+        ] {
+            assert!((x - y).abs() <= 1e-4 * x.abs().max(1e-3), "{l:?}\n{r:?}");
+        }
+        // Instruments = regressors: the correlation matrix of (θ, v), smaller singular value 1 − |r|.
+        assert!(
+            (r.instrument_strength - (1.0 - r.tilt_vel_corr.abs())).abs() < 1e-4,
+            "{r:?}"
+        );
+        // Instruments constant within every window: no fit.
+        let mut iv = WindIvFit::new();
+        for i in 0..100 {
+            let z = (i / 10) as f32;
+            iv.add(
+                [[z, z], [z, z]],
+                [0.01 * (i % 7) as f32; 2],
+                [0.1 * (i % 3) as f32; 2],
+                [0.0; 2],
+            );
+            if i % 10 == 9 {
+                iv.end_window();
+            }
+        }
+        assert!(iv.solve().is_none());
     }
 }
