@@ -22,6 +22,11 @@ use fcc_nav::GRAVITY_MPS2;
 
 /// A fused ground height with a larger variance than this is not trusted for landing (m²).
 const GROUND_MAX_VAR_M2: f32 = 0.25;
+/// Velocity mode: the integrated target height stays within this of the estimate, m.
+const VEL_ALT_LEAD_M: f32 = 1.0;
+/// A velocity-mode descent faster than this is the operator's own (the terrain floor lets it
+/// through), m/s.
+const FLOOR_DESCENT_MPS: f32 = 0.1;
 /// Deceleration planned for stopping at the geofence, m/s².
 const FENCE_BRAKE_MPS2: f32 = 1.0;
 /// Closer to the fence than this while being held back by it → reported as a geofence event.
@@ -68,6 +73,11 @@ pub struct FlightCore {
     last_setpoint_us: Option<u64>,
     hold_ne_m: [f32; 2],
     hold_alt_m: f32,
+    /// Velocity mode: the height the commanded climb rate integrates to (m, up); `None` until
+    /// the first velocity-mode step.
+    vel_alt_m: Option<f32>,
+    /// Truly above the terrain floor since take-off (the floor then applies).
+    above_floor: bool,
     yaw_hold_rad: f32,
     takeoff_alt_m: f32,
     /// On the ground or in the air ([`crate::land_detector`]).
@@ -116,6 +126,8 @@ impl FlightCore {
             last_setpoint_us: None,
             hold_ne_m: [0.0; 2],
             hold_alt_m: 0.0,
+            vel_alt_m: None,
+            above_floor: false,
             yaw_hold_rad: 0.0,
             takeoff_alt_m: 0.0,
             land: LandDetector::new(),
@@ -423,6 +435,7 @@ impl FlightCore {
     }
 
     fn enter_hold(&mut self, nav: &NavState) {
+        self.vel_alt_m = None;
         self.mode = Mode::Hold;
         self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         self.hold_alt_m = -nav.pos_ned_m[2];
@@ -431,6 +444,7 @@ impl FlightCore {
     }
 
     fn enter_land(&mut self, nav: &NavState) {
+        self.vel_alt_m = None;
         self.mode = Mode::Land;
         self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         self.yaw_hold_rad = nav.euler.yaw_rad;
@@ -539,21 +553,24 @@ impl FlightCore {
                     if let Some(y) = sp.yaw_rad {
                         self.yaw_hold_rad = y;
                     }
+                    let vz = self.velocity_climb(dt_s, sp.vel_ned_mps[2], alt);
                     (
                         [sp.vel_ned_mps[0], sp.vel_ned_mps[1]],
-                        sp.vel_ned_mps[2],
+                        vz,
                         self.yaw_hold_rad,
                     )
                 }
                 None => (hold_ne(self), 0.0, self.yaw_hold_rad),
             },
             Mode::Land => {
-                let v = if self.height_above_ground_m(nav) > l.land_slow_alt_m {
-                    l.land_speed_mps
+                if self.height_above_ground_m(nav) > l.land_slow_alt_m {
+                    (hold_ne(self), l.land_speed_mps, self.yaw_hold_rad)
                 } else {
-                    l.land_final_speed_mps
-                };
-                (hold_ne(self), v, self.yaw_hold_rad)
+                    // Final descent: zero horizontal velocity (no position corrections that
+                    // would slide the gear at touchdown); where it is becomes the hold point.
+                    self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
+                    ([0.0; 2], l.land_final_speed_mps, self.yaw_hold_rad)
+                }
             }
             Mode::Pilot => {
                 let d =
@@ -614,12 +631,65 @@ impl FlightCore {
                 }
             }
         }
+        vz_down = self.terrain_floor(nav, vz_down);
         if alt - self.takeoff_alt_m > l.fence_alt_m && vz_down < 0.0 {
             vz_down = 0.3;
             self.failsafe = FailsafeCause::Geofence;
         }
         let _ = now_us;
         (v_ne, vz_down, yaw)
+    }
+
+    /// Velocity mode's vertical channel: the commanded climb rate integrates into a target
+    /// height `h_t` that the height loop holds, so a zero climb rate holds the height instead
+    /// of drifting with the velocity estimate (PX4's position lock under velocity setpoints):
+    /// `h_t ← h_t − v_z,cmd·dt` (kept within [`VEL_ALT_LEAD_M`] of ĥ),
+    /// `v_z = v_z,cmd − k_alt·(h_t − ĥ)`, limited to the climb/descent limits (NED down).
+    fn velocity_climb(&mut self, dt_s: f32, vz_cmd_down: f32, alt_m: f32) -> f32 {
+        let l = self.params.limits;
+        let t = self.vel_alt_m.get_or_insert(alt_m);
+        *t = fcc_nav::math::clampf(
+            *t - vz_cmd_down * dt_s,
+            alt_m - VEL_ALT_LEAD_M,
+            alt_m + VEL_ALT_LEAD_M,
+        );
+        fcc_nav::math::clampf(
+            vz_cmd_down - self.params.control.alt_p_per_s * (*t - alt_m),
+            -l.max_climb_mps,
+            l.max_descent_mps,
+        )
+    }
+
+    /// Terrain floor: outside LAND, once the vehicle has been above `limits.min_agl_m`, a
+    /// level or climbing command never lets it sink below that height over the ground the
+    /// rangefinders see (a descent the operator commands is still obeyed).
+    fn terrain_floor(&mut self, nav: &NavState, vz_down: f32) -> f32 {
+        let floor_m = self.params.limits.min_agl_m;
+        if !self.ground_usable(nav) || floor_m <= 0.0 {
+            return vz_down;
+        }
+        let h = nav.ground.height_m - self.params.airframe.sensor_height_on_ground_m;
+        if self.land.landed() || self.mode == Mode::Land {
+            self.above_floor = false;
+            return vz_down;
+        }
+        if h > floor_m {
+            self.above_floor = true;
+        }
+        let commanded_down = match (self.mode, self.setpoint) {
+            (Mode::Velocity, Some((sp, _))) => sp.vel_ned_mps[2] > FLOOR_DESCENT_MPS,
+            (Mode::Pilot, _) => true,
+            _ => false,
+        };
+        if !self.above_floor || commanded_down || h >= floor_m {
+            return vz_down;
+        }
+        let climb = self.params.control.alt_p_per_s * (floor_m - h);
+        vz_down.min(-fcc_nav::math::clampf(
+            climb,
+            0.0,
+            self.params.limits.max_climb_mps,
+        ))
     }
 
     fn control(

@@ -215,6 +215,7 @@ impl Navigator {
             for (i, ft) in f_tilt.iter_mut().enumerate() {
                 *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
             }
+            self.att.mag_realign_allowed = on_ground_disarmed;
             let euler = if self.calibrated {
                 self.att.update(gyro, Some(f_tilt), mag, dt_s)
             } else {
@@ -389,6 +390,7 @@ impl Navigator {
             let (roll, pitch) = accel_tilt_rad(f);
             let yaw = match self.last_mag_frd {
                 Some(m) => {
+                    self.att.set_mag_reference(m, roll, pitch);
                     mag_heading_rad(m, roll, pitch, self.params.declination_deg.to_radians())
                 }
                 None => 0.0,

@@ -241,6 +241,9 @@ pub struct LimitParams {
     pub land_slow_alt_m: f32,
     /// Touchdown: on ground for this long (low vertical speed, thrust well below hover) → disarm.
     pub touchdown_s: f32,
+    /// Terrain floor: outside LAND, a level or climbing command never lets the vehicle sink
+    /// below this height of its gear over the ground the rangefinders see, m; 0 = off.
+    pub min_agl_m: f32,
 }
 
 impl Default for LimitParams {
@@ -258,6 +261,7 @@ impl Default for LimitParams {
             land_final_speed_mps: 0.3,
             land_slow_alt_m: 2.0,
             touchdown_s: 1.0,
+            min_agl_m: 1.0,
         }
     }
 }
@@ -335,7 +339,12 @@ impl Params {
         check("nav.calibration_s", n.calibration_s, 0.1, 30.0)?;
         check("nav.vert_bias_pole_radps", n.vert_bias_pole_radps, 0.0, 1.0)?;
         check("nav.range_aid_max_m", n.range_aid_max_m, 0.0, 150.0)?;
-        check("nav.vert_aided_omega_radps", n.vert_aided_omega_radps, 0.01, 5.0)?;
+        check(
+            "nav.vert_aided_omega_radps",
+            n.vert_aided_omega_radps,
+            0.01,
+            5.0,
+        )?;
         check(
             "nav.horiz_bias_pole_radps",
             n.horiz_bias_pole_radps,
@@ -380,6 +389,7 @@ impl Params {
             1.0,
         )?;
         check("limits.touchdown_s", l.touchdown_s, 0.2, 10.0)?;
+        check("limits.min_agl_m", l.min_agl_m, 0.0, 50.0)?;
         let c = &self.control;
         check("control.accel_forgetting", c.accel_forgetting, 0.9, 1.0)?;
         check(

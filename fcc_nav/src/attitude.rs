@@ -10,6 +10,7 @@
 //! `[0, 0, −g]`; at rest with roll φ and pitch θ it reads `g·(sin θ, −sin φ cos θ, −cos φ cos θ)`.
 
 use crate::complementary::{wrap_pi, AngleCf, CfGains};
+use crate::math::fabsf;
 use crate::math::{asinf, atan2f, sincosf, sqrtf};
 use crate::GRAVITY_MPS2;
 
@@ -53,6 +54,19 @@ pub fn mag_heading_rad(
     let mx_h = mx * ct + my * sp * st + mz * cp * st;
     let my_h = my * cp - mz * sp;
     wrap_pi(atan2f(-my_h, mx_h) + declination_rad)
+}
+
+/// Magnitude \[µT] and dip (inclination, down positive) \[rad] of a body-frame field at the
+/// given roll and pitch.
+pub fn mag_norm_dip(m_frd: [f32; 3], roll_rad: f32, pitch_rad: f32) -> (f32, f32) {
+    let [mx, my, mz] = m_frd;
+    let (sp, cp) = sincosf(roll_rad);
+    let (st, ct) = sincosf(pitch_rad);
+    let mx_h = mx * ct + my * sp * st + mz * cp * st;
+    let my_h = my * cp - mz * sp;
+    let mz_v = -mx * st + my * sp * ct + mz * cp * ct;
+    let h = sqrtf(mx_h * mx_h + my_h * my_h);
+    (sqrtf(h * h + mz_v * mz_v), atan2f(mz_v, h))
 }
 
 /// Euler-angle rates `[φ̇, θ̇, ψ̇]` \[rad/s] from body rates `[p, q, r]` \[rad/s] (FRD).
@@ -109,12 +123,28 @@ pub struct AttitudeEstimator {
     /// Accelerometer correction is skipped when `| |f| − g | >` this \[m/s²] (default 2.0).
     pub accel_gate_mps2: f32,
     /// Magnetometer innovation gate \[rad]: a heading that disagrees with the gyro-propagated
-    /// yaw by more than this is treated as a magnetic disturbance and not fused (default 10°),
-    /// for at most `mag_reject_timeout_s`, after which it is accepted again (a real heading
-    /// change the gyro missed must not lock the magnetometer out forever).
+    /// yaw by more than this is treated as a magnetic disturbance and not fused (default 10°).
     pub mag_gate_rad: f32,
-    /// Longest time magnetometer readings are rejected in a row \[s] (default 15).
-    pub mag_reject_timeout_s: f32,
+    /// Field-consistency gates against the reference taken on the ground
+    /// ([`Self::set_mag_reference`]): a field whose magnitude differs by more than
+    /// `mag_norm_gate_ut` \[µT] or whose dip differs by more than `mag_dip_gate_rad` is
+    /// disturbed, whatever heading it gives (defaults 4 µT, 4°).
+    pub mag_norm_gate_ut: f32,
+    /// See `mag_norm_gate_ut`.
+    pub mag_dip_gate_rad: f32,
+    /// There is **no timeout** that accepts a disturbed field in flight: while disturbed, the
+    /// heading is held on the gyro (a horizontal disturbance can keep the field's magnitude
+    /// and dip and still turn its heading by tens of degrees). Only while
+    /// `mag_realign_allowed` (the caller: on the ground, disarmed and still) does a field that
+    /// matches the reference's magnitude and dip but disagrees with the gyro heading for
+    /// `mag_realign_s` \[s] re-align the heading to it (a heading change the gyro missed
+    /// before take-off must not lock the magnetometer out; default 10).
+    pub mag_realign_s: f32,
+    /// See `mag_realign_s` (default false).
+    pub mag_realign_allowed: bool,
+    mag_ref: Option<(f32, f32)>,
+    mag_consistent_s: f32,
+    mag_realigns: u32,
     mag_rejected_s: f32,
     mag_rejects: u32,
 }
@@ -129,7 +159,13 @@ impl AttitudeEstimator {
             declination_rad,
             accel_gate_mps2: 2.0,
             mag_gate_rad: 10.0 * core::f32::consts::PI / 180.0,
-            mag_reject_timeout_s: 15.0,
+            mag_norm_gate_ut: 4.0,
+            mag_dip_gate_rad: 4.0 * core::f32::consts::PI / 180.0,
+            mag_realign_s: 10.0,
+            mag_realign_allowed: false,
+            mag_ref: None,
+            mag_consistent_s: 0.0,
+            mag_realigns: 0,
             mag_rejected_s: 0.0,
             mag_rejects: 0,
         }
@@ -138,6 +174,22 @@ impl AttitudeEstimator {
     /// Magnetometer readings rejected by the innovation gate so far.
     pub fn mag_rejects(&self) -> u32 {
         self.mag_rejects
+    }
+
+    /// Heading re-alignments to a consistent field after `mag_realign_s` of disagreement.
+    pub fn mag_realigns(&self) -> u32 {
+        self.mag_realigns
+    }
+
+    /// Take the undisturbed field's magnitude and dip from a reading at the given attitude
+    /// (on the ground, at calibration).
+    pub fn set_mag_reference(&mut self, m_frd_ut: [f32; 3], roll_rad: f32, pitch_rad: f32) {
+        self.mag_ref = Some(mag_norm_dip(m_frd_ut, roll_rad, pitch_rad));
+    }
+
+    /// Seconds the magnetometer has been rejected in a row (0 when fused).
+    pub fn mag_disturbed_s(&self) -> f32 {
+        self.mag_rejected_s
     }
 
     /// Whether the magnetometer is currently being rejected (disturbance suspected).
@@ -177,16 +229,33 @@ impl AttitudeEstimator {
         let roll = self.roll.update(rates[0], tilt.map(|t| t.0), dt_s);
         let pitch = self.pitch.update(rates[1], tilt.map(|t| t.1), dt_s);
         let mut heading = mag_frd_ut.map(|m| mag_heading_rad(m, roll, pitch, self.declination_rad));
-        if let Some(h) = heading {
+        if let (Some(h), Some(m)) = (heading, mag_frd_ut) {
             let innov = crate::complementary::wrap_pi(h - self.yaw.angle_rad());
-            if innov.abs() > self.mag_gate_rad {
-                if self.mag_rejected_s < self.mag_reject_timeout_s {
-                    heading = None;
-                    self.mag_rejects = self.mag_rejects.wrapping_add(1);
-                } else {
-                    // Disagreement persisted: trust the magnetometer again and jump to it.
-                    self.yaw.reset(h);
+            let field_ok = match self.mag_ref {
+                None => true,
+                Some((n0, d0)) => {
+                    let (n, d) = mag_norm_dip(m, roll, pitch);
+                    fabsf(n - n0) <= self.mag_norm_gate_ut && fabsf(d - d0) <= self.mag_dip_gate_rad
                 }
+            };
+            if field_ok && fabsf(innov) <= self.mag_gate_rad {
+                self.mag_consistent_s = 0.0;
+            } else if field_ok
+                && self.mag_realign_allowed
+                && self.mag_consistent_s >= self.mag_realign_s
+            {
+                // An Earth-like field disagreeing for that long: the gyro heading was wrong.
+                self.yaw.reset(h);
+                self.mag_realigns = self.mag_realigns.wrapping_add(1);
+                self.mag_consistent_s = 0.0;
+            } else {
+                heading = None;
+                self.mag_rejects = self.mag_rejects.wrapping_add(1);
+                self.mag_consistent_s = if field_ok {
+                    self.mag_consistent_s + dt_s
+                } else {
+                    0.0
+                };
             }
         }
         if mag_frd_ut.is_some() {
@@ -366,9 +435,11 @@ mod tests {
         // and north (e.g. rotated before the gyro integration started): it must converge
         let target = e(0.2, -0.15, 1.0);
         est.reset(e(0.0, 0.0, 0.0));
-        // (the 57° heading error is first taken for a disturbance and rejected for
-        // `mag_reject_timeout_s`, then the heading is re-acquired)
+        // (the 57° heading error is first taken for a disturbance; the field matches the
+        // Earth's, so after `mag_realign_s` the heading is re-aligned to it)
+        est.mag_realign_allowed = true;
         sim(&mut est, target, [0.0; 3], 25.0, &mut rng);
+        assert_eq!(est.mag_realigns(), 1);
         let got = est.euler();
         assert!((got.roll_rad - 0.2).abs() < 0.01, "{got:?}");
         assert!((got.pitch_rad + 0.15).abs() < 0.01, "{got:?}");
@@ -453,6 +524,32 @@ mod tests {
             );
         }
         assert!(est.mag_rejects() > 0 && est.mag_disturbed());
+        sim(&mut est, truth, [0.0; 3], 1.0, &mut rng);
+        assert!(!est.mag_disturbed());
+    }
+
+    #[test]
+    fn a_long_disturbance_is_never_accepted() {
+        let mut rng = Rng::new(6);
+        let mut est = AttitudeEstimator::new(CfGains::new(0.5, 0.7), CfGains::new(0.1, 1.0), 0.0);
+        let truth = e(0.0, 0.0, 0.5);
+        est.reset(truth);
+        est.set_mag_reference(ned_to_body(&truth, M_NED), 0.0, 0.0);
+        sim(&mut est, truth, [0.0; 3], 5.0, &mut rng);
+        // 120 s of an extra 25 µT that keeps the field's magnitude (50.2 vs 50 µT) and dip
+        // but turns its heading by 49°: rejected throughout in flight, yaw held on the gyro.
+        for _ in 0..(120.0 / DT) as usize {
+            let f = accel_at_rest(&truth);
+            let m_ned = [M_NED[0] - 10.0, M_NED[1] + 22.9, M_NED[2]];
+            est.update([0.0; 3], Some(f), Some(ned_to_body(&truth, m_ned)), DT);
+        }
+        assert!(
+            (est.euler().yaw_rad - 0.5).abs() < 1f32.to_radians(),
+            "{:?}",
+            est.euler()
+        );
+        assert!(est.mag_disturbed_s() > 119.0 && est.mag_realigns() == 0);
+        // Over: fused again at once.
         sim(&mut est, truth, [0.0; 3], 1.0, &mut rng);
         assert!(!est.mag_disturbed());
     }

@@ -104,7 +104,11 @@ mod tests {
         for _ in 0..(200.0 / 0.02) as usize {
             a.measurement(0.02, 5.0, 6.5, Some(5.25), 0);
         }
-        assert!((a.baro_offset_m() - 1.5).abs() < 0.01, "{}", a.baro_offset_m());
+        assert!(
+            (a.baro_offset_m() - 1.5).abs() < 0.01,
+            "{}",
+            a.baro_offset_m()
+        );
         // Range lost: the corrected baro continues where the range left off.
         assert!((a.measurement(0.02, 5.0, 6.5, None, 0) - 5.0).abs() < 0.01);
         assert!(!a.aiding());

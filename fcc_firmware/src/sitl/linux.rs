@@ -24,6 +24,14 @@ enum Plan {
         follower: WaypointFollower,
         land_sent: bool,
     },
+    Velocity {
+        alt_m: f32,
+        speed_mps: f32,
+        radius_m: f32,
+        cruise_s: f32,
+        cruise_start_s: Option<f64>,
+        landing: bool,
+    },
     Carried,
 }
 
@@ -58,6 +66,23 @@ impl LinuxSide {
                     land_sent: false,
                 }
             }
+            FlightPlan::MissionInline { mission } => Plan::Mission {
+                follower: WaypointFollower::new(mission.clone()),
+                land_sent: false,
+            },
+            FlightPlan::Velocity {
+                alt_m,
+                speed_mps,
+                radius_m,
+                cruise_s,
+            } => Plan::Velocity {
+                alt_m: *alt_m,
+                speed_mps: *speed_mps,
+                radius_m: *radius_m,
+                cruise_s: *cruise_s,
+                cruise_start_s: None,
+                landing: false,
+            },
             FlightPlan::Elevator { .. } | FlightPlan::Rig { .. } => Plan::Carried,
         };
         let phase = if matches!(plan, Plan::Carried) {
@@ -168,6 +193,52 @@ impl LinuxSide {
                     self.phase = PlanPhase::Holding { hold_ned_m: hold };
                     self.events
                         .push((t_s, format!("holding at {:.2?} for {hold_s} s", hold)));
+                }
+            }
+            Plan::Velocity {
+                alt_m,
+                speed_mps,
+                radius_m,
+                cruise_s,
+                cruise_start_s,
+                landing,
+            } => {
+                if *landing {
+                    return;
+                }
+                if let Some(start) = *cruise_start_s {
+                    if t_s - start >= *cruise_s as f64 {
+                        *landing = true;
+                        let _ = core.command(t_us, Command::Land);
+                        self.phase = PlanPhase::Landing;
+                        self.events.push((t_s, "cruise done, landing".into()));
+                        return;
+                    }
+                    // Tangent to the circle through the start point (counter-clockwise seen
+                    // from above), zero climb: the MCU holds the height.
+                    let w = *speed_mps / *radius_m;
+                    let a = w * (t_s - start) as f32;
+                    let (s_a, c_a) = (a.sin(), a.cos());
+                    let v = [-*speed_mps * s_a, *speed_mps * c_a, 0.0];
+                    let r = core.setpoint(t_us, sp(v, None));
+                    count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
+                    return;
+                }
+                if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
+                    return;
+                }
+                let err = *alt_m + nav.pos_ned_m[2];
+                let vz_up = (0.8 * err).clamp(-1.0, 1.5);
+                let r = core.setpoint(t_us, sp([0.0, 0.0, -vz_up], None));
+                count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
+                self.phase = PlanPhase::Climbing;
+                if err.abs() < 0.1 && nav.vel_ned_mps[2].abs() < 0.2 {
+                    *cruise_start_s = Some(t_s);
+                    self.phase = PlanPhase::Cruise {
+                        speed_mps: *speed_mps,
+                    };
+                    self.events
+                        .push((t_s, format!("cruise at {speed_mps} m/s for {cruise_s} s")));
                 }
             }
             Plan::Mission {

@@ -22,6 +22,10 @@ pub enum PlanPhase {
         to_ned_m: [f32; 3],
     },
     HoldAtWaypoint(usize),
+    /// Velocity-mode cruise (scenario `velocity`): commanded horizontal speed, zero climb.
+    Cruise {
+        speed_mps: f32,
+    },
     Landing,
     Done,
     /// Carried (elevator): no flight.

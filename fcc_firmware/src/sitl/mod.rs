@@ -9,6 +9,7 @@
 //! - [`pty`]: the board's UART as a pseudo-terminal the bridge opens like a serial port.
 //! - [`sim`]: the lockstep loop; [`log`] and [`metrics`]: what a flight leaves and its figures.
 
+pub mod campaign;
 pub mod linux;
 pub mod log;
 pub mod metrics;

@@ -96,6 +96,16 @@ pub enum FlightPlan {
     /// Fly a mission file with the Linux-side waypoint logic (`fcc_mission`), path relative to
     /// the scenario file.
     Mission { mission_file: PathBuf },
+    /// The same, with the mission written inline (generated scenarios: the campaign).
+    MissionInline { mission: fcc_mission::Mission },
+    /// Velocity mode: take off to `alt_m`, then command `speed_mps` tangent to a circle of
+    /// `radius_m` around home (zero vertical speed) for `cruise_s`, then land.
+    Velocity {
+        alt_m: f32,
+        speed_mps: f32,
+        radius_m: f32,
+        cruise_s: f32,
+    },
     /// The vehicle is carried in an elevator (motors off, no GPS): floors visited in order,
     /// paper A Figs. 8–9.
     /// A static test rig (paper B's ground and roll tests): the vehicle held at `height_m`
@@ -221,7 +231,26 @@ impl Scenario {
                     return bad("flight.hold_s", "must be positive");
                 }
             }
-            FlightPlan::Mission { .. } => {}
+            FlightPlan::Mission { .. } | FlightPlan::MissionInline { .. } => {}
+            FlightPlan::Velocity {
+                alt_m,
+                speed_mps,
+                radius_m,
+                cruise_s,
+            } => {
+                if !(alt_m.is_finite() && (1.0..=100.0).contains(alt_m)) {
+                    return bad("flight.alt_m", "must be in [1, 100] m");
+                }
+                if !(speed_mps.is_finite() && (0.0..=20.0).contains(speed_mps)) {
+                    return bad("flight.speed_mps", "must be in [0, 20] m/s");
+                }
+                if !(radius_m.is_finite() && *radius_m >= 5.0) {
+                    return bad("flight.radius_m", "must be ≥ 5 m");
+                }
+                if !(cruise_s.is_finite() && *cruise_s > 0.0) {
+                    return bad("flight.cruise_s", "must be positive");
+                }
+            }
             FlightPlan::Rig {
                 height_m,
                 roll_deg,

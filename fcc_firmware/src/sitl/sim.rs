@@ -10,7 +10,7 @@ use super::log::{FlightLog, LogSample};
 use super::physics::Octorotor;
 use super::rangefinders::{LaserModel, SonarModel};
 use super::scenario::{Fault, FlightPlan, Scenario};
-use super::sensor_models::{BaroModel, BatteryModel, GpsModel, ImuModel, MagModel};
+use super::sensor_models::{BaroModel, BaroParams, BatteryModel, GpsModel, ImuModel, MagModel};
 use super::terrain::Terrain;
 use super::wind::Wind;
 use crate::commands::Mode;
@@ -152,7 +152,14 @@ impl Sim {
         let board = SimBoard {
             imu: ImuModel::new(s.imu.clone(), seed),
             mag: MagModel::new(s.mag.clone(), seed),
-            baro: BaroModel::new(s.baro.clone(), seed),
+            // The barometer's atmosphere (and its thermometer) is the scenario's air.
+            baro: BaroModel::new(
+                BaroParams {
+                    t0_c: scenario.air_temp_c,
+                    ..s.baro.clone()
+                },
+                seed,
+            ),
             gps: GpsModel::new(s.gps.clone(), seed),
             battery: BatteryModel::new(Default::default(), seed),
             laser: LaserModel::new(s.laser.clone(), seed),
@@ -226,12 +233,15 @@ impl Sim {
                     ..Default::default()
                 },
                 commanded_alt_m: match &scenario.flight {
-                    FlightPlan::Hover { alt_m, .. } => Some(*alt_m as f64),
+                    FlightPlan::Hover { alt_m, .. } | FlightPlan::Velocity { alt_m, .. } => {
+                        Some(*alt_m as f64)
+                    }
                     _ => None,
                 },
                 plan_kind: match &scenario.flight {
                     FlightPlan::Hover { .. } => "hover",
-                    FlightPlan::Mission { .. } => "mission",
+                    FlightPlan::Mission { .. } | FlightPlan::MissionInline { .. } => "mission",
+                    FlightPlan::Velocity { .. } => "velocity",
                     FlightPlan::Elevator { .. } => "elevator",
                     FlightPlan::Rig { .. } => "rig",
                 },
@@ -289,7 +299,8 @@ impl Sim {
         let was_on_ground = self.body.on_ground();
         let v = self.body.state.vel_ned_mps;
         let q = self.body.state.q_body_to_ned;
-        self.body.step(&self.motors.0, self.wind_ned, ground_down, sub);
+        self.body
+            .step(&self.motors.0, self.wind_ned, ground_down, sub);
         let clearance = ground_down - self.body.state.pos_ned_m.z;
         if clearance > super::truth::AIRBORNE_CLEARANCE_M {
             self.airborne_since_contact = true;
@@ -302,7 +313,8 @@ impl Sim {
         let tilt_deg = z_body.z.clamp(-1.0, 1.0).acos().to_degrees();
         let mode = self.core.mode();
         let (vz, vh) = (v.z, v.x.hypot(v.y));
-        let outcome = super::truth::classify_contact(vz, vh, tilt_deg, self.body.params.gear_height_m);
+        let outcome =
+            super::truth::classify_contact(vz, vh, tilt_deg, self.body.params.gear_height_m);
         let t_s = self.t_s();
         self.log.contacts.push(super::truth::Contact {
             t_s,
@@ -335,9 +347,16 @@ impl Sim {
         if self.core.armed() && !self.core.telemetry().attitude_active {
             c.attitude_off_airborne_s += dt;
         }
-        let tilt = st.q_body_to_ned.transform_vector(&Vector3::z()).z.clamp(-1.0, 1.0).acos();
+        let tilt = st
+            .q_body_to_ned
+            .transform_vector(&Vector3::z())
+            .z
+            .clamp(-1.0, 1.0)
+            .acos();
         c.max_tilt_deg = c.max_tilt_deg.max(tilt.to_degrees());
-        c.max_speed_mps = c.max_speed_mps.max(st.vel_ned_mps.x.hypot(st.vel_ned_mps.y));
+        c.max_speed_mps = c
+            .max_speed_mps
+            .max(st.vel_ned_mps.x.hypot(st.vel_ned_mps.y));
     }
 
     fn apply_faults(&mut self) -> bool {

@@ -46,7 +46,7 @@ pub const W20_LIGHT_KT: f64 = 15.0;
 pub const W20_MODERATE_KT: f64 = 30.0;
 
 /// Wind configuration. Default: calm, no turbulence.
-#[derive(Clone, Debug, Deserialize, Default)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct WindParams {
     /// Mean horizontal wind speed, m/s.
@@ -56,6 +56,46 @@ pub struct WindParams {
     /// Wind speed at 20 ft that sets the turbulence intensity, knots (0 = no turbulence;
     /// 15 = light, 30 = moderate, 45 = severe).
     pub w20_kt: f64,
+    /// Roughness length of the MIL-F-8785C wind-shear law, m: the mean wind at height `h` is
+    /// `mean_speed_mps·ln(h/z0)/ln(20 ft/z0)` (`mean_speed_mps` is the wind at 20 ft, the
+    /// spec's W20 height); `z0` = 0.15 ft (0.046 m) for category C flight phases (terminal:
+    /// take-off, approach, landing), the spec's value for flight near the ground. 0 = no
+    /// shear (the same mean wind at every height).
+    #[serde(default = "default_z0_m")]
+    pub shear_z0_m: f64,
+}
+
+fn default_z0_m() -> f64 {
+    SHEAR_Z0_CAT_C_M
+}
+
+impl Default for WindParams {
+    /// Calm, no turbulence, the category C shear law.
+    fn default() -> Self {
+        Self {
+            mean_speed_mps: 0.0,
+            from_direction_deg: 0.0,
+            w20_kt: 0.0,
+            shear_z0_m: SHEAR_Z0_CAT_C_M,
+        }
+    }
+}
+
+/// MIL-F-8785C wind-shear roughness length for category C flight phases: 0.15 ft, in m.
+pub const SHEAR_Z0_CAT_C_M: f64 = 0.15 * 0.3048;
+/// The shear law's reference height (20 ft), m.
+const SHEAR_REF_M: f64 = 20.0 * 0.3048;
+
+/// Mean-wind factor of the shear law at `height_m` (1 at 20 ft; 0 at or below `z0`).
+pub fn shear_factor(height_m: f64, z0_m: f64) -> f64 {
+    if z0_m <= 0.0 {
+        return 1.0;
+    }
+    let h = height_m.min(DRYDEN_MAX_HEIGHT_FT / FT_PER_M);
+    if h <= z0_m {
+        return 0.0;
+    }
+    (h / z0_m).ln() / (SHEAR_REF_M / z0_m).ln()
 }
 
 /// Intensities (σ_u, σ_v, σ_w) in m/s and scale lengths (L_u, L_v, L_w) in m at `height_m`.
@@ -143,7 +183,7 @@ impl Wind {
     /// Advance by `dt_s` and return the wind velocity (mean + turbulence), NED, m/s.
     /// `height_m` is height above ground, `airspeed_mps` the vehicle's airspeed.
     pub fn step(&mut self, height_m: f64, airspeed_mps: f64, dt_s: f64) -> Vector3<f64> {
-        let mean = self.mean_ned_mps();
+        let mean = self.mean_ned_mps() * shear_factor(height_m, self.params.shear_z0_m);
         if self.params.w20_kt <= 0.0 || dt_s.is_nan() || dt_s <= 0.0 {
             self.last_turbulence_uvw = Vector3::zeros();
             return mean;
@@ -198,6 +238,7 @@ mod tests {
                 mean_speed_mps: 5.0,
                 from_direction_deg: 0.0,
                 w20_kt: 0.0,
+                shear_z0_m: 0.0,
             },
             1,
         );
@@ -210,6 +251,7 @@ mod tests {
                 mean_speed_mps: 4.0,
                 from_direction_deg: 270.0,
                 w20_kt: 0.0,
+                shear_z0_m: 0.0,
             },
             1,
         );
@@ -234,6 +276,7 @@ mod tests {
             mean_speed_mps: 3.0,
             from_direction_deg: 30.0,
             w20_kt: W20_LIGHT_KT,
+            shear_z0_m: 0.0,
         };
         let mut w = Wind::new(p.clone(), 42);
         let (h, v, dt) = (10.0, 15.0, 0.01);
@@ -274,6 +317,7 @@ mod tests {
             mean_speed_mps: 2.0,
             from_direction_deg: 90.0,
             w20_kt: 15.0,
+            shear_z0_m: 0.0,
         };
         let mut a = Wind::new(p.clone(), 7);
         let mut b = Wind::new(p.clone(), 7);

@@ -1,0 +1,45 @@
+//! The Monte-Carlo flight-safety campaign, short form (issue 13): 6 seeds × 7 scenario
+//! families (42 flights), every flight scored on the simulator's truth
+//! (`fcc_firmware::sitl::campaign`). The benchmark flies ≥ 500 (BENCHMARKS.md):
+//!
+//! ```text
+//! cargo run --release -p fcc_firmware --bin fcc-campaign -- --per-family 72 --long
+//! ```
+//!
+//! Asserted on every flight: no crash or tip-over, no unplanned ground contact, the attitude
+//! loops on whenever truly airborne, every flight landed and disarmed; hover true altitude
+//! within ±0.3 m and the estimated box within half of paper A's; mission cross-track; yaw under
+//! a 25 µT disturbance; paper B's rig at every height and air temperature. The checks in
+//! `campaign::OPEN_CHECKS` are printed with their failures but not asserted: the vehicle does
+//! not meet them yet (the issue stays open on them).
+
+use fcc_firmware::sitl::campaign;
+
+#[test]
+fn short_campaign_on_truth() {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let out = campaign::run(6, 1000, false, threads);
+    println!("{}", campaign::table(&out));
+    assert_eq!(out.len(), 6 * campaign::FAMILIES.len());
+    let mut asserted = Vec::new();
+    let mut open = 0;
+    for o in &out {
+        for (name, what) in &o.failures {
+            if campaign::OPEN_CHECKS.contains(name) {
+                open += 1;
+            } else {
+                asserted.push(format!("{} seed {} ({}): {what}", o.family, o.seed, o.what));
+            }
+        }
+    }
+    println!("open (not asserted) check failures: {open}");
+    assert!(asserted.is_empty(), "{}", asserted.join("\n"));
+    // The figures the assertions rest on were really measured.
+    for fam in campaign::FAMILIES {
+        let n = out
+            .iter()
+            .filter(|o| o.family == fam && !o.figures.is_empty())
+            .count();
+        assert_eq!(n, 6, "{fam}: every flight scored");
+    }
+}
