@@ -38,7 +38,7 @@
 //! correlation. A fit is only suggested as parameters when it passes [`judge`].
 
 use crate::figures::Series;
-use fcc_nav::sysid::{ar1_inflation, PlaneFit, WindPlaneFit, WindowMeans};
+use fcc_nav::sysid::{ar1_inflation, PlaneFit, WindIvFit, WindPlaneFit, WindowMeans};
 use serde::Serialize;
 
 /// Length of a wind window (s). Long enough that each window holds manoeuvres (accelerating
@@ -74,6 +74,33 @@ pub const MIN_VEL_STD_MPS: f64 = 0.3;
 /// tilt and velocity move together and k1 and k2 trade off against each other.
 pub const MAX_CONDITION: f64 = 10.0;
 
+/// Delay of the second instrument (s): the velocity setpoint this long before the sample.
+/// The vehicle follows a setpoint step within about a second (tilt first, then velocity), so
+/// the setpoint now and a second ago move tilt and velocity differently (the two instruments
+/// are not collinear with each other's effect).
+pub const IV_LAG_S: f64 = 1.0;
+/// A velocity setpoint older than this (s) no longer commands anything (the bridge's link
+/// timeout is shorter); the instrument is then 0 (the MCU holds position, or the mission ended).
+pub const SETPOINT_MAX_AGE_S: f64 = 0.5;
+/// Smallest instrument strength (smaller canonical correlation of the setpoints with tilt and
+/// velocity, within windows) for an IV fit to be suggested: below 0.2 the setpoints explain
+/// under 4 % of the regressors' variance along their weakest direction, and a weak-instrument
+/// IV estimate drifts towards the biased least-squares one with intervals that understate it.
+pub const MIN_INSTRUMENT_STRENGTH: f64 = 0.2;
+
+/// The velocity setpoint N, E (m/s) in force at `t_s`: the last one received at or before it,
+/// if at most [`SETPOINT_MAX_AGE_S`] old, else 0. `None` when the bag has no setpoints.
+pub fn setpoint_ne_mps(s: &Series, t_s: f64) -> Option<[f64; 2]> {
+    if s.vel_cmd.is_empty() {
+        return None;
+    }
+    let i = s.vel_cmd.partition_point(|c| c.0 <= t_s);
+    Some(match i.checked_sub(1).map(|k| &s.vel_cmd[k]) {
+        Some(c) if t_s - c.0 <= SETPOINT_MAX_AGE_S => [c.1[0], c.1[1]],
+        _ => [0.0; 2],
+    })
+}
+
 /// One fit sample: N, E components (fixed frame).
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
@@ -84,6 +111,9 @@ pub struct Sample {
     pub vel_ne_mps: [f64; 2],
     /// Acceleration N, E (m/s²).
     pub accel_ne_mps2: [f64; 2],
+    /// Instruments per axis, `[[z1_n, z2_n], [z1_e, z2_e]]`: the velocity setpoint N, E (m/s)
+    /// at t and at t − [`IV_LAG_S`] ([`setpoint_ne_mps`]); NaN when the bag has no setpoints.
+    pub instr_ne: [[f64; 2]; 2],
 }
 
 /// Heading-frame tilt `[−pitch, roll]` rotated into N, E by the yaw.
@@ -130,6 +160,10 @@ pub fn samples(s: &Series, src: AccelSource) -> Vec<Sample> {
     };
     let o = &s.odom;
     let tilt = |k: usize| tilt_ne_rad(o[k].3[0], o[k].3[1], o[k].3[2]);
+    let instr = |t: f64| match (setpoint_ne_mps(s, t), setpoint_ne_mps(s, t - IV_LAG_S)) {
+        (Some(z1), Some(z2)) => [[z1[0], z2[0]], [z1[1], z2[1]]],
+        _ => [[f64::NAN; 2]; 2],
+    };
     let mut out = Vec::new();
     for (i, x) in o.iter().enumerate() {
         let (t, p, v, _) = *x;
@@ -149,6 +183,7 @@ pub fn samples(s: &Series, src: AccelSource) -> Vec<Sample> {
                     tilt_ne_rad: tilt(i),
                     vel_ne_mps: [v[0], v[1]],
                     accel_ne_mps2: a,
+                    instr_ne: instr(t),
                 });
             }
             AccelSource::OdomDifferenced => {
@@ -158,13 +193,15 @@ pub fn samples(s: &Series, src: AccelSource) -> Vec<Sample> {
                 if j0 >= i || j1 <= i || dt <= 0.0 || dt > 2.0 * DIFF_HALF_SPAN_S + MAX_GAP_S {
                     continue;
                 }
-                let n = (j1 - j0 + 1) as f64;
+                // Time average over [t_j0, t_j1] by the trapezoid rule, the mean whose
+                // derivative counterpart is exactly the difference quotient above.
                 let (mut th, mut vm) = ([0.0f64; 2], [0.0f64; 2]);
-                for (k, ok) in o.iter().enumerate().take(j1 + 1).skip(j0) {
-                    let q = tilt(k);
+                for k in j0..j1 {
+                    let (qa, qb) = (tilt(k), tilt(k + 1));
+                    let wgt = 0.5 * (o[k + 1].0 - o[k].0) / dt;
                     for j in 0..2 {
-                        th[j] += q[j] / n;
-                        vm[j] += ok.2[j] / n;
+                        th[j] += wgt * (qa[j] + qb[j]);
+                        vm[j] += wgt * (o[k].2[j] + o[k + 1].2[j]);
                     }
                 }
                 out.push(Sample {
@@ -175,72 +212,10 @@ pub fn samples(s: &Series, src: AccelSource) -> Vec<Sample> {
                         (o[j1].2[0] - o[j0].2[0]) / dt,
                         (o[j1].2[1] - o[j0].2[1]) / dt,
                     ],
+                    instr_ne: instr(t),
                 });
             }
         }
-    }
-    out
-}
-
-/// The samples smoothed by a centred moving average over ±`half_span_s`, the same for tilt,
-/// velocity and acceleration, within each run of samples without a gap > [`MAX_GAP_S`]
-/// (samples closer than `half_span_s` to a run's ends are dropped). The model is linear with
-/// a constant intercept, so the same unit-gain linear filter on every signal keeps it exact
-/// (`F(a) = k1·F(θ) − k2·F(v) + c`) while averaging out the accelerometer's vibration noise,
-/// which is far wider-band than the manoeuvres.
-pub fn smooth(x: &[Sample], half_span_s: f64) -> Vec<Sample> {
-    if half_span_s <= 0.0 {
-        return x.to_vec();
-    }
-    let mut out = Vec::with_capacity(x.len());
-    let mut i0 = 0;
-    while i0 < x.len() {
-        let mut i1 = i0 + 1;
-        while i1 < x.len() && x[i1].t_s - x[i1 - 1].t_s <= MAX_GAP_S {
-            i1 += 1;
-        }
-        let run = &x[i0..i1];
-        // Prefix sums of the 6 components.
-        let comp = |q: &Sample| {
-            [
-                q.tilt_ne_rad[0],
-                q.tilt_ne_rad[1],
-                q.vel_ne_mps[0],
-                q.vel_ne_mps[1],
-                q.accel_ne_mps2[0],
-                q.accel_ne_mps2[1],
-            ]
-        };
-        let mut cum = vec![[0.0f64; 6]; run.len() + 1];
-        for (k, q) in run.iter().enumerate() {
-            let c = comp(q);
-            for m in 0..6 {
-                cum[k + 1][m] = cum[k][m] + c[m];
-            }
-        }
-        let (t_first, t_last) = (run[0].t_s, run[run.len() - 1].t_s);
-        let (mut lo, mut hi) = (0, 0);
-        for (k, q) in run.iter().enumerate() {
-            if q.t_s - half_span_s < t_first || q.t_s + half_span_s > t_last {
-                continue;
-            }
-            while run[lo].t_s < q.t_s - half_span_s {
-                lo += 1;
-            }
-            while hi < run.len() && run[hi].t_s <= q.t_s + half_span_s {
-                hi += 1;
-            }
-            let n = (hi - lo) as f64;
-            let m = |j: usize| (cum[hi][j] - cum[lo][j]) / n;
-            let _ = k;
-            out.push(Sample {
-                t_s: q.t_s,
-                tilt_ne_rad: [m(0), m(1)],
-                vel_ne_mps: [m(2), m(3)],
-                accel_ne_mps2: [m(4), m(5)],
-            });
-        }
-        i0 = i1;
     }
     out
 }
@@ -257,6 +232,8 @@ pub struct Window {
 #[derive(Clone, Debug, Serialize)]
 pub struct SysId {
     pub accel_source: String,
+    /// "instrumental variables …" or "least squares" ([`fit`]).
+    pub estimator: String,
     pub samples: usize,
     pub window_s: f64,
     pub windows: u32,
@@ -266,7 +243,8 @@ pub struct SysId {
     /// 95 % half-widths, widened for correlated residuals.
     pub k1_ci95_mps2_per_rad: f64,
     pub k2_ci95_per_s: f64,
-    /// The same from `σ²·(XᵀX)⁻¹` alone (white residuals).
+    /// The same from the residual variance and `(XᵀX)⁻¹` (least squares) or
+    /// `(ZᵀX)⁻¹·ZᵀZ·(XᵀZ)⁻¹` (IV) alone, i.e. for white residuals.
     pub k1_ci95_white_mps2_per_rad: f64,
     pub k2_ci95_white_per_s: f64,
     /// Lag-1 correlation of the residuals and the resulting widening factor.
@@ -279,10 +257,15 @@ pub struct SysId {
     pub tilt_std_rad: f64,
     pub vel_std_mps: f64,
     pub condition_number: f64,
+    /// IV only: smaller canonical correlation of instruments and regressors (NaN otherwise).
+    pub instrument_strength: f64,
     /// Wind estimated from the intercepts, mean over windows (weighted by samples) N, E (m/s),
     /// and the RMS spread of the windows' winds about it.
     pub wind_mean_ne_mps: [f64; 2],
     pub wind_spread_mps: f64,
+    /// When IV is the estimator: least squares on the same windows, [k1, ±95 %, k2, ±95 %]
+    /// (the same widening), for comparison.
+    pub least_squares: Option<[f64; 4]>,
     /// Paper A's fit without the wind (heading frame, as before): k1, k2, R².
     pub no_wind_fit: Option<[f64; 3]>,
     /// `Some([k1, k2])` when the fit passes [`judge`].
@@ -293,9 +276,46 @@ pub struct SysId {
     pub window_list: Vec<Window>,
 }
 
-/// Fit the model with the wind to `samples` (time-ordered), windows of `window_s`.
+/// Residual lag-1 correlation of the model `k1`, `k2` with each window's intercept
+/// (consecutive samples of one window and axis), pooled over axes and windows.
+fn residual_lag1(samples: &[Sample], win_of: &[usize], windows: &[Window], k: (f32, f32)) -> f64 {
+    let (k1, k2) = k;
+    let (mut s00, mut s01) = (0.0f64, 0.0f64);
+    let mut prev: Option<(usize, [f64; 2])> = None;
+    for (x, &w) in samples.iter().zip(win_of) {
+        let c = windows[w].means.intercept_ne_mps2(k1, k2);
+        let e = [0, 1].map(|j| {
+            x.accel_ne_mps2[j] - k1 as f64 * x.tilt_ne_rad[j] + k2 as f64 * x.vel_ne_mps[j]
+                - c[j] as f64
+        });
+        if let Some((_, pe)) = prev.filter(|p| p.0 == w) {
+            for j in 0..2 {
+                s00 += pe[j] * pe[j];
+                s01 += pe[j] * e[j];
+            }
+        }
+        prev = Some((w, e));
+    }
+    if s00 > 0.0 {
+        s01 / s00
+    } else {
+        f64::NAN
+    }
+}
+
+/// Fit the model with the wind to `samples` (time-ordered), windows of `window_s`: with
+/// instrumental variables ([`fcc_nav::sysid::WindIvFit`]) when every sample has its
+/// instruments (the bag has velocity setpoints) and they vary within the windows, else by
+/// least squares ([`fcc_nav::sysid::WindPlaneFit`]), which is shown but never suggested: in
+/// closed loop the tilt answers the gusts left in the residual, and least squares comes out
+/// low (on the main job's windy bag k1 = 7.8 against the calm-air 9.17, where IV gives 9.2).
 pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysId, String> {
     let mut wf = WindPlaneFit::new();
+    let mut ivf = WindIvFit::new();
+    let use_iv = !samples.is_empty()
+        && samples
+            .iter()
+            .all(|x| x.instr_ne.iter().flatten().all(|z| z.is_finite()));
     let mut plain = PlaneFit::new();
     let mut windows: Vec<Window> = Vec::new();
     // Window of each sample (index into `windows`, filled as they close).
@@ -311,6 +331,7 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
                     t1_s: last,
                     means: wf.end_window().unwrap_or_default(),
                 });
+                ivf.end_window();
                 start = None;
             }
         }
@@ -321,9 +342,17 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
             f32x2(x.vel_ne_mps),
             f32x2(x.accel_ne_mps2),
         );
+        if use_iv {
+            ivf.add(
+                [f32x2(x.instr_ne[0]), f32x2(x.instr_ne[1])],
+                f32x2(x.tilt_ne_rad),
+                f32x2(x.vel_ne_mps),
+                f32x2(x.accel_ne_mps2),
+            );
+        }
         win_of.push(windows.len());
-        // Paper A's plain fit, heading frame (k1, k2 are rotation-invariant, so N/E is the
-        // same plane).
+        // Paper A's plain fit (k1, k2 are rotation-invariant, so N/E is the heading-frame
+        // plane).
         for j in 0..2 {
             plain.add(
                 x.tilt_ne_rad[j] as f32,
@@ -332,12 +361,30 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
             );
         }
     }
-    let r = wf.solve().ok_or_else(|| {
-        format!(
-            "no fit: {} airborne samples, tilt and velocity constant or collinear within the windows",
-            samples.len()
-        )
-    })?;
+    let ls = wf.solve();
+    let iv = if use_iv { ivf.solve() } else { None };
+    let (r, estimator) = match (iv, ls) {
+        (Some(r), _) => (
+            r,
+            format!("instrumental variables (velocity setpoints now and {IV_LAG_S} s earlier)"),
+        ),
+        (None, Some(r)) => (
+            r,
+            if use_iv {
+                "least squares (the setpoints are constant within the windows: no instruments)"
+            } else {
+                "least squares (no velocity setpoints in the bag for instruments)"
+            }
+            .to_string(),
+        ),
+        (None, None) => {
+            return Err(format!(
+                "no fit: {} airborne samples, tilt and velocity constant or collinear within the windows",
+                samples.len()
+            ))
+        }
+    };
+    let is_iv = r.instrument_strength.is_finite();
     if let Some((t0, last)) = start {
         windows.push(Window {
             t0_s: t0,
@@ -346,37 +393,28 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
         });
     }
     let (k1, k2) = (r.k1_mps2_per_rad, r.k2_per_s);
-    // Residual lag-1 correlation (consecutive samples of one window and axis).
-    let (mut s00, mut s01) = (0.0f64, 0.0f64);
-    let mut prev: Option<(usize, [f64; 2])> = None;
-    for (x, &w) in samples.iter().zip(&win_of) {
-        let c = windows[w].means.intercept_ne_mps2(k1, k2);
-        let e = [0, 1].map(|j| {
-            x.accel_ne_mps2[j] - k1 as f64 * x.tilt_ne_rad[j] + k2 as f64 * x.vel_ne_mps[j]
-                - c[j] as f64
-        });
-        if let Some((_, pe)) = prev.filter(|p| p.0 == w) {
-            for j in 0..2 {
-                s00 += pe[j] * pe[j];
-                s01 += pe[j] * e[j];
-            }
-        }
-        prev = Some((w, e));
-    }
-    let rho = if s00 > 0.0 { s01 / s00 } else { f64::NAN };
+    let rho = residual_lag1(samples, &win_of, &windows, (k1, k2));
     let infl = ar1_inflation(rho as f32);
     let (c1, c2) = r.ci95(infl);
     let (w1, w2) = r.ci95(1.0);
+    let least_squares = ls.filter(|_| is_iv).map(|l| {
+        let rho = residual_lag1(samples, &win_of, &windows, (l.k1_mps2_per_rad, l.k2_per_s));
+        let (c1, c2) = l.ci95(ar1_inflation(rho as f32));
+        [
+            l.k1_mps2_per_rad as f64,
+            c1 as f64,
+            l.k2_per_s as f64,
+            c2 as f64,
+        ]
+    });
     // Wind per window.
     let (mut wsum, mut n) = ([0.0f64; 2], 0.0f64);
     let winds: Vec<([f32; 2], f64)> = windows
         .iter()
         .map(|w| (w.means.wind_ne_mps(k1, k2), w.means.samples as f64))
-        .collect();
-    for (w, m) in winds
-        .iter()
         .filter(|(w, _)| w[0].is_finite() && w[1].is_finite())
-    {
+        .collect();
+    for (w, m) in &winds {
         wsum[0] += w[0] as f64 * m;
         wsum[1] += w[1] as f64 * m;
         n += m;
@@ -384,13 +422,13 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
     let wmean = [wsum[0] / n, wsum[1] / n];
     let spread = (winds
         .iter()
-        .filter(|(w, _)| w[0].is_finite() && w[1].is_finite())
         .map(|(w, m)| m * ((w[0] as f64 - wmean[0]).powi(2) + (w[1] as f64 - wmean[1]).powi(2)))
         .sum::<f64>()
         / n)
         .sqrt();
     let mut out = SysId {
         accel_source: accel_source.to_string(),
+        estimator,
         samples: samples.len(),
         window_s,
         windows: windows.len() as u32,
@@ -408,8 +446,10 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
         tilt_std_rad: r.tilt_std_rad as f64,
         vel_std_mps: r.vel_std_mps as f64,
         condition_number: r.condition_number as f64,
+        instrument_strength: r.instrument_strength as f64,
         wind_mean_ne_mps: wmean,
         wind_spread_mps: spread,
+        least_squares,
         no_wind_fit: plain.solve().map(|p| {
             [
                 p.k1_mps2_per_rad as f64,
@@ -480,6 +520,17 @@ pub fn judge(f: &SysId) -> Result<(), String> {
             f.condition_number
         ));
     }
+    if !f.instrument_strength.is_finite() {
+        why.push(
+            "least squares only (no velocity setpoints that vary to use as instruments): in closed loop the controller's answer to gusts biases it low"
+                .into(),
+        );
+    } else if f.instrument_strength < MIN_INSTRUMENT_STRENGTH {
+        why.push(format!(
+            "instrument strength {:.2} < {MIN_INSTRUMENT_STRENGTH} (the setpoints barely move tilt and velocity)",
+            f.instrument_strength
+        ));
+    }
     if why.is_empty() {
         Ok(())
     } else {
@@ -497,8 +548,8 @@ impl std::fmt::Display for SysId {
     fn fmt(&self, w: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(
             w,
-            "k1/k2 fit (a = k1·tilt − k2·(v − wind), wind per N/E axis constant over {:.0} s windows; {} samples, {} windows, acceleration from {}):",
-            self.window_s, self.samples, self.windows, self.accel_source
+            "k1/k2 fit (a = k1·tilt − k2·(v − wind), wind per N/E axis constant over {:.0} s windows; {} samples, {} windows; {}; acceleration from {}):",
+            self.window_s, self.samples, self.windows, self.estimator, self.accel_source
         )?;
         writeln!(
             w,
@@ -517,9 +568,13 @@ impl std::fmt::Display for SysId {
         let (n, e) = (self.wind_mean_ne_mps[0], self.wind_mean_ne_mps[1]);
         write!(
             w,
-            "  excitation: tilt σ {:.3} rad, velocity σ {:.2} m/s, condition number {:.2}; ",
+            "  excitation: tilt σ {:.3} rad, velocity σ {:.2} m/s, condition number {:.2}",
             self.tilt_std_rad, self.vel_std_mps, self.condition_number,
         )?;
+        if self.instrument_strength.is_finite() {
+            write!(w, ", instrument strength {:.2}", self.instrument_strength)?;
+        }
+        write!(w, "; ")?;
         if n.is_finite() && e.is_finite() {
             // Direction the wind blows from, degrees clockwise from north.
             let from_deg = ((-e).atan2(-n).to_degrees() + 360.0) % 360.0;
@@ -534,6 +589,12 @@ impl std::fmt::Display for SysId {
             )?;
         } else {
             writeln!(w, "no wind estimate (needs k2 > 0)")?;
+        }
+        if let Some([k1, c1, k2, c2]) = self.least_squares {
+            writeln!(
+                w,
+                "  least squares, same windows (biased low where the controller answers gusts): k1 = {k1:.3} ± {c1:.3}, k2 = {k2:.4} ± {c2:.4}"
+            )?;
         }
         if let Some([k1, k2, r2]) = self.no_wind_fit {
             writeln!(
