@@ -577,12 +577,7 @@ impl WindIvFit {
             f64::NAN
         };
         // Correlation matrix of instruments and regressors; its smaller singular value.
-        let mut c = [[0.0; 2]; 2];
-        for p in 0..2 {
-            for q in 0..2 {
-                c[p][q] = w.zx[p][q] / sqrt(w.zz[p][p] * w.xx[q][q]);
-            }
-        }
+        let c = [0, 1].map(|p| [0, 1].map(|q| w.zx[p][q] / sqrt(w.zz[p][p] * w.xx[q][q])));
         let ctc = mul2(transpose2(c), c);
         let (tr, det) = (
             ctc[0][0] + ctc[1][1],
