@@ -22,20 +22,39 @@
 //! in N, E is the heading-frame model with the N/E wind rotated into it, since the rotation is
 //! orthogonal and k1, k2 are the same on both axes).
 //!
-//! The acceleration is `state/odom`'s velocity differenced over ±[`DIFF_HALF_SPAN_S`], with
-//! the tilt and velocity averaged over the same samples ([`samples`]). The bag's
-//! `accel/measured` (the gravity-compensated accelerometer, the quantity the calm-air fit in
-//! `tests/tests/sysid.rs` uses at 500 Hz) gives the same k1/k2 within its uncertainty, but at
-//! the bag's rate its vibration noise leaves R² ≈ 0.02 and intervals of ±30 % on the main
-//! job's flight; the odometry velocity is that accelerometer integrated and corrected by GPS
-//! in the flight core, which removes the noise without a lag the averaging does not match.
-//! Neither the differencing nor the tilt source (the estimated attitude, as in the calm-air
-//! fit) caused the low k1 of the plain fit: the wind did.
+//! The window's constant takes the mean wind and its slow swings, not the gusts within the
+//! window: `k2·(w(t) − w_m)` stays in the residual, and the flight controller tilts against
+//! exactly that disturbance, so tilt and residual are correlated and least squares reads
+//! "tilt without acceleration" once more (on the main job's windy bag: k1 = 7.8 with 5 s
+//! windows, 6.6 with 20 s, against the calm-air 9.17). The estimator is therefore
+//! **instrumental variables** ([`fcc_nav::sysid::WindIvFit`]): the instruments are the mission's
+//! velocity setpoints along each axis, now and [`IV_LAG_S`] earlier — they move tilt and
+//! velocity but do not depend on the gusts — and
 //!
-//! Uncertainty: the standard errors `σ²·(XᵀX)⁻¹` assume white residuals; flight residuals
-//! (turbulence, unmodelled dynamics) are strongly correlated from one sample to the next, so the
-//! 95 % intervals are widened by [`fcc_nav::sysid::ar1_inflation`] of the residuals' lag-1
-//! correlation. A fit is only suggested as parameters when it passes [`judge`].
+//! ```text
+//! [k1, −k2] = (ZᵀX)⁻¹·Zᵀa,   Cov = σ²·(ZᵀX)⁻¹·ZᵀZ·(XᵀZ)⁻¹,   σ² = Σ residual² / dof
+//! ```
+//!
+//! with X = [θ, v], Z the instruments, all centred within each window and axis (which
+//! eliminates the wind intercepts exactly). On the main job's bag IV gives k1 = 9.0–9.7 for
+//! windows of 3–20 s, where least squares falls from 8.1 to 6.6. Without setpoints that vary
+//! (no mission, a hover) the fit falls back to least squares, printed but never suggested.
+//!
+//! The acceleration is `state/odom`'s velocity differenced over ±[`DIFF_HALF_SPAN_S`], with
+//! the tilt and velocity averaged over the same interval ([`samples`]). The bag's
+//! `accel/measured` (the gravity-compensated accelerometer, the quantity the calm-air fit in
+//! `tests/tests/sysid.rs` uses at 500 Hz) gives the same k1/k2 within its uncertainty (IV:
+//! k1 = 9.5 ± 4.0 on that bag), but at the bag's rate its vibration noise leaves R² ≈ 0.02;
+//! the odometry velocity is that accelerometer integrated and corrected by GPS in the flight
+//! core, which removes the noise (R² ≈ 0.76). Neither the differencing nor the tilt source
+//! (the estimated attitude, as in the calm-air fit) caused the low k1 of the plain fit: the
+//! wind did, then the gusts.
+//!
+//! Uncertainty: the standard errors from the residual variance assume white residuals; flight
+//! residuals (turbulence, unmodelled dynamics) are strongly correlated from one sample to the
+//! next, so the 95 % intervals are widened by [`fcc_nav::sysid::ar1_inflation`] of the
+//! residuals' lag-1 correlation (conservative). A fit is only suggested as parameters when it
+//! passes [`judge`]; otherwise the report prints `no suggestion: <reasons>`.
 
 use crate::figures::Series;
 use fcc_nav::sysid::{ar1_inflation, PlaneFit, WindIvFit, WindPlaneFit, WindowMeans};
