@@ -417,7 +417,7 @@ fn main() -> anyhow::Result<()> {
                 "m/s²",
                 vec![
                     Line {
-                        name: "measured",
+                        name: "measured (odometry velocity, differenced)",
                         pts: meas,
                         color: c(150, 150, 150),
                         dots: true,
