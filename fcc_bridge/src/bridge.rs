@@ -256,16 +256,44 @@ impl Inbound {
 /// A message from a subscription, with the string that was cut on arrival (if any).
 type InboundMsg = (Inbound, Option<bounded::Oversize>);
 
+/// Samples of an incoming topic that rustdds keeps in its topic cache. Without a resource
+/// limit it keeps 64 per topic whatever the history depth: 64 MB per topic when a peer sends
+/// 1 MB messages. The topic is created on the participant with this limit (ros2-client's
+/// `QosProfile` has no resource limits, and rustdds only ever raises a topic's limit).
+const INBOUND_KEEP: i32 = 4;
+
 fn subscribe<T: RosMsg + Sync>(
+    ctx: &Context,
+    node_name: &NodeName,
     node: &mut Node,
     name: &str,
     tx: mpsc::Sender<InboundMsg>,
     wrap: fn(T) -> Inbound,
 ) -> Result<(), BridgeError> {
+    use rustdds::policy::ResourceLimits;
     // Best-effort reader: matches both reliable (`ros2 topic pub`) and best-effort writers.
-    let qos = QosProfile::subscription_default().history(History::KeepLast { depth: 10 });
-    let topic = node
-        .create_topic(&Name::parse(name).map_err(ros_err)?, T::type_name(), &qos)
+    let qos = QosProfile::subscription_default().history(History::KeepLast {
+        depth: INBOUND_KEEP as usize,
+    });
+    let limits = rustdds::QosPolicyBuilder::new()
+        .resource_limits(ResourceLimits {
+            max_samples: INBOUND_KEEP,
+            max_instances: 1,
+            max_samples_per_instance: INBOUND_KEEP,
+        })
+        .build();
+    let dds_qos = rustdds::QosPolicies::from(&qos).modify_by(&limits);
+    let dds_name = Name::parse(name)
+        .map_err(ros_err)?
+        .to_dds_name("rt", node_name, "");
+    let topic = ctx
+        .domain_participant()
+        .create_topic(
+            dds_name,
+            T::type_name().dds_msg_type(),
+            &dds_qos,
+            rustdds::TopicKind::NoKey,
+        )
         .map_err(ros_err)?;
     let sub = node
         .create_subscription::<T>(&topic, None)
@@ -672,16 +700,40 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     let pubs = Publishers::new(&mut node, opts)?;
     step.set("creating the subscriptions");
     let (tx, rx) = mpsc::channel::<InboundMsg>(64);
+    let node_name = NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?;
     subscribe::<TwistStamped>(
+        &ctx,
+        &node_name,
         &mut node,
         &opts.name("setpoint/velocity"),
         tx.clone(),
         Inbound::Setpoint,
     )?;
-    subscribe::<Bool>(&mut node, &opts.name("cmd/arm"), tx.clone(), Inbound::Arm)?;
-    subscribe::<StringMsg>(&mut node, &opts.name("cmd/mode"), tx.clone(), Inbound::Mode)?;
+    subscribe::<Bool>(
+        &ctx,
+        &node_name,
+        &mut node,
+        &opts.name("cmd/arm"),
+        tx.clone(),
+        Inbound::Arm,
+    )?;
+    subscribe::<StringMsg>(
+        &ctx,
+        &node_name,
+        &mut node,
+        &opts.name("cmd/mode"),
+        tx.clone(),
+        Inbound::Mode,
+    )?;
     if opts.use_sim_time && opts.clock == ClockSource::Sync {
-        subscribe::<Clock>(&mut node, &opts.name("/clock"), tx, Inbound::Clock)?;
+        subscribe::<Clock>(
+            &ctx,
+            &node_name,
+            &mut node,
+            &opts.name("/clock"),
+            tx,
+            Inbound::Clock,
+        )?;
     }
     step.set("creating the services");
     use link::CommandKind as K;
