@@ -22,6 +22,15 @@ use fcc_nav::GRAVITY_MPS2;
 
 /// A fused ground height with a larger variance than this is not trusted for landing (m²).
 const GROUND_MAX_VAR_M2: f32 = 0.25;
+/// LAND: below this height of the gear over the ground the tilt is limited to
+/// [`LAND_LEVEL_TILT_DEG`], m.
+const LAND_LEVEL_HEIGHT_M: f32 = 0.15;
+/// LAND: the tilt limit just before touchdown, deg.
+const LAND_LEVEL_TILT_DEG: f32 = 4.5;
+/// Velocity mode: command reduction per m/s of estimated speed over the limit.
+const SPEED_LIMIT_GAIN: f32 = 2.0;
+/// Velocity mode: largest rate of change of the horizontal velocity command, m/s².
+const VEL_SLEW_MPS2: f32 = 2.0;
 /// Velocity mode: the integrated target height stays within this of the estimate, m.
 const VEL_ALT_LEAD_M: f32 = 1.0;
 /// A velocity-mode descent faster than this is the operator's own (the terrain floor lets it
@@ -76,6 +85,8 @@ pub struct FlightCore {
     /// Velocity mode: the height the commanded climb rate integrates to (m, up); `None` until
     /// the first velocity-mode step.
     vel_alt_m: Option<f32>,
+    /// Velocity mode: the slew-limited horizontal command (NED north, east), m/s.
+    vel_slew_ne: Option<[f32; 2]>,
     /// Truly above the terrain floor since take-off (the floor then applies).
     above_floor: bool,
     yaw_hold_rad: f32,
@@ -127,6 +138,7 @@ impl FlightCore {
             hold_ne_m: [0.0; 2],
             hold_alt_m: 0.0,
             vel_alt_m: None,
+            vel_slew_ne: None,
             above_floor: false,
             yaw_hold_rad: 0.0,
             takeoff_alt_m: 0.0,
@@ -436,6 +448,7 @@ impl FlightCore {
 
     fn enter_hold(&mut self, nav: &NavState) {
         self.vel_alt_m = None;
+        self.vel_slew_ne = None;
         self.mode = Mode::Hold;
         self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         self.hold_alt_m = -nav.pos_ned_m[2];
@@ -445,6 +458,7 @@ impl FlightCore {
 
     fn enter_land(&mut self, nav: &NavState) {
         self.vel_alt_m = None;
+        self.vel_slew_ne = None;
         self.mode = Mode::Land;
         self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         self.yaw_hold_rad = nav.euler.yaw_rad;
@@ -554,11 +568,9 @@ impl FlightCore {
                         self.yaw_hold_rad = y;
                     }
                     let vz = self.velocity_climb(dt_s, sp.vel_ned_mps[2], alt);
-                    (
-                        [sp.vel_ned_mps[0], sp.vel_ned_mps[1]],
-                        vz,
-                        self.yaw_hold_rad,
-                    )
+                    let target = [sp.vel_ned_mps[0], sp.vel_ned_mps[1]];
+                    let v = self.slew_velocity(dt_s, target, nav);
+                    (v, vz, self.yaw_hold_rad)
                 }
                 None => (hold_ne(self), 0.0, self.yaw_hold_rad),
             },
@@ -640,6 +652,28 @@ impl FlightCore {
         (v_ne, vz_down, yaw)
     }
 
+    /// Velocity mode: the horizontal command moves towards the setpoint at no more than
+    /// [`VEL_SLEW_MPS2`] (a step from hover to the speed limit would otherwise saturate the
+    /// tilt and overshoot the speed); it starts from the estimated velocity.
+    fn slew_velocity(&mut self, dt_s: f32, target_ne: [f32; 2], nav: &NavState) -> [f32; 2] {
+        let v = self
+            .vel_slew_ne
+            .get_or_insert([nav.vel_ned_mps[0], nav.vel_ned_mps[1]]);
+        let d = [target_ne[0] - v[0], target_ne[1] - v[1]];
+        let step = clamp_norm(d, VEL_SLEW_MPS2 * dt_s);
+        *v = [v[0] + step[0], v[1] + step[1]];
+        // Speed limit as a feedback, not only a clamp of the command: a gust that pushes the
+        // estimated speed over the limit pulls the command back along the velocity.
+        let u = [nav.vel_ned_mps[0], nav.vel_ned_mps[1]];
+        let speed = fcc_nav::math::hypotf(u[0], u[1]);
+        let excess = speed - self.params.limits.max_horiz_speed_mps;
+        if excess > 0.0 && speed > 0.0 {
+            let k = SPEED_LIMIT_GAIN * excess / speed;
+            return [v[0] - k * u[0], v[1] - k * u[1]];
+        }
+        *v
+    }
+
     /// Velocity mode's vertical channel: the commanded climb rate integrates into a target
     /// height `h_t` that the height loop holds, so a zero climb rate holds the height instead
     /// of drifting with the velocity estimate (PX4's position lock under velocity setpoints):
@@ -692,6 +726,22 @@ impl FlightCore {
         ))
     }
 
+    /// The tilt limit: `limits.max_tilt_deg`, and in LAND's last [`LAND_LEVEL_HEIGHT_M`] above
+    /// the gear no more than [`LAND_LEVEL_TILT_DEG`] (touch down level: a tilted gear catches
+    /// a foot and tips the vehicle over).
+    fn tilt_limit_rad(&self, nav: &NavState) -> f32 {
+        let on_ground_m = self.params.airframe.sensor_height_on_ground_m;
+        let level = self.mode == Mode::Land
+            && self.ground_usable(nav)
+            && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M;
+        let l = self.params.limits;
+        if level {
+            l.max_tilt_deg.min(LAND_LEVEL_TILT_DEG).to_radians()
+        } else {
+            l.max_tilt_deg.to_radians()
+        }
+    }
+
     fn control(
         &mut self,
         dt_s: f32,
@@ -701,7 +751,6 @@ impl FlightCore {
         yaw_cmd: f32,
     ) {
         let c = self.params.control;
-        let l = self.params.limits;
         let e = nav.euler;
         if self.land.landed() && vz_cmd_down < -0.2 {
             self.land.take_off();
@@ -739,7 +788,7 @@ impl FlightCore {
         let v_fr = to_fr(v_ne);
         let a_meas_fr = to_fr([nav.accel_ned_mps2[0], nav.accel_ned_mps2[1]]);
         let tilt_fr = [-e.pitch_rad, e.roll_rad];
-        let max_tilt = l.max_tilt_deg.to_radians();
+        let max_tilt = self.tilt_limit_rad(nav);
         let mut tilt_cmd = [0.0f32; 2];
         let mut a_est = [0.0f32; 2];
         for i in 0..2 {

@@ -281,6 +281,13 @@ impl Navigator {
                     let ned = home.lla_to_ned(&lla);
                     let delay_steps = (self.params.gps_latency_s / 0.002 + 0.5) as usize;
                     self.horiz.gps([ned[0] as f32, ned[1] as f32], delay_steps);
+                    if g.vel_ned_mps.iter().all(|v| v.is_finite()) {
+                        self.horiz.gps_velocity(
+                            [g.vel_ned_mps[0], g.vel_ned_mps[1]],
+                            delay_steps,
+                            self.params.gps_vel_gain,
+                        );
+                    }
                     self.last_gps_us = Some(now_us);
                 }
             }

@@ -80,6 +80,10 @@ pub struct NavParams {
     pub range_aid_max_m: f32,
     /// Vertical filter crossover while range-aided (the measurement is then good to cm).
     pub vert_aided_omega_radps: f32,
+    /// GPS velocity aiding of the horizontal filter: gain per fix (0 = position only, paper
+    /// A's filter). The receiver's Doppler velocity (u-blox M8: 0.05 m/s) is far better than
+    /// differentiated positions with a metre of slowly wandering error.
+    pub gps_vel_gain: f32,
 }
 
 impl Default for NavParams {
@@ -105,6 +109,7 @@ impl Default for NavParams {
             horiz_bias_pole_radps: 0.05,
             range_aid_max_m: 8.0,
             vert_aided_omega_radps: 1.0,
+            gps_vel_gain: 0.3,
         }
     }
 }
@@ -253,7 +258,7 @@ impl Default for LimitParams {
             hold_max_speed_mps: 1.5,
             max_climb_mps: 2.5,
             max_descent_mps: 1.5,
-            max_tilt_deg: 25.0,
+            max_tilt_deg: 35.0,
             fence_radius_m: 200.0,
             fence_alt_m: 100.0,
             setpoint_lost_land_s: 3.0,

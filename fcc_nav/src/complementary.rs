@@ -238,6 +238,8 @@ pub struct PosVelCf<const HIST: usize> {
     vel: f32,
     innov_rate: f32,
     hist: [f32; HIST],
+    /// Predicted velocities beside `hist`, for delayed velocity measurements.
+    vhist: [f32; HIST],
     head: usize,
     meas: Option<f32>,
     delay_steps: usize,
@@ -265,6 +267,7 @@ impl<const HIST: usize> PosVelCf<HIST> {
             vel: 0.0,
             innov_rate: 0.0,
             hist: [0.0; HIST],
+            vhist: [0.0; HIST],
             head: 0,
             meas: None,
             delay_steps: 0,
@@ -313,6 +316,7 @@ impl<const HIST: usize> PosVelCf<HIST> {
         self.vel = vel;
         self.innov_rate = 0.0;
         self.hist = [pos; HIST];
+        self.vhist = [vel; HIST];
         self.head = 0;
         self.meas = None;
         self.age_s = 0.0;
@@ -330,6 +334,20 @@ impl<const HIST: usize> PosVelCf<HIST> {
         self.meas = Some(pos);
         self.delay_steps = delay_steps.min(HIST - 1);
         self.age_s = 0.0;
+    }
+
+    /// A velocity measurement `v` (e.g. GPS Doppler velocity), valid `delay_steps` updates ago,
+    /// applied once: `v̂ ← v̂ + k_v·(v − v̂(t − d))` against the velocity predicted for its time
+    /// (the history beside the positions). With `k_v` per fix at the fix rate `f`, the velocity
+    /// error decays at ≈ `k_v·f` 1/s and the measurement noise is averaged over ≈ `2/k_v` fixes.
+    pub fn velocity_measurement(&mut self, v: f32, delay_steps: usize, gain: f32) {
+        let idx = (self.head + HIST - delay_steps.min(HIST - 1)) % HIST;
+        let e = v - self.vhist[idx];
+        let k = gain.clamp(0.0, 1.0);
+        self.vel += k * e;
+        for x in self.vhist.iter_mut() {
+            *x += k * e;
+        }
     }
 
     /// Drop the held measurement (pure dead reckoning from now on).
@@ -350,6 +368,7 @@ impl<const HIST: usize> PosVelCf<HIST> {
         let v_pred = self.vel + accel * dt_s;
         self.head = (self.head + 1) % HIST;
         self.hist[self.head] = x_pred;
+        self.vhist[self.head] = v_pred;
         self.pos = x_pred;
         self.vel = v_pred;
         self.innov_rate = 0.0;

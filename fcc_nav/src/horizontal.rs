@@ -36,6 +36,15 @@ impl HorizontalEstimator {
         self.e.set_measurement(pos_ne_m[1], delay_steps);
     }
 
+    /// GPS velocity (NE \[m/s]) measured `delay_steps` updates ago, applied once with gain
+    /// `gain` per fix ([`PosVelCf::velocity_measurement`]).
+    pub fn gps_velocity(&mut self, vel_ne_mps: [f32; 2], delay_steps: usize, gain: f32) {
+        self.n
+            .velocity_measurement(vel_ne_mps[0], delay_steps, gain);
+        self.e
+            .velocity_measurement(vel_ne_mps[1], delay_steps, gain);
+    }
+
     /// Drop the held GPS fix (dead reckoning).
     pub fn clear_gps(&mut self) {
         self.n.clear_measurement();
