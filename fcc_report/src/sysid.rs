@@ -50,10 +50,12 @@
 //! (the estimated attitude, as in the calm-air fit) caused the low k1 of the plain fit: the
 //! wind did, then the gusts.
 //!
-//! Uncertainty: the standard errors from the residual variance assume white residuals; flight
-//! residuals (turbulence, unmodelled dynamics) are strongly correlated from one sample to the
-//! next, so the 95 % intervals are widened by [`fcc_nav::sysid::ar1_inflation`] of the
-//! residuals' lag-1 correlation (conservative). A fit is only suggested as parameters when it
+//! Uncertainty: the standard errors from the residual variance and `(XᵀX)⁻¹` (or the IV
+//! sandwich) assume white residuals; flight residuals (turbulence, unmodelled dynamics) are
+//! strongly correlated from one sample to the next. The 95 % intervals used are the larger of
+//! the window-clustered ones (sandwich over the windows' score sums,
+//! [`fcc_nav::sysid::ClusterMeat`]) and the white ones widened by
+//! [`fcc_nav::sysid::ar1_inflation`] of the residuals' lag-1 correlation ([`ci95`]). A fit is only suggested as parameters when it
 //! passes [`judge`]; otherwise the report prints `no suggestion: <reasons>`.
 
 use crate::figures::Series;
@@ -259,9 +261,16 @@ pub struct SysId {
     pub dof: u32,
     pub k1_mps2_per_rad: f64,
     pub k2_per_s: f64,
-    /// 95 % half-widths, widened for correlated residuals.
+    /// 95 % half-widths used for the verdict: the larger of the window-clustered interval and
+    /// the AR(1)-widened one ([`ci95`]).
     pub k1_ci95_mps2_per_rad: f64,
     pub k2_ci95_per_s: f64,
+    /// Window-clustered (sandwich) 95 % half-widths, `t(windows − 1)`.
+    pub k1_ci95_cluster_mps2_per_rad: f64,
+    pub k2_ci95_cluster_per_s: f64,
+    /// AR(1)-widened 95 % half-widths (white ones × `ci_inflation`).
+    pub k1_ci95_ar1_mps2_per_rad: f64,
+    pub k2_ci95_ar1_per_s: f64,
     /// The same from the residual variance and `(XᵀX)⁻¹` (least squares) or
     /// `(ZᵀX)⁻¹·ZᵀZ·(XᵀZ)⁻¹` (IV) alone, i.e. for white residuals.
     pub k1_ci95_white_mps2_per_rad: f64,
@@ -320,6 +329,28 @@ fn residual_lag1(samples: &[Sample], win_of: &[usize], windows: &[Window], k: (f
     } else {
         f64::NAN
     }
+}
+
+/// 95 % half-widths of (k1, k2): `[used k1, used k2, cluster k1, cluster k2, AR(1) k1,
+/// AR(1) k2, white k1, white k2]`. Used = the larger of the window-clustered interval (valid
+/// for any correlation inside a window, but itself uncertain with few windows) and the white
+/// interval widened by `inflation` (the AR(1) bound, which misses slow residual components
+/// under white noise: in gusty synthetic flights it covered the truth in only ~half of them).
+pub fn ci95(r: &fcc_nav::sysid::WindFitResult, inflation: f32) -> [f64; 8] {
+    let (c1, c2) = r.ci95_cluster();
+    let (a1, a2) = r.ci95(inflation);
+    let (w1, w2) = r.ci95(1.0);
+    let m = |x: f32, y: f32| if x.is_nan() { y } else { x.max(y) } as f64;
+    [
+        m(c1, a1),
+        m(c2, a2),
+        c1 as f64,
+        c2 as f64,
+        a1 as f64,
+        a2 as f64,
+        w1 as f64,
+        w2 as f64,
+    ]
 }
 
 /// Fit the model with the wind to `samples` (time-ordered), windows of `window_s`: with
@@ -414,17 +445,11 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
     let (k1, k2) = (r.k1_mps2_per_rad, r.k2_per_s);
     let rho = residual_lag1(samples, &win_of, &windows, (k1, k2));
     let infl = ar1_inflation(rho as f32);
-    let (c1, c2) = r.ci95(infl);
-    let (w1, w2) = r.ci95(1.0);
+    let ci = ci95(&r, infl);
     let least_squares = ls.filter(|_| is_iv).map(|l| {
         let rho = residual_lag1(samples, &win_of, &windows, (l.k1_mps2_per_rad, l.k2_per_s));
-        let (c1, c2) = l.ci95(ar1_inflation(rho as f32));
-        [
-            l.k1_mps2_per_rad as f64,
-            c1 as f64,
-            l.k2_per_s as f64,
-            c2 as f64,
-        ]
+        let c = ci95(&l, ar1_inflation(rho as f32));
+        [l.k1_mps2_per_rad as f64, c[0], l.k2_per_s as f64, c[1]]
     });
     // Wind per window.
     let (mut wsum, mut n) = ([0.0f64; 2], 0.0f64);
@@ -454,10 +479,14 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
         dof: r.dof,
         k1_mps2_per_rad: k1 as f64,
         k2_per_s: k2 as f64,
-        k1_ci95_mps2_per_rad: c1 as f64,
-        k2_ci95_per_s: c2 as f64,
-        k1_ci95_white_mps2_per_rad: w1 as f64,
-        k2_ci95_white_per_s: w2 as f64,
+        k1_ci95_mps2_per_rad: ci[0],
+        k2_ci95_per_s: ci[1],
+        k1_ci95_cluster_mps2_per_rad: ci[2],
+        k2_ci95_cluster_per_s: ci[3],
+        k1_ci95_ar1_mps2_per_rad: ci[4],
+        k2_ci95_ar1_per_s: ci[5],
+        k1_ci95_white_mps2_per_rad: ci[6],
+        k2_ci95_white_per_s: ci[7],
         residual_lag1_corr: rho,
         ci_inflation: infl as f64,
         r_squared: r.r_squared as f64,
@@ -572,15 +601,17 @@ impl std::fmt::Display for SysId {
         )?;
         writeln!(
             w,
-            "  k1 = {:.3} ± {:.3} m/s²/rad, k2 = {:.4} ± {:.4} 1/s (95 %, widened ×{:.1} for residual lag-1 correlation {:.3}; white-noise ± {:.3}, ± {:.4}); R² (within windows) = {:.3}, residual RMS {:.3} m/s²",
+            "  k1 = {:.3} ± {:.3} m/s²/rad, k2 = {:.4} ± {:.4} 1/s (95 %: the larger of window-clustered ± {:.3}, ± {:.4} and white-noise ± {:.3}, ± {:.4} widened ×{:.1} for residual lag-1 correlation {:.3}); R² (within windows) = {:.3}, residual RMS {:.3} m/s²",
             self.k1_mps2_per_rad,
             self.k1_ci95_mps2_per_rad,
             self.k2_per_s,
             self.k2_ci95_per_s,
-            self.ci_inflation,
-            self.residual_lag1_corr,
+            self.k1_ci95_cluster_mps2_per_rad,
+            self.k2_ci95_cluster_per_s,
             self.k1_ci95_white_mps2_per_rad,
             self.k2_ci95_white_per_s,
+            self.ci_inflation,
+            self.residual_lag1_corr,
             self.r_squared,
             self.rms_residual_mps2
         )?;
