@@ -73,13 +73,12 @@ pub const MAX_GAP_S: f64 = 0.5;
 /// Samples count from this altitude above the take-off point (m), as the calm-air fit (ground
 /// contact and the take-off's thrust transient are not the model).
 pub const MIN_ALT_M: f64 = 2.0;
-/// Half-span of the central difference of the odometry velocity when the bag has no
-/// `accel/measured` (s).
+/// Half-span of the central difference of the odometry velocity (s): ±0.1 s spans 21
+/// odometry messages at the main job's bag rate (100 Hz), short against the manoeuvres (1–3 s).
 pub const DIFF_HALF_SPAN_S: f64 = 0.1;
 /// Largest 95 % confidence half-width, relative to the value, for k1 and for k2 to be
-/// suggested: the controller's feed-forward tolerates about 10 % error in either (the
-/// acceptance of the calm-air fit), so a parameter not known to 10 % is no improvement over
-/// the default.
+/// suggested: 10 % is the agreement asked of a log's fit with the calm-air one (issue 13); a
+/// parameter not known to ±10 % is no better founded than the default it would replace.
 pub const MAX_REL_CI95: f64 = 0.10;
 /// Smallest within-window R²: below it the model explains less than half of the acceleration
 /// that is not wind; the rest is unmodelled dynamics or gusts the controller answers with tilt,
@@ -100,8 +99,9 @@ pub const MAX_CONDITION: f64 = 10.0;
 /// the setpoint now and a second ago move tilt and velocity differently (the two instruments
 /// are not collinear with each other's effect).
 pub const IV_LAG_S: f64 = 1.0;
-/// A velocity setpoint older than this (s) no longer commands anything (the bridge's link
-/// timeout is shorter); the instrument is then 0 (the MCU holds position, or the mission ended).
+/// A velocity setpoint older than this (s) no longer commands anything (the bridge lets a
+/// setpoint expire after `ttl_ms`, 300 ms by default); the instrument is then 0 (the MCU holds
+/// position, or the mission ended).
 pub const SETPOINT_MAX_AGE_S: f64 = 0.5;
 /// Smallest instrument strength (smaller canonical correlation of the setpoints with tilt and
 /// velocity, within windows) for an IV fit to be suggested: below 0.2 the setpoints explain
@@ -172,8 +172,8 @@ impl AccelSource {
 /// Differencing is a filter: `(v(t+h) − v(t−h)) / 2h` is the mean of the acceleration over
 /// [t−h, t+h], so the tilt and velocity of the sample are averaged over the same samples too;
 /// the model is linear, so `mean(a) = k1·mean(θ) − k2·mean(v) + c` holds exactly, whereas
-/// pairing the averaged acceleration with the instantaneous tilt biases k1 low by the tilt's
-/// power above ~1/(2h).
+/// pairing the averaged acceleration with the instantaneous tilt does not (its error grows
+/// with how much the tilt moves within ±h). The mean is the trapezoid rule over the samples.
 pub fn samples(s: &Series, src: AccelSource) -> Vec<Sample> {
     let airborne = |t: f64| -> bool {
         let i = s.status.partition_point(|x| x.0 <= t);
