@@ -48,7 +48,7 @@ impl RosArgs {
     pub fn locate(&self, msg: String) -> String {
         let name = msg
             .strip_prefix("parameter ")
-            .and_then(|r| r.split(|c: char| c == ':' || c == ' ').next());
+            .and_then(|r| r.split([':', ' ']).next());
         match name.and_then(|n| self.param_origin.get(n)) {
             Some(f) => format!("{f}: {msg}"),
             None => msg,
