@@ -359,7 +359,13 @@ impl RosSide<'_> {
     fn request(&mut self, r: LinkRequest, st: &mut LinkState) -> Option<link::Message> {
         match r {
             LinkRequest::Command(kind, reply) => {
-                match st.on_command(Some(link::Command { command: kind }), "service") {
+                match st.on_command(
+                    Some(link::Command {
+                        command: kind,
+                        confirm: 0,
+                    }),
+                    "service",
+                ) {
                     Some(m) => {
                         self.cmds.push((kind, reply, tokio::time::Instant::now()));
                         Some(m)

@@ -391,6 +391,11 @@ pub fn failsafe_code(f: link::FailsafeCause) -> (u8, &'static str) {
         link::FailsafeCause::SetpointLost => (Status::FAILSAFE_SETPOINT_LOST, "setpoint_lost"),
         link::FailsafeCause::Geofence => (Status::FAILSAFE_GEOFENCE, "geofence"),
         link::FailsafeCause::GpsLost => (Status::FAILSAFE_GPS_LOST, "gps_lost"),
+        link::FailsafeCause::WindLimit => (Status::FAILSAFE_WIND_LIMIT, "wind_limit"),
+        link::FailsafeCause::EstimatorFault => {
+            (Status::FAILSAFE_ESTIMATOR_FAULT, "estimator_fault")
+        }
+        link::FailsafeCause::EmergencyKill => (Status::FAILSAFE_EMERGENCY_KILL, "emergency_kill"),
     }
 }
 
@@ -404,6 +409,7 @@ pub fn reject_name(r: link::CommandResult) -> &'static str {
         link::CommandResult::InvalidSetpoint => "invalid_setpoint",
         link::CommandResult::Incompatible => "incompatible",
         link::CommandResult::PilotOverride => "pilot_override",
+        link::CommandResult::KillNotConfirmed => "kill_not_confirmed",
     }
 }
 
@@ -424,6 +430,8 @@ pub fn status(m: &link::Status, stamp: Time, cfg: &Config) -> Status {
         mag_rejects: m.sensors.mag_rejects,
         laser_ok: m.sensors.laser_ok,
         sonar_ok: m.sensors.sonar_ok,
+        mag_disturbed_s: m.sensors.mag_disturbed_ds as f32 * 0.1,
+        nav_faults: m.sensors.nav_faults,
         loop_time_max_us: m.loop_time_max_us,
         loop_time_avg_us: m.loop_time_avg_us,
         last_reject: reject_name(m.last_reject).into(),
@@ -592,6 +600,7 @@ pub fn arm_command(m: &Bool) -> link::Command {
         } else {
             link::CommandKind::Disarm
         },
+        confirm: 0,
     }
 }
 
@@ -609,7 +618,10 @@ pub fn mode_command(m: &StringMsg) -> Option<link::Command> {
         "disarm" => link::CommandKind::Disarm,
         _ => return None,
     };
-    Some(link::Command { command: c })
+    Some(link::Command {
+        command: c,
+        confirm: 0,
+    })
 }
 
 #[cfg(test)]

@@ -1,7 +1,8 @@
 //! `/diagnostics` (diagnostic_msgs/DiagnosticArray) from the bridge's state, and the sensor-health
 //! rules: statuses `fcc_bridge: link`, `fcc_bridge: time sync`, `fcc_bridge: setpoints`,
-//! `fcc: vehicle` and `fcc: sensors` (WARN while GPS is lost, the magnetometer is disturbed, or
-//! the laser / sonar gives no valid reading while it should see the ground); [`SensorWatch`]
+//! `fcc: vehicle` and `fcc: sensors` (WARN while GPS is lost, the magnetometer is disturbed, the
+//! laser / sonar gives no valid reading while it should see the ground, or a navigation filter
+//! diverged); [`SensorWatch`]
 //! turns the same rules into one `/rosout` WARN per episode and an INFO on recovery.
 
 use crate::convert::Config;
@@ -11,7 +12,7 @@ use fcc_msgs as link;
 use std::collections::BTreeMap;
 
 /// The sensors whose health the MCU reports on `Status`.
-pub const SENSORS: [&str; 4] = ["gps", "mag", "laser", "sonar"];
+pub const SENSORS: [&str; 5] = ["gps", "mag", "laser", "sonar", "estimator"];
 
 /// After a sensor was reported unhealthy, it is reported healthy again only once it stayed
 /// healthy this long (MCU time): a flag that flickers (a magnetometer near the innovation gate)
@@ -23,7 +24,7 @@ pub const SENSOR_RECOVERY_HOLD_US: u64 = 2_000_000;
 /// it should see the ground: armed, in the air, and the estimated height above ground within its
 /// range (0.5 m margin; a NaN height counts as in range) — a laser below its minimum range on
 /// the ground, or a sonar above its 10 m, is no fault.
-pub fn unhealthy(s: &link::Status, ground_height_m: Option<f32>, cfg: &Config) -> [bool; 4] {
+pub fn unhealthy(s: &link::Status, ground_height_m: Option<f32>, cfg: &Config) -> [bool; 5] {
     let flying = s.armed && !s.landed;
     let in_range = |min: f32, max: f32| match ground_height_m {
         Some(h) if h.is_finite() => h >= min + 0.5 && h <= max - 0.5,
@@ -34,6 +35,7 @@ pub fn unhealthy(s: &link::Status, ground_height_m: Option<f32>, cfg: &Config) -
         s.sensors.mag_disturbed,
         flying && in_range(cfg.laser.min_m, cfg.laser.max_m) && !s.sensors.laser_ok,
         flying && in_range(cfg.sonar.min_m, cfg.sonar.max_m) && !s.sensors.sonar_ok,
+        s.sensors.nav_faults != 0,
     ]
 }
 
@@ -44,11 +46,30 @@ fn problem_text(i: usize, s: &link::Status, ground_height_m: Option<f32>) -> Str
     match i {
         0 => "GPS lost (no fresh fix: the MCU navigates on baro/accel; in flight it lands)".into(),
         1 => format!(
-            "magnetometer disturbed (rejected by the attitude filter, {} readings so far): yaw on the gyro",
+            "magnetometer disturbed (rejected by the attitude filter for {:.1} s, {} readings so far): yaw on the gyro",
+            s.sensors.mag_disturbed_ds as f32 * 0.1,
             s.sensors.mag_rejects
         ),
         2 => format!("laser altimeter gives no valid reading{agl} (dark surface or failure): ground altitude on the sonar"),
+        4 => format!(
+            "estimator fault: {} filter diverged (innovations beyond their gate): the MCU holds, then lands",
+            nav_fault_names(s.sensors.nav_faults)
+        ),
         _ => format!("ultrasonic rangefinder gives no valid reading{agl}: ground altitude on the laser"),
+    }
+}
+
+/// The filters named by the `nav_faults` bits (`fcc_firmware::nav_health`).
+pub fn nav_fault_names(bits: u8) -> String {
+    let names: Vec<&str> = [(1u8, "vertical"), (2, "horizontal"), (4, "attitude")]
+        .iter()
+        .filter(|(b, _)| bits & b != 0)
+        .map(|(_, n)| *n)
+        .collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join("+")
     }
 }
 
@@ -59,6 +80,7 @@ fn recovery_text(i: usize, s: &link::Status) -> String {
             "magnetometer ok again ({} readings rejected since start)",
             s.sensors.mag_rejects
         ),
+        4 => "estimator faults cleared (at arming)".into(),
         2 if s.sensors.laser_ok => "laser altimeter ok again".into(),
         2 => {
             "laser altimeter: no longer expected to see the ground (landed or out of range)".into()
@@ -76,9 +98,9 @@ fn recovery_text(i: usize, s: &link::Status) -> String {
 #[derive(Clone, Debug, Default)]
 pub struct SensorWatch {
     /// Per sensor: reported unhealthy (WARN sent, no INFO yet).
-    pub reported: [bool; 4],
+    pub reported: [bool; 5],
     /// Per sensor: MCU time it was last seen unhealthy.
-    last_bad_us: [u64; 4],
+    last_bad_us: [u64; 5],
     /// WARNs and INFOs sent so far.
     pub warnings: u64,
     pub recoveries: u64,
@@ -134,8 +156,12 @@ pub fn sensors_status(
         "magnetometer disturbed",
         "laser not ok",
         "sonar not ok",
+        "estimator fault",
     ];
-    let problems: Vec<&str> = (0..4).filter(|&i| bad[i]).map(|i| names[i]).collect();
+    let problems: Vec<&str> = (0..names.len())
+        .filter(|&i| bad[i])
+        .map(|i| names[i])
+        .collect();
     DiagnosticStatus {
         level: if problems.is_empty() {
             DiagnosticStatus::OK
@@ -155,6 +181,8 @@ pub fn sensors_status(
             kv("mag_rejects", s.sensors.mag_rejects),
             kv("laser_ok", s.sensors.laser_ok),
             kv("sonar_ok", s.sensors.sonar_ok),
+            kv("mag_disturbed_s", s.sensors.mag_disturbed_ds as f32 * 0.1),
+            kv("nav_faults", nav_fault_names(s.sensors.nav_faults)),
             kv(
                 "ground_height_m",
                 ground_height_m.map_or(String::new(), |h| format!("{h:.2}")),

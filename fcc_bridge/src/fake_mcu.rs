@@ -299,7 +299,7 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                                     armed = true;
                                     mode = link::FlightMode::Hold;
                                 }
-                                link::CommandKind::Disarm => {
+                                link::CommandKind::Disarm | link::CommandKind::Kill => {
                                     armed = false;
                                     mode = link::FlightMode::Disarmed;
                                 }
@@ -509,6 +509,8 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                         mag_rejects: 0,
                         laser_ok: true,
                         sonar_ok: true,
+                        mag_disturbed_ds: 0,
+                        nav_faults: 0,
                     },
                     ..Default::default()
                 }),

@@ -21,7 +21,14 @@ pub enum Command {
     Land,
     /// Follow external velocity setpoints (entered automatically by the first setpoint when armed).
     Velocity,
+    /// Emergency motor stop, in the air too (the only way to disarm while flying). Carries
+    /// the confirmation [`KILL_CONFIRM`]; anything else is refused.
+    Kill { confirm: u32 },
 }
+
+/// The confirmation an emergency kill must carry ("KILL" in ASCII): a kill is never the
+/// accident of a flipped bit or a mistyped mode.
+pub const KILL_CONFIRM: u32 = 0x4B49_4C4C;
 
 /// Why a command was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -38,6 +45,8 @@ pub enum CommandError {
     InvalidSetpoint,
     /// The pilot's override switch is on: the R/C pilot has the vehicle ([`crate::pilot`]).
     PilotOverride,
+    /// An emergency kill without the right confirmation.
+    KillNotConfirmed,
 }
 
 impl core::fmt::Display for CommandError {
@@ -49,6 +58,7 @@ impl core::fmt::Display for CommandError {
             CommandError::Disarmed => "vehicle is disarmed",
             CommandError::InvalidSetpoint => "setpoint is not finite or out of range",
             CommandError::PilotOverride => "the pilot's override switch is on",
+            CommandError::KillNotConfirmed => "emergency kill without its confirmation",
         })
     }
 }
@@ -76,4 +86,10 @@ pub enum FailsafeCause {
     Geofence,
     /// GPS lost in flight → altitude hold, then land.
     GpsLost,
+    /// Wind beyond the vehicle's authority (tilt at its limit, blown off) → land where it is.
+    WindLimit,
+    /// A navigation filter diverged ([`crate::nav_health`]) → hold, then land.
+    EstimatorFault,
+    /// Motors stopped by the emergency kill command.
+    EmergencyKill,
 }

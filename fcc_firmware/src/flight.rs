@@ -4,7 +4,7 @@
 //! [`crate::control`]: it owns them, feeds them the navigation solution and the Linux computer's
 //! setpoints, and produces motor commands. Time is always an argument (`now_us`, MCU µs).
 
-use crate::commands::{Command, CommandError, FailsafeCause, Mode, VelocitySetpoint};
+use crate::commands::{Command, CommandError, FailsafeCause, Mode, VelocitySetpoint, KILL_CONFIRM};
 use crate::control::accel::AccelController;
 use crate::control::attitude::{TiltPid, YawController};
 use crate::control::mixer::{Mixer, MixerSaturation};
@@ -22,9 +22,22 @@ use fcc_nav::GRAVITY_MPS2;
 
 /// A fused ground height with a larger variance than this is not trusted for landing (m²).
 const GROUND_MAX_VAR_M2: f32 = 0.25;
+/// Wind limit: tilt at its limit with the velocity command missed by more than
+/// [`WIND_VEL_ERR_MPS`] for this long (net of [`WIND_LEAK`]), s.
+const WIND_LIMIT_S: f32 = 2.5;
+/// Wind limit: the saturation count decays at this fraction of real time while not saturated.
+const WIND_LEAK: f32 = 0.5;
+/// Wind limit: velocity error that counts as "blown off", m/s.
+const WIND_VEL_ERR_MPS: f32 = 1.0;
+/// Estimator fault (not horizontal): hold this long before landing, s.
+const FAULT_HOLD_S: f32 = 2.0;
 /// LAND: below this height of the gear over the ground the tilt is limited to
 /// [`LAND_LEVEL_TILT_DEG`], m.
 const LAND_LEVEL_HEIGHT_M: f32 = 0.15;
+/// LAND: the level limit applies only while slower than this over the ground: a gust that
+/// drives the vehicle sideways near the ground is braked with the full tilt (sliding into the
+/// ground tips a vehicle over sooner than a tilted gear does), m/s.
+const LAND_LEVEL_MAX_SPEED_MPS: f32 = 0.4;
 /// LAND: the tilt limit just before touchdown, deg.
 const LAND_LEVEL_TILT_DEG: f32 = 4.5;
 /// Velocity mode: command reduction per m/s of estimated speed over the limit.
@@ -89,6 +102,10 @@ pub struct FlightCore {
     vel_slew_ne: Option<[f32; 2]>,
     /// Truly above the terrain floor since take-off (the floor then applies).
     above_floor: bool,
+    /// Time the tilt has been at its limit while the velocity command is not followed, s.
+    wind_sat_s: f32,
+    /// Time since an estimator fault put the vehicle in hold, s.
+    fault_hold_s: f32,
     yaw_hold_rad: f32,
     takeoff_alt_m: f32,
     /// On the ground or in the air ([`crate::land_detector`]).
@@ -140,6 +157,8 @@ impl FlightCore {
             vel_alt_m: None,
             vel_slew_ne: None,
             above_floor: false,
+            wind_sat_s: 0.0,
+            fault_hold_s: 0.0,
             yaw_hold_rad: 0.0,
             takeoff_alt_m: 0.0,
             land: LandDetector::new(),
@@ -324,6 +343,17 @@ impl FlightCore {
     /// Apply an operator command.
     pub fn command(&mut self, now_us: u64, cmd: Command) -> Result<(), CommandError> {
         let nav = *self.nav.state();
+        if let Command::Kill { confirm } = cmd {
+            // Before the pilot check: the kill stops the motors whoever flies.
+            if confirm != KILL_CONFIRM {
+                return Err(CommandError::KillNotConfirmed);
+            }
+            self.mode = Mode::Disarmed;
+            self.failsafe = FailsafeCause::EmergencyKill;
+            self.setpoint = None;
+            self.motors = [0.0; MOTOR_COUNT];
+            return Ok(());
+        }
         if self.mode == Mode::Pilot {
             match cmd {
                 Command::Arm => return Ok(()),
@@ -346,6 +376,7 @@ impl FlightCore {
                     return Err(CommandError::NotLanded);
                 }
                 self.reset_controllers();
+                self.nav.clear_faults();
                 self.takeoff_alt_m = -nav.pos_ned_m[2];
                 self.enter_hold(&nav);
                 self.failsafe = FailsafeCause::None;
@@ -373,6 +404,7 @@ impl FlightCore {
                 }
                 self.enter_land(&nav);
             }
+            Command::Kill { .. } => {}
             Command::Velocity => {
                 if !self.armed() {
                     return Err(CommandError::Disarmed);
@@ -479,6 +511,10 @@ impl FlightCore {
             ..Default::default()
         };
         if self.mode == Mode::Disarmed {
+            if !self.land.landed() {
+                // Disarmed in the air (an emergency kill): landed once at rest.
+                self.detect_touchdown(dt_s, &nav, 1.0);
+            }
             self.motors = [0.0; MOTOR_COUNT];
             return self.motors;
         }
@@ -531,10 +567,47 @@ impl FlightCore {
             }
             _ => {}
         }
+        self.estimator_failsafe(nav);
+        // Wind beyond authority: the tilt at its limit and still blown off → land here
+        // (the wind weakens towards the ground).
+        if self.wind_sat_s >= WIND_LIMIT_S && self.mode != Mode::Land && !self.land.landed() {
+            self.enter_land(nav);
+            self.failsafe = FailsafeCause::WindLimit;
+        }
         // GPS lost in flight: the horizontal estimate will drift → land on baro/accel.
-        if nav.home_set && !nav.gps_ok && !self.land.landed() && self.mode != Mode::Land {
+        if nav.home_set
+            && !nav.gps_ok
+            && !self.land.landed()
+            && self.mode != Mode::Land
+            && self.failsafe != FailsafeCause::EstimatorFault
+        {
             self.enter_land(nav);
             self.failsafe = FailsafeCause::GpsLost;
+        }
+    }
+
+    /// A diverged navigation filter ([`crate::nav_health`]): a horizontal fault lands at once
+    /// (holding needs the position), any other holds for [`FAULT_HOLD_S`] and then lands.
+    fn estimator_failsafe(&mut self, nav: &NavState) {
+        if nav.nav_faults == 0 || self.land.landed() || self.mode == Mode::Land {
+            return;
+        }
+        let dt_s = 0.002;
+        if self.failsafe != FailsafeCause::EstimatorFault {
+            self.failsafe = FailsafeCause::EstimatorFault;
+            self.fault_hold_s = 0.0;
+            if nav.nav_faults & crate::nav_health::FAULT_HORIZONTAL != 0 {
+                self.enter_land(nav);
+            } else {
+                self.enter_hold(nav);
+            }
+            return;
+        }
+        self.fault_hold_s += dt_s;
+        if self.fault_hold_s >= FAULT_HOLD_S
+            || nav.nav_faults & crate::nav_health::FAULT_HORIZONTAL != 0
+        {
+            self.enter_land(nav);
         }
     }
 
@@ -727,13 +800,15 @@ impl FlightCore {
     }
 
     /// The tilt limit: `limits.max_tilt_deg`, and in LAND's last [`LAND_LEVEL_HEIGHT_M`] above
-    /// the gear no more than [`LAND_LEVEL_TILT_DEG`] (touch down level: a tilted gear catches
-    /// a foot and tips the vehicle over).
+    /// the gear no more than [`LAND_LEVEL_TILT_DEG`] while slower than
+    /// [`LAND_LEVEL_MAX_SPEED_MPS`] (touch down level: a tilted gear catches a foot).
     fn tilt_limit_rad(&self, nav: &NavState) -> f32 {
         let on_ground_m = self.params.airframe.sensor_height_on_ground_m;
+        let speed = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
         let level = self.mode == Mode::Land
             && self.ground_usable(nav)
-            && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M;
+            && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M
+            && speed < LAND_LEVEL_MAX_SPEED_MPS;
         let l = self.params.limits;
         if level {
             l.max_tilt_deg.min(LAND_LEVEL_TILT_DEG).to_radians()
@@ -803,6 +878,13 @@ impl FlightCore {
         }
         let n = fcc_nav::math::hypotf(tilt_cmd[0], tilt_cmd[1]);
         self.tilt_sat_fr = [0.0; 2];
+        let v_err = fcc_nav::math::hypotf(v_cmd[0] - v_ne[0], v_cmd[1] - v_ne[1]);
+        // Leaky: gust lulls pause the count instead of restarting it.
+        if airborne && n > max_tilt && v_err > WIND_VEL_ERR_MPS && self.mode != Mode::Land {
+            self.wind_sat_s += dt_s;
+        } else {
+            self.wind_sat_s = (self.wind_sat_s - WIND_LEAK * dt_s).max(0.0);
+        }
         if n > max_tilt {
             self.tilt_sat_fr = [sign_or_zero(tilt_cmd[0]), sign_or_zero(tilt_cmd[1])];
             tilt_cmd = [tilt_cmd[0] * max_tilt / n, tilt_cmd[1] * max_tilt / n];
@@ -908,7 +990,7 @@ impl FlightCore {
 
     /// Run the land detector (every armed mode); in LAND, a confirmed touchdown disarms.
     fn detect_touchdown(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) {
-        if self.land.landed() {
+        if self.land.landed() && self.mode != Mode::Disarmed {
             if self.mode == Mode::Land {
                 self.disarm_landed();
             }

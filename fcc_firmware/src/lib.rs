@@ -30,6 +30,7 @@ pub mod geometry;
 pub mod land_detector;
 pub mod link;
 pub mod nav;
+pub mod nav_health;
 pub mod params;
 pub mod pilot;
 pub mod scheduler;

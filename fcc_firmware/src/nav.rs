@@ -5,6 +5,7 @@
 //! bias and the barometric reference over `calibration_s`. The first valid GPS fix becomes the
 //! local NED origin (home).
 
+use crate::nav_health::{Innovations, NavHealth};
 use crate::params::NavParams;
 use crate::sensors::SensorInputs;
 use fcc_nav::attitude::{
@@ -50,6 +51,10 @@ pub struct NavState {
     /// Latest raw rangefinder readings (m along the sensor axis; laser 99999 = no return).
     pub laser_m: Option<f32>,
     pub sonar_m: Option<f32>,
+    /// Estimator faults ([`crate::nav_health`] bits; latched until the next arm).
+    pub nav_faults: u8,
+    /// Seconds the magnetometer has been rejected in a row (0 = fused).
+    pub mag_disturbed_s: f32,
 }
 
 /// Why the navigation task is not ready to fly.
@@ -90,6 +95,8 @@ pub struct Navigator {
     air_temp_c: f32,
     /// Range-aided height: the vertical filter's measurement while the ground is in range.
     range_aid: RangeAid,
+    /// Innovation monitors of every filter.
+    health: NavHealth,
     vert_aided: bool,
     last_baro_us: Option<u64>,
     state: NavState,
@@ -135,6 +142,7 @@ impl Navigator {
             ground: GroundAltitudeFilter::new(GroundAltitudeParams::default()),
             air_temp_c: 15.0,
             range_aid: RangeAid::new(),
+            health: NavHealth::new(),
             vert_aided: false,
             last_baro_us: None,
             state: NavState::default(),
@@ -184,6 +192,7 @@ impl Navigator {
             self.calibrate(now_us, s, on_ground_disarmed);
         }
         let mut imu_dt_s = 0.0;
+        let mut innov = Innovations::default();
         if let Some(imu) = s.imu {
             let dt_s = match self.last_imu_us {
                 Some(t) if imu.t_us > t => ((imu.t_us - t) as f32 * 1e-6).min(0.02),
@@ -221,6 +230,16 @@ impl Navigator {
             } else {
                 self.att.euler()
             };
+            let n_f = fcc_nav::math::sqrtf(
+                f_tilt[0] * f_tilt[0] + f_tilt[1] * f_tilt[1] + f_tilt[2] * f_tilt[2],
+            );
+            if self.calibrated
+                && fcc_nav::math::fabsf(n_f - fcc_nav::GRAVITY_MPS2) <= self.params.accel_gate_mps2
+            {
+                let (r_a, p_a) = accel_tilt_rad(f_tilt);
+                let d = fcc_nav::math::hypotf(r_a - euler.roll_rad, p_a - euler.pitch_rad);
+                innov.tilt_rad = Some(d);
+            }
             let a_ned = linear_accel_ned_mps2(&euler, imu.accel_frd_mps2);
             if self.calibrated {
                 self.horiz.update([a_ned[0], a_ned[1]], dt_s);
@@ -250,6 +269,9 @@ impl Navigator {
                 );
                 self.vert.baro_alt(z);
                 self.set_vert_aided(self.range_aid.aiding());
+                if self.range_aid.aiding() {
+                    innov.range_alt_m = Some(self.range_aid.innovation_m());
+                }
             }
         }
         if let Some(g) = s.gps {
@@ -280,22 +302,35 @@ impl Navigator {
                 if let Some(home) = &self.home {
                     let ned = home.lla_to_ned(&lla);
                     let delay_steps = (self.params.gps_latency_s / 0.002 + 0.5) as usize;
-                    self.horiz.gps([ned[0] as f32, ned[1] as f32], delay_steps);
-                    if g.vel_ned_mps.iter().all(|v| v.is_finite()) {
-                        self.horiz.gps_velocity(
-                            [g.vel_ned_mps[0], g.vel_ned_mps[1]],
-                            delay_steps,
-                            self.params.gps_vel_gain,
-                        );
-                    }
+                    let p = self.horiz.pos_ne_m();
+                    let d = fcc_nav::math::hypotf(ned[0] as f32 - p[0], ned[1] as f32 - p[1]);
+                    innov.gps_m = Some(d);
                     self.last_gps_us = Some(now_us);
+                    if !NavHealth::gps_acceptable(d) {
+                        // A jump (multipath, spoofing): not fused; the monitor times it.
+                        self.horiz.clear_gps();
+                    } else {
+                        self.horiz.gps([ned[0] as f32, ned[1] as f32], delay_steps);
+                        if g.vel_ned_mps.iter().all(|v| v.is_finite()) {
+                            self.horiz.gps_velocity(
+                                [g.vel_ned_mps[0], g.vel_ned_mps[1]],
+                                delay_steps,
+                                self.params.gps_vel_gain,
+                            );
+                        }
+                    }
                 }
             }
         }
+        let faults = if self.calibrated {
+            self.health.update(imu_dt_s, &innov)
+        } else {
+            0
+        };
         let gps_ok = match self.last_gps_us {
             Some(t) => now_us.saturating_sub(t) as f32 * 1e-6 < self.params.gps_timeout_s,
             None => false,
-        };
+        } && faults & crate::nav_health::FAULT_HORIZONTAL == 0;
         if !gps_ok && self.last_gps_us.is_some() {
             self.horiz.clear_gps();
         }
@@ -322,6 +357,8 @@ impl Navigator {
         self.state.pos_ned_m = [pn[0], pn[1], -self.vert.alt_m()];
         self.state.vel_ned_mps = [vn[0], vn[1], self.vert.vel_down_mps()];
         self.state.gps_ok = gps_ok;
+        self.state.nav_faults = faults;
+        self.state.mag_disturbed_s = self.att.mag_disturbed_s();
         self.state.home_set = self.home.is_some();
         self.state.calibrated = self.calibrated;
         &self.state
@@ -357,6 +394,16 @@ impl Navigator {
         self.vert
             .down
             .set_bias_gain(self.params.vert_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+    }
+
+    /// Forget latched estimator faults (at arming, on the ground).
+    pub fn clear_faults(&mut self) {
+        self.health.clear();
+    }
+
+    /// The innovation monitors (GPS fixes refused so far, fault bits).
+    pub fn health(&self) -> &NavHealth {
+        &self.health
     }
 
     /// The range aid (its baro offset, terrain reference, innovation).

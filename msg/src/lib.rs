@@ -70,4 +70,4 @@ pub use rates::{max_frame_len, period_us, StreamRates, BAUD_921600_BYTES_PER_S};
 
 /// Version of the frame layout and message set. Bump it for any incompatible change
 /// (the schema hash catches changes that were not bumped).
-pub const PROTOCOL_VERSION: u8 = 3;
+pub const PROTOCOL_VERSION: u8 = 4;

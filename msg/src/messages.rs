@@ -62,6 +62,12 @@ pub enum FailsafeCause {
     SetpointLost,
     Geofence,
     GpsLost,
+    /// Wind beyond the vehicle's authority: landing where it is.
+    WindLimit,
+    /// A navigation filter diverged (`SensorHealth::nav_faults`): hold, then land.
+    EstimatorFault,
+    /// Motors stopped by the emergency kill.
+    EmergencyKill,
 }
 
 /// Operator command (mirror of `fcc_firmware::commands::Command`).
@@ -75,7 +81,13 @@ pub enum CommandKind {
     Land,
     /// Follow velocity setpoints.
     Velocity,
+    /// Emergency motor stop, also in flight; `Command::confirm` must be [`KILL_CONFIRM`].
+    Kill,
 }
+
+/// The confirmation an emergency kill carries (`"KILL"` in ASCII); the MCU refuses a kill
+/// without it ([`CommandResult::KillNotConfirmed`]).
+pub const KILL_CONFIRM: u32 = 0x4B49_4C4C;
 
 /// Outcome of a command or setpoint on the MCU (mirror of `fcc_firmware::commands::CommandError`
 /// plus `Accepted` and link-level refusals).
@@ -92,6 +104,8 @@ pub enum CommandResult {
     Incompatible,
     /// The pilot's override switch is on: setpoints and mode commands are refused.
     PilotOverride,
+    /// An emergency kill without its confirmation.
+    KillNotConfirmed,
 }
 
 /// Outcome of a [`ParamSet`] on the MCU.
@@ -264,6 +278,11 @@ pub struct SensorHealth {
     pub laser_ok: bool,
     /// The ultrasonic rangefinder gave a plausible reading recently.
     pub sonar_ok: bool,
+    /// How long the magnetometer has been rejected in a row (0 = fused), 0.1 s (saturates at
+    /// 6553.5 s).
+    pub mag_disturbed_ds: u16,
+    /// Estimator faults (bits: 1 vertical, 2 horizontal/GPS, 4 attitude), latched until arming.
+    pub nav_faults: u8,
 }
 
 /// Vehicle and link status.
@@ -347,6 +366,8 @@ pub struct VelocitySetpoint {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub struct Command {
     pub command: CommandKind,
+    /// [`KILL_CONFIRM`] for [`CommandKind::Kill`]; 0 for every other command.
+    pub confirm: u32,
 }
 
 /// Time-sync request; the MCU answers with [`TimeSyncPong`].
@@ -563,13 +584,13 @@ pub const SCHEMA: &str = "\
 enum RangeSensor { Laser, Sonar }
 enum AltitudeSource { None, Laser, Sonar, Both, Predicted }
 enum FlightMode { Disarmed, Hold, Velocity, Land, Pilot }
-enum FailsafeCause { None, SetpointStale, SetpointLost, Geofence, GpsLost }
-enum CommandKind { Arm, Disarm, Hold, Land, Velocity }
-enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible, PilotOverride }
+enum FailsafeCause { None, SetpointStale, SetpointLost, Geofence, GpsLost, WindLimit, EstimatorFault, EmergencyKill }
+enum CommandKind { Arm, Disarm, Hold, Land, Velocity, Kill }
+enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible, PilotOverride, KillNotConfirmed }
 enum ParamResult { Accepted, UnknownId, NotFinite, OutOfRange, Incompatible }
 params 1=limits.max_horiz_speed_mps 2=limits.max_tilt_deg 3=control.cross_track_k_per_s 4=control.vel_p_per_s 5=limits.max_climb_mps 6=limits.max_descent_mps
 struct LinkCounters max=60 { rx_bytes: u32, rx_frames: u32, crc_errors: u32, framing_errors: u32, overruns: u32, resyncs: u32, decode_errors: u32, unknown_ids: u32, version_errors: u32, seq_gaps: u32, frames_lost: u32, seq_resets: u32 }
-struct SensorHealth max=9 { gps_ok: bool, mag_disturbed: bool, mag_rejects: u32, laser_ok: bool, sonar_ok: bool }
+struct SensorHealth max=13 { gps_ok: bool, mag_disturbed: bool, mag_rejects: u32, laser_ok: bool, sonar_ok: bool, mag_disturbed_ds: u16, nav_faults: u8 }
 msg 0x01 Hello max=9 { protocol_version: u8, schema_hash: u32, firmware_version: [u8; 3] }
 msg 0x02 ImuRaw max=24 { gyro_frd_radps: [f32; 3], accel_frd_mps2: [f32; 3] }
 msg 0x03 MagRaw max=12 { mag_frd_ut: [f32; 3] }
@@ -579,13 +600,13 @@ msg 0x06 RangeRaw max=5 { sensor: RangeSensor, range_m: f32 }
 msg 0x07 Battery max=8 { voltage_v: f32, current_a: f32 }
 msg 0x08 NavState max=95 { q_body_to_ned: [f32; 4], rate_frd_radps: [f32; 3], pos_ned_m: [f32; 3], vel_ned_mps: [f32; 3], accel_ned_mps2: [f32; 3], accel_obs_ne_mps2: [f32; 2], home_lat_deg: f64, home_lon_deg: f64, home_alt_m: f32, gps_ok: bool, home_set: bool, calibrated: bool }
 msg 0x09 AltitudeFusion max=29 { baro_alt_m: f32, alt_m: f32, vel_down_mps: f32, ground_height_m: f32, ground_var_m2: f32, laser_m: f32, sonar_m: f32, source: AltitudeSource }
-msg 0x0A Status max=104 { mode: FlightMode, armed: bool, landed: bool, failsafe: FailsafeCause, sensors: SensorHealth, loop_time_max_us: u32, loop_time_avg_us: u32, link_rx: LinkCounters, tx_frames: u32, tx_dropped: u32, setpoint_rejects: u32, command_rejects: u32, last_reject: CommandResult }
+msg 0x0A Status max=108 { mode: FlightMode, armed: bool, landed: bool, failsafe: FailsafeCause, sensors: SensorHealth, loop_time_max_us: u32, loop_time_avg_us: u32, link_rx: LinkCounters, tx_frames: u32, tx_dropped: u32, setpoint_rejects: u32, command_rejects: u32, last_reject: CommandResult }
 msg 0x0B TimeSyncPong max=30 { linux_time_ns: u64, mcu_rx_time_us: u64, mcu_tx_time_us: u64 }
 msg 0x0C CommandAck max=2 { command: CommandKind, result: CommandResult }
 msg 0x0D ParamAck max=8 { id: u16, value: f32, result: ParamResult }
 msg 0x40 HelloRequest max=6 { protocol_version: u8, schema_hash: u32 }
 msg 0x41 VelocitySetpoint max=20 { vel_ned_mps: [f32; 3], has_yaw: bool, yaw_rad: f32, ttl_ms: u16 }
-msg 0x42 Command max=1 { command: CommandKind }
+msg 0x42 Command max=6 { command: CommandKind, confirm: u32 }
 msg 0x43 TimeSyncPing max=10 { linux_time_ns: u64 }
 msg 0x44 ParamSet max=7 { id: u16, value: f32 }
 ";

@@ -88,6 +88,8 @@ pub(crate) fn samples() -> Vec<Message> {
                 mag_rejects: 17,
                 laser_ok: false,
                 sonar_ok: true,
+                mag_disturbed_ds: 25,
+                nav_faults: 2,
             },
             loop_time_max_us: 310,
             loop_time_avg_us: 180,
@@ -121,6 +123,7 @@ pub(crate) fn samples() -> Vec<Message> {
         }),
         Message::Command(Command {
             command: CommandKind::Land,
+            confirm: 0,
         }),
         Message::TimeSyncPing(TimeSyncPing {
             linux_time_ns: 1_700_000_000_000_000_000,
@@ -333,6 +336,7 @@ fn single_bit_flips_are_never_accepted_and_decoder_resyncs() {
         let next = enc(
             &Message::Command(Command {
                 command: CommandKind::Hold,
+                confirm: 0,
             }),
             8,
             100,
@@ -393,7 +397,7 @@ fn truncated_frames_are_rejected() {
 
 #[test]
 fn trailing_bytes_and_short_payloads_are_counted() {
-    let cmd = [0u8]; // Command { Arm }
+    let cmd = [0u8, 0u8]; // Command { Arm, confirm: 0 }
     let mut long = cmd.to_vec();
     long.push(0x00);
     let mut dec = FrameDecoder::new();
@@ -518,6 +522,7 @@ fn sequence_gaps_and_restarts() {
     let mut dec = FrameDecoder::new();
     let m = Message::Command(Command {
         command: CommandKind::Hold,
+        confirm: 0,
     });
     for seq in [65_533u16, 65_534, 65_535, 0, 1, 5, 6, 2] {
         assert!(decode_all(&mut dec, &enc(&m, seq, 0))[0].is_ok());
@@ -568,6 +573,8 @@ fn max_length_checks() {
             mag_rejects: u32::MAX,
             laser_ok: true,
             sonar_ok: true,
+            mag_disturbed_ds: u16::MAX,
+            nav_faults: u8::MAX,
         },
         loop_time_max_us: u32::MAX,
         loop_time_avg_us: u32::MAX,
@@ -604,6 +611,7 @@ fn encoder_numbers_frames() {
             .encode(
                 &Message::Command(Command {
                     command: CommandKind::Arm,
+                    confirm: 0,
                 }),
                 5,
                 &mut buf,

@@ -247,6 +247,8 @@ class Status(IdlStruct, typename=_t("fcc_msgs", "Status")):
     mag_rejects: uint32
     laser_ok: bool
     sonar_ok: bool
+    mag_disturbed_s: float32
+    nav_faults: uint8
     loop_time_max_us: uint32
     loop_time_avg_us: uint32
     last_reject: str

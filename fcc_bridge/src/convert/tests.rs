@@ -296,6 +296,8 @@ fn status_carries_sensor_health() {
             mag_rejects: 42,
             laser_ok: false,
             sonar_ok: true,
+            mag_disturbed_ds: 0,
+            nav_faults: 0,
         },
         ..Default::default()
     };
@@ -334,6 +336,8 @@ fn sensor_watch_transitions() {
             mag_rejects: 0,
             laser_ok: true,
             sonar_ok: true,
+            mag_disturbed_ds: 0,
+            nav_faults: 0,
         },
         ..Default::default()
     };
@@ -373,18 +377,24 @@ fn sensor_watch_transitions() {
     // Laser: not a fault on the ground or below its minimum range; a fault at 5 m in the air.
     s.sensors.laser_ok = false;
     s.landed = true;
-    assert_eq!(unhealthy(&s, Some(0.3), &c), [false; 4]);
+    assert_eq!(unhealthy(&s, Some(0.3), &c), [false; 5]);
     s.landed = false;
-    assert_eq!(unhealthy(&s, Some(0.3), &c), [false; 4]);
-    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, true, false]);
+    assert_eq!(unhealthy(&s, Some(0.3), &c), [false; 5]);
+    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, true, false, false]);
     // Sonar above its range (10.68 m): no fault; below: a fault.
     s.sensors.laser_ok = true;
     s.sensors.sonar_ok = false;
-    assert_eq!(unhealthy(&s, Some(20.0), &c), [false; 4]);
-    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, false, true]);
+    assert_eq!(unhealthy(&s, Some(20.0), &c), [false; 5]);
+    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, false, true, false]);
     // Disarmed: rangefinders are not checked.
     s.armed = false;
-    assert_eq!(unhealthy(&s, Some(5.0), &c), [false; 4]);
+    assert_eq!(unhealthy(&s, Some(5.0), &c), [false; 5]);
+    // A diverged filter is a fault in any state, named in the text.
+    s.sensors.nav_faults = 2;
+    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, false, false, true]);
+    let d = crate::diag::sensors_status(&s, Some(5.0), &c, "fcc");
+    assert_eq!(d.level, DiagnosticStatus::WARN);
+    assert!(d.values.iter().any(|kv| kv.key == "nav_faults" && kv.value == "horizontal"));
 }
 
 /// A rebooted MCU says Hello again with its sequence from 0: one sequence reset, not thousands

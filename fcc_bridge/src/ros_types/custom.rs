@@ -48,6 +48,8 @@ pub struct Status {
     pub mag_rejects: u32,
     pub laser_ok: bool,
     pub sonar_ok: bool,
+    pub mag_disturbed_s: f32,
+    pub nav_faults: u8,
     pub loop_time_max_us: u32,
     pub loop_time_avg_us: u32,
     pub last_reject: String,
@@ -93,6 +95,12 @@ impl Status {
     pub const FAILSAFE_SETPOINT_LOST: u8 = 2;
     pub const FAILSAFE_GEOFENCE: u8 = 3;
     pub const FAILSAFE_GPS_LOST: u8 = 4;
+    pub const FAILSAFE_WIND_LIMIT: u8 = 5;
+    pub const FAILSAFE_ESTIMATOR_FAULT: u8 = 6;
+    pub const FAILSAFE_EMERGENCY_KILL: u8 = 7;
+    pub const NAV_FAULT_VERTICAL: u8 = 1;
+    pub const NAV_FAULT_HORIZONTAL: u8 = 2;
+    pub const NAV_FAULT_ATTITUDE: u8 = 4;
 }
 
 /// fcc_msgs/msg/LinkFrame (see `msg/msg/LinkFrame.msg`): one raw link frame, as recorded.

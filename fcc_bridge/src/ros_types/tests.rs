@@ -65,16 +65,18 @@ fn custom_msgs_match_structs() {
     let st = fields(Status::DEFINITION);
     assert_eq!(st.first().map(String::as_str), Some("header"));
     assert_eq!(st.last().map(String::as_str), Some("time_sync_rtt_us"));
-    assert_eq!(st.len(), 37, "{st:?}");
+    assert_eq!(st.len(), 39, "{st:?}");
     let i = st.iter().position(|f| f == "failsafe_name").unwrap();
     assert_eq!(
-        st[i + 1..i + 6],
+        st[i + 1..i + 8],
         [
             "gps_ok",
             "mag_disturbed",
             "mag_rejects",
             "laser_ok",
-            "sonar_ok"
+            "sonar_ok",
+            "mag_disturbed_s",
+            "nav_faults"
         ]
     );
 }

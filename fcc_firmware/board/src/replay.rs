@@ -106,13 +106,24 @@ impl<'a> InputStream<'a> {
         let flags = r.u8()?;
         let mut inp = SensorInputs::default();
         if flags & 1 != 0 {
-            inp.imu = Some(ImuSample { t_us: r.u64()?, gyro_frd_radps: r.f32x3()?, accel_frd_mps2: r.f32x3()? });
+            inp.imu = Some(ImuSample {
+                t_us: r.u64()?,
+                gyro_frd_radps: r.f32x3()?,
+                accel_frd_mps2: r.f32x3()?,
+            });
         }
         if flags & 2 != 0 {
-            inp.mag = Some(MagSample { t_us: r.u64()?, mag_frd_ut: r.f32x3()? });
+            inp.mag = Some(MagSample {
+                t_us: r.u64()?,
+                mag_frd_ut: r.f32x3()?,
+            });
         }
         if flags & 4 != 0 {
-            inp.baro = Some(BaroSample { t_us: r.u64()?, pressure_pa: r.f32()?, temperature_c: r.f32()? });
+            inp.baro = Some(BaroSample {
+                t_us: r.u64()?,
+                pressure_pa: r.f32()?,
+                temperature_c: r.f32()?,
+            });
         }
         if flags & 8 != 0 {
             inp.gps = Some(GpsFix {
@@ -127,13 +138,23 @@ impl<'a> InputStream<'a> {
             });
         }
         if flags & 16 != 0 {
-            inp.laser = Some(RangeSample { t_us: r.u64()?, range_m: r.f32()? });
+            inp.laser = Some(RangeSample {
+                t_us: r.u64()?,
+                range_m: r.f32()?,
+            });
         }
         if flags & 32 != 0 {
-            inp.sonar = Some(RangeSample { t_us: r.u64()?, range_m: r.f32()? });
+            inp.sonar = Some(RangeSample {
+                t_us: r.u64()?,
+                range_m: r.f32()?,
+            });
         }
         if flags & 64 != 0 {
-            inp.battery = Some(BatterySample { t_us: r.u64()?, voltage_v: r.f32()?, current_a: r.f32()? });
+            inp.battery = Some(BatterySample {
+                t_us: r.u64()?,
+                voltage_v: r.f32()?,
+                current_a: r.f32()?,
+            });
         }
         let mut events = [None; MAX_EVENTS];
         if flags & 128 != 0 {
@@ -145,6 +166,7 @@ impl<'a> InputStream<'a> {
                     2 => Event::Command(Command::Hold),
                     3 => Event::Command(Command::Land),
                     4 => Event::Command(Command::Velocity),
+                    6 => Event::Command(Command::Kill { confirm: r.u32()? }),
                     5 => {
                         let vel_ned_mps = r.f32x3()?;
                         let has_yaw = r.u8()?;
@@ -163,7 +185,11 @@ impl<'a> InputStream<'a> {
                 }
             }
         }
-        Some(TickRecord { now_us, inputs: inp, events })
+        Some(TickRecord {
+            now_us,
+            inputs: inp,
+            events,
+        })
     }
 }
 
@@ -261,7 +287,9 @@ pub fn replay<F: FnMut(u32, &[f32; MOTOR_COUNT])>(
 ) -> Option<u32> {
     let stream = InputStream::new(input)?;
     let mut core = fcc_firmware::flight::FlightCore::new(params);
-    let mut board = ReplayBoard { next: SensorInputs::default() };
+    let mut board = ReplayBoard {
+        next: SensorInputs::default(),
+    };
     let mut motors = MotorLatch::default();
     let mut n = 0;
     for rec in stream {
@@ -353,12 +381,17 @@ pub mod encode {
                 self.buf.push(events.len() as u8);
                 for e in events {
                     match e {
+                        Event::Command(Command::Kill { confirm }) => {
+                            self.buf.push(6);
+                            self.buf.extend_from_slice(&confirm.to_le_bytes());
+                        }
                         Event::Command(c) => self.buf.push(match c {
                             Command::Arm => 0,
                             Command::Disarm => 1,
                             Command::Hold => 2,
                             Command::Land => 3,
                             Command::Velocity => 4,
+                            Command::Kill { .. } => 6,
                         }),
                         Event::Setpoint(sp) => {
                             self.buf.push(5);

@@ -297,7 +297,7 @@ impl LinkEndpoint {
                 let r = if matches!(self.peer, PeerState::Incompatible(_)) {
                     CommandResult::Incompatible
                 } else {
-                    to_result(core.command(now_us, to_core_command(c.command)))
+                    to_result(core.command(now_us, to_core_command(c.command, c.confirm)))
                 };
                 if r == CommandResult::Accepted {
                     self.stats.commands_applied = self.stats.commands_applied.wrapping_add(1);
@@ -611,6 +611,8 @@ fn core_status(core: &FlightCore, mut s: Status) -> Status {
         mag_rejects,
         laser_ok: n.ground.laser_valid,
         sonar_ok: n.ground.sonar_valid,
+        mag_disturbed_ds: (n.mag_disturbed_s * 10.0).min(u16::MAX as f32) as u16,
+        nav_faults: n.nav_faults,
     };
     s.failsafe = match core.failsafe() {
         commands::FailsafeCause::None => FailsafeCause::None,
@@ -618,6 +620,9 @@ fn core_status(core: &FlightCore, mut s: Status) -> Status {
         commands::FailsafeCause::SetpointLost => FailsafeCause::SetpointLost,
         commands::FailsafeCause::Geofence => FailsafeCause::Geofence,
         commands::FailsafeCause::GpsLost => FailsafeCause::GpsLost,
+        commands::FailsafeCause::WindLimit => FailsafeCause::WindLimit,
+        commands::FailsafeCause::EstimatorFault => FailsafeCause::EstimatorFault,
+        commands::FailsafeCause::EmergencyKill => FailsafeCause::EmergencyKill,
     };
     s
 }
@@ -663,11 +668,13 @@ fn to_result(r: Result<(), CommandError>) -> CommandResult {
         Err(CommandError::Disarmed) => CommandResult::Disarmed,
         Err(CommandError::InvalidSetpoint) => CommandResult::InvalidSetpoint,
         Err(CommandError::PilotOverride) => CommandResult::PilotOverride,
+        Err(CommandError::KillNotConfirmed) => CommandResult::KillNotConfirmed,
     }
 }
 
-fn to_core_command(c: CommandKind) -> commands::Command {
+fn to_core_command(c: CommandKind, confirm: u32) -> commands::Command {
     match c {
+        CommandKind::Kill => commands::Command::Kill { confirm },
         CommandKind::Arm => commands::Command::Arm,
         CommandKind::Disarm => commands::Command::Disarm,
         CommandKind::Hold => commands::Command::Hold,

@@ -154,10 +154,12 @@ fn arm_before_calibration_is_acked_with_the_reason() {
     let mut linux = Linux::new();
     let bytes = linux.frame(Message::Command(Command {
         command: CommandKind::Arm,
+        confirm: 0,
     }));
     link.on_bytes(0, &bytes, &mut core);
     let hold = linux.frame(Message::Command(Command {
         command: CommandKind::Hold,
+        confirm: 0,
     }));
     link.on_bytes(0, &hold, &mut core);
     assert_eq!(link.stats().command_rejects, 2);
@@ -185,6 +187,7 @@ fn arm_and_setpoint_through_the_link() {
     let mut linux = Linux::new();
     let arm = linux.frame(Message::Command(Command {
         command: CommandKind::Arm,
+        confirm: 0,
     }));
     let mut armed_at = None;
     let mut results = Vec::new();
@@ -309,6 +312,7 @@ fn hello_at_start_and_on_request_and_incompatible_peer_is_refused() {
         4,
         &linux.frame(Message::Command(Command {
             command: CommandKind::Disarm,
+            confirm: 0,
         })),
         &mut core,
     );
@@ -330,6 +334,7 @@ fn garbage_and_mcu_messages_from_linux_are_counted() {
     let mut bytes = std::vec![0x13u8, 0x37, 0xFF, 0x00];
     let mut good = linux.frame(Message::Command(Command {
         command: CommandKind::Land,
+        confirm: 0,
     }));
     let n = good.len();
     good[n / 2] ^= 0x04;

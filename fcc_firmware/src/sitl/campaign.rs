@@ -58,17 +58,15 @@ pub struct Outcome {
 
 /// Acceptance checks of the flight-safety issue that the vehicle does **not** meet yet across
 /// the campaign (measured, printed and listed as failures by `fcc-campaign`; the test command's
-/// short campaign asserts every other check): touchdown horizontal speed (GPS-limited velocity
-/// estimate, ≈0.1–0.2 m/s error), touchdown tilt in wind (a vehicle holding against the wind
-/// near the ground leans into it), the 2 m excursion in a gale and its flyaways (no wind-limit
-/// failsafe yet), speed and tilt overshoot at the velocity limit.
-pub const OPEN_CHECKS: [&str; 6] = [
+/// short campaign asserts every other check): touchdown horizontal speed and tilt in wind and
+/// turbulence near the ground (a vehicle holding against the wind leans into it; limiting the
+/// tilt lets the gusts push it sideways — the land controller keeps tip-over, not these, at
+/// zero), and the 2 m true excursion of the gale hover (GPS-limited: the estimate's box is
+/// ≈0.3 m, and the 3 m/s hover's true excursion from its start is as large).
+pub const OPEN_CHECKS: [&str; 3] = [
     "touchdown_horiz_mps",
     "touchdown_tilt_deg",
     "hold_excursion_m",
-    "flyaways",
-    "cruise_speed_over_limit",
-    "cruise_tilt_over_limit_deg",
 ];
 
 fn wind_yaml(speed: f64, dir: f64, w20: f64) -> String {
@@ -235,6 +233,21 @@ pub fn fly(f: &Flight) -> Outcome {
         o.failures
             .push(("disarmed", "still armed at the end of the run".into()));
     }
+    let failsafe = |c: crate::commands::FailsafeCause| {
+        log.samples.iter().any(|s| s.failsafe == c) as u8 as f64
+    };
+    fig(
+        &mut o,
+        "wind_limit_landings",
+        failsafe(crate::commands::FailsafeCause::WindLimit),
+        None,
+    );
+    fig(
+        &mut o,
+        "estimator_faults",
+        failsafe(crate::commands::FailsafeCause::EstimatorFault),
+        Some(0.0),
+    );
     fig(&mut o, "max_tilt_deg", t.max_tilt_deg, None);
     fig(&mut o, "max_speed_mps", t.max_speed_mps, None);
     match f.family {

@@ -135,6 +135,13 @@ pub enum Fault {
     },
     /// No GPS fixes between `start_s` and `end_s`.
     GpsOutage { start_s: f64, end_s: f64 },
+    /// Every GPS fix between `start_s` and `end_s` is off by `offset_ned_m` (a jump:
+    /// multipath, spoofing) — the horizontal filter's innovation monitor must catch it.
+    GpsJump {
+        start_s: f64,
+        end_s: f64,
+        offset_ned_m: [f64; 3],
+    },
     /// The mission computer falls silent (killed, link cut): no setpoints or commands reach the
     /// MCU between `start_s` and `end_s`.
     LinuxSilent { start_s: f64, end_s: f64 },
@@ -145,6 +152,7 @@ impl Fault {
         match *self {
             Fault::MagDisturbance { start_s, end_s, .. }
             | Fault::GpsOutage { start_s, end_s }
+            | Fault::GpsJump { start_s, end_s, .. }
             | Fault::LinuxSilent { start_s, end_s } => (start_s, end_s),
         }
     }

@@ -604,6 +604,7 @@ pub struct GpsModel {
     rng: ChaCha8Rng,
     schedule: Schedule,
     available: bool,
+    jump_ned_m: Vector3<f64>,
     err_ned_m: Vector3<f64>,
     last_meas_us: Option<u64>,
     /// Measured fixes waiting for delivery: (delivery time, fix with measurement time).
@@ -625,6 +626,7 @@ impl GpsModel {
             rng,
             schedule,
             available: true,
+            jump_ned_m: Vector3::zeros(),
             err_ned_m,
             last_meas_us: None,
             queue: VecDeque::new(),
@@ -632,6 +634,11 @@ impl GpsModel {
     }
 
     /// GPS outage: while off, fixes measured are reported with `fix_ok = false`.
+    /// A position error added to every fix (a jump: multipath, spoofing), NED m.
+    pub fn set_jump(&mut self, offset_ned_m: Vector3<f64>) {
+        self.jump_ned_m = offset_ned_m;
+    }
+
     pub fn set_available(&mut self, on: bool) {
         self.available = on;
     }
@@ -676,7 +683,7 @@ impl GpsModel {
                 self.err_ned_m.z = step(self.err_ned_m.z, p.v_sigma_m, p.v_tau_s, &mut self.rng);
             }
             let fix = if self.available {
-                let (lat, lon, alt) = p.ned_to_lla(pos_ned_m + self.err_ned_m);
+                let (lat, lon, alt) = p.ned_to_lla(pos_ned_m + self.err_ned_m + self.jump_ned_m);
                 let v = vel_ned_mps + normal3(&mut self.rng, p.vel_sigma_mps);
                 GpsFix {
                     t_us,

@@ -363,6 +363,7 @@ impl Sim {
         let t = self.t_s();
         let mut mag_field = Vector3::zeros();
         let mut gps_on = true;
+        let mut gps_jump = Vector3::zeros();
         let mut linux_on = true;
         for f in &self.scenario.faults {
             let (a, b) = f.window();
@@ -374,11 +375,15 @@ impl Sim {
                     mag_field += Vector3::new(field_ned_ut[0], field_ned_ut[1], field_ned_ut[2]);
                 }
                 Fault::GpsOutage { .. } => gps_on = false,
+                Fault::GpsJump { offset_ned_m, .. } => {
+                    gps_jump += Vector3::new(offset_ned_m[0], offset_ned_m[1], offset_ned_m[2]);
+                }
                 Fault::LinuxSilent { .. } => linux_on = false,
             }
         }
         self.board.mag.set_disturbance(mag_field);
         self.board.gps.set_available(gps_on);
+        self.board.gps.set_jump(gps_jump);
         linux_on
     }
 

@@ -162,7 +162,7 @@ pub fn report(log: &FlightLog) -> TruthReport {
     for s in &log.samples {
         let p = [s.true_pos_ned_m[0], s.true_pos_ned_m[1]];
         match s.plan {
-            PlanPhase::Holding { hold_ned_m } if s.armed => {
+            PlanPhase::Holding { hold_ned_m } if s.armed && s.mode == Mode::Hold => {
                 let start = *hold_start.get_or_insert(p);
                 let cmd_alt = log.commanded_alt_m.unwrap_or(-hold_ned_m[2] as f64);
                 max_opt(

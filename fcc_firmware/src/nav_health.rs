@@ -1,0 +1,211 @@
+//! Estimator health: innovation / consistency monitors for each navigation filter. A filter
+//! whose measurements keep disagreeing with its prediction has diverged (or its sensor lies);
+//! the flight core answers a fault with hold, then land ([`crate::flight`]).
+//!
+//! | bit | filter | innovation | fault when |
+//! |---|---|---|---|
+//! | [`FAULT_VERTICAL`] | vertical (range-aided) | \|range altitude − estimate\| | > [`VERT_INNOV_M`] for [`VERT_FAULT_S`] |
+//! | [`FAULT_HORIZONTAL`] | horizontal (GPS) | \|GPS position − estimate\| (fix refused beyond the gate) | > [`GPS_GATE_M`] for [`GPS_FAULT_S`] |
+//! | [`FAULT_ATTITUDE`] | roll/pitch | angle between the accelerometer's and the estimate's gravity | > [`TILT_INNOV_RAD`] for [`TILT_FAULT_S`] |
+//!
+//! The magnetometer has its own gate (`fcc_nav::attitude`): a disturbed field is reported, not
+//! a fault (the heading is held on the gyro).
+//! A terrain step is not a vertical fault: the ground filter re-acquires and the range aid
+//! re-anchors, so the innovation stays small.
+
+/// Vertical filter fault bit.
+pub const FAULT_VERTICAL: u8 = 1;
+/// Horizontal filter (GPS) fault bit.
+pub const FAULT_HORIZONTAL: u8 = 2;
+/// Attitude (tilt) fault bit.
+pub const FAULT_ATTITUDE: u8 = 4;
+
+/// Range-aided altitude innovation beyond which the vertical filter is suspect, m.
+pub const VERT_INNOV_M: f32 = 1.0;
+/// … for this long, s.
+pub const VERT_FAULT_S: f32 = 2.0;
+/// A GPS fix further than this from the estimate is refused (multipath, a jump), m.
+pub const GPS_GATE_M: f32 = 5.0;
+/// Fixes refused for this long: the horizontal filter has lost GPS agreement, s.
+pub const GPS_FAULT_S: f32 = 2.0;
+/// Tilt innovation (accelerometer vs estimate) beyond which the attitude is suspect, rad (15°).
+pub const TILT_INNOV_RAD: f32 = 0.26;
+/// … for this long, s (manoeuvres the GPS compensation misses last well under it).
+pub const TILT_FAULT_S: f32 = 5.0;
+
+/// Innovations of one step (`None`: no measurement of that kind this step).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Innovations {
+    pub range_alt_m: Option<f32>,
+    /// A GPS fix arrived: its distance from the estimate, m.
+    pub gps_m: Option<f32>,
+    pub tilt_rad: Option<f32>,
+}
+
+/// Per-filter timers and the latched fault bits.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NavHealth {
+    vert_s: f32,
+    gps_s: f32,
+    tilt_s: f32,
+    faults: u8,
+    gps_refused: u32,
+}
+
+impl NavHealth {
+    pub const fn new() -> Self {
+        Self {
+            vert_s: 0.0,
+            gps_s: 0.0,
+            tilt_s: 0.0,
+            faults: 0,
+            gps_refused: 0,
+        }
+    }
+
+    /// Whether a GPS fix this far from the estimate is to be fused.
+    pub fn gps_acceptable(distance_m: f32) -> bool {
+        distance_m <= GPS_GATE_M
+    }
+
+    /// One step; returns the fault bits (latched until [`Self::clear`]).
+    pub fn update(&mut self, dt_s: f32, x: &Innovations) -> u8 {
+        let bad = |t: &mut f32, v: Option<f32>, limit: f32, hold: f32, bit: u8, f: &mut u8| {
+            match v {
+                Some(v) if !(v <= limit) => *t += dt_s,
+                Some(_) => *t = 0.0,
+                None => {}
+            }
+            if *t >= hold {
+                *f |= bit;
+            }
+        };
+        bad(
+            &mut self.vert_s,
+            x.range_alt_m,
+            VERT_INNOV_M,
+            VERT_FAULT_S,
+            FAULT_VERTICAL,
+            &mut self.faults,
+        );
+        if let Some(d) = x.gps_m {
+            if !Self::gps_acceptable(d) {
+                self.gps_refused = self.gps_refused.wrapping_add(1);
+            }
+        }
+        // GPS: the timer runs between fixes too while the last one was refused.
+        match x.gps_m {
+            Some(d) if Self::gps_acceptable(d) => self.gps_s = 0.0,
+            Some(_) => self.gps_s += dt_s,
+            None if self.gps_s > 0.0 => self.gps_s += dt_s,
+            None => {}
+        }
+        if self.gps_s >= GPS_FAULT_S {
+            self.faults |= FAULT_HORIZONTAL;
+        }
+        bad(
+            &mut self.tilt_s,
+            x.tilt_rad,
+            TILT_INNOV_RAD,
+            TILT_FAULT_S,
+            FAULT_ATTITUDE,
+            &mut self.faults,
+        );
+        self.faults
+    }
+
+    pub fn faults(&self) -> u8 {
+        self.faults
+    }
+
+    /// GPS fixes refused by the gate since start.
+    pub fn gps_refused(&self) -> u32 {
+        self.gps_refused
+    }
+
+    /// Forget the faults (on the ground, before a new flight).
+    pub fn clear(&mut self) {
+        *self = Self {
+            gps_refused: self.gps_refused,
+            ..Self::new()
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(h: &mut NavHealth, x: Innovations, s: f32) -> u8 {
+        for _ in 0..(s / 0.002) as usize {
+            h.update(0.002, &x);
+        }
+        h.faults()
+    }
+
+    #[test]
+    fn healthy_innovations_raise_nothing() {
+        let mut h = NavHealth::new();
+        let x = Innovations {
+            range_alt_m: Some(0.3),
+            gps_m: Some(2.0),
+            tilt_rad: Some(0.1),
+        };
+        assert_eq!(run(&mut h, x, 60.0), 0);
+    }
+
+    #[test]
+    fn each_divergence_is_flagged_after_its_hold_time() {
+        let mut h = NavHealth::new();
+        let v = Innovations {
+            range_alt_m: Some(1.5),
+            ..Default::default()
+        };
+        assert_eq!(run(&mut h, v, 1.9), 0);
+        assert_eq!(run(&mut h, v, 0.2), FAULT_VERTICAL);
+        let mut h = NavHealth::new();
+        // A refused fix at 5 Hz, then silence between fixes: the timer keeps running.
+        for _ in 0..12 {
+            h.update(
+                0.002,
+                &Innovations {
+                    gps_m: Some(30.0),
+                    ..Default::default()
+                },
+            );
+            run(&mut h, Innovations::default(), 0.198);
+        }
+        assert_eq!(h.faults(), FAULT_HORIZONTAL);
+        assert!(h.gps_refused() == 12);
+        let mut h = NavHealth::new();
+        let t = Innovations {
+            tilt_rad: Some(0.5),
+            ..Default::default()
+        };
+        assert_eq!(run(&mut h, t, 5.1), FAULT_ATTITUDE);
+        // Latched until cleared.
+        assert_eq!(
+            run(
+                &mut h,
+                Innovations {
+                    tilt_rad: Some(0.0),
+                    ..Default::default()
+                },
+                1.0
+            ),
+            FAULT_ATTITUDE
+        );
+        h.clear();
+        assert_eq!(h.faults(), 0);
+    }
+
+    #[test]
+    fn nan_innovation_counts_as_bad() {
+        let mut h = NavHealth::new();
+        let x = Innovations {
+            range_alt_m: Some(f32::NAN),
+            ..Default::default()
+        };
+        assert_eq!(run(&mut h, x, 2.1), FAULT_VERTICAL);
+    }
+}

@@ -1,0 +1,101 @@
+//! Failsafes of the flight-safety issue, injected in the simulator and judged on truth:
+//! an estimator fault (a 30 m GPS jump the horizontal filter's innovation monitor must refuse
+//! and report), wind beyond the vehicle's authority (reported as `WindLimit`, answered by a
+//! landing where it is), and the emergency kill (the only way to stop the motors in flight).
+
+mod common;
+
+use fcc_firmware::commands::{Command, FailsafeCause, Mode, KILL_CONFIRM};
+use fcc_firmware::sitl::scenario::Fault;
+use fcc_firmware::sitl::{sim::Sim, truth};
+
+#[test]
+fn gps_jump_is_refused_reported_and_answered_by_landing() {
+    let mut s = common::load("hover");
+    let t0 = 40.0;
+    s.faults.push(Fault::GpsJump {
+        start_s: t0,
+        end_s: 1e6,
+        offset_ned_m: [30.0, -20.0, 0.0],
+    });
+    let log = common::fly_scenario(s);
+    let after: Vec<_> = log.samples.iter().filter(|x| x.t_s >= t0).collect();
+    let fault = after
+        .iter()
+        .find(|x| x.nav.nav_faults != 0)
+        .expect("the horizontal innovation monitor raises a fault");
+    let land = after.iter().find(|x| x.mode == Mode::Land).expect("lands");
+    let t = truth::report(&log);
+    let start = after[0].true_pos_ned_m;
+    let drift = after
+        .iter()
+        .filter(|x| x.armed)
+        .map(|x| (x.true_pos_ned_m[0] - start[0]).hypot(x.true_pos_ned_m[1] - start[1]))
+        .fold(0.0f64, f64::max);
+    println!(
+        "GPS jump of 36 m at {t0} s: fault bits {} at {:.2} s, land at {:.2} s ({:?}); true drift until disarm {drift:.2} m\n{t}",
+        fault.nav.nav_faults, fault.t_s, land.t_s, land.failsafe
+    );
+    assert_eq!(
+        fault.nav.nav_faults,
+        fcc_firmware::nav_health::FAULT_HORIZONTAL
+    );
+    assert!(fault.t_s - t0 <= 2.5, "fault after {:.2} s", fault.t_s - t0);
+    assert_eq!(land.failsafe, FailsafeCause::EstimatorFault);
+    // The jump never reached the position estimate: no dash towards a 36 m error.
+    assert!(drift < 3.0, "true drift {drift:.2} m");
+    assert!(!t.crashed && t.unplanned_contacts == 0, "{t}");
+    assert!(
+        log.events.iter().any(|e| e.1.starts_with("disarmed")),
+        "landed and disarmed: {:?}",
+        log.events
+    );
+}
+
+#[test]
+fn wind_beyond_authority_lands_where_it_is() {
+    let mut s = common::load("hover");
+    s.wind.mean_speed_mps = 16.0;
+    s.wind.w20_kt = 30.0;
+    let log = common::fly_scenario(s);
+    let t = truth::report(&log);
+    let wl = log
+        .samples
+        .iter()
+        .find(|x| x.failsafe == FailsafeCause::WindLimit);
+    println!(
+        "16 m/s + W20 30 kt: wind limit at {:?} s\n{t}",
+        wl.map(|x| x.t_s)
+    );
+    let wl = wl.expect("wind limit detected and reported");
+    assert_eq!(wl.mode, Mode::Land);
+    assert!(!t.crashed, "{t}");
+    assert_eq!(t.unplanned_contacts, 0, "{t}");
+    assert!(!t.flyaway, "{t}");
+}
+
+#[test]
+fn emergency_kill_needs_its_confirmation_and_disarm_is_refused_in_flight() {
+    let mut sim = Sim::new(common::load("hover")).unwrap();
+    while sim.t_s() < 30.0 {
+        sim.tick();
+    }
+    assert!(sim.core.armed() && !sim.core.landed(), "flying at 30 s");
+    let t = sim.t_us;
+    assert!(
+        sim.core.command(t, Command::Disarm).is_err(),
+        "disarm refused in the air"
+    );
+    assert!(sim.core.command(t, Command::Kill { confirm: 0 }).is_err());
+    assert!(sim.core.armed());
+    sim.core
+        .command(
+            t,
+            Command::Kill {
+                confirm: KILL_CONFIRM,
+            },
+        )
+        .unwrap();
+    assert!(!sim.core.armed());
+    assert_eq!(sim.core.failsafe(), FailsafeCause::EmergencyKill);
+}
