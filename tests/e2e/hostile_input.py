@@ -162,6 +162,15 @@ def main():
     if rej1 - rej0 < 1:
         fails.append("no oversized setpoint counted as refused")
 
+    # Unknown frames with terminal escapes and a newline: refused, shown escaped.
+    evil = "evil\x1b[2J\x1b]0;pwned\x07\nINFO fake line"
+    for _ in range(5):
+        sp.write(rt.TwistStamped(rt.Header(rt.Time(), evil), rt.Twist(rt.Vector3(1.0, 0.0, 0.0))))
+        time.sleep(0.3)
+    time.sleep(1.0)
+    poll()
+    rej1 = last_status[0].setpoint_rejects_bridge
+
     # 2. NaN flood.
     log0 = os.path.getsize(a.bridge_log)
     n = 0
@@ -197,6 +206,10 @@ def main():
         if why:
             fails.append(f"bridge log line: {why}: {l[:80]!r}")
             break
+    esc = [l for l in lines if "unknown frame_id 'evil\\u{1b}[2J\\u{1b}]0;pwned\\u{7}\\nINFO fake line'" in l]
+    print(f"bridge log: unknown frame with escapes shown as: {esc[0].split('refused: ')[-1] if esc else '-'}")
+    if not esc:
+        fails.append("the unknown frame_id with control characters is not in the log, escaped")
     sup = [l for l in lines if "suppressed)" in l]
     print(f"bridge log: {len(lines)} lines, longest {longest} chars, {len(sup)} with a suppressed count; "
           f"e.g. {sup[-1].split('WARN')[-1].strip()[:140] if sup else '-'}")
