@@ -16,7 +16,7 @@ cd "$(dirname "$0")/.."
 BENCHES=(link_codec attitude_filter flight_core)
 out_md=BENCHMARKS.md
 raw=$(mktemp)
-trap 'rm -f "$raw" "$raw.mcu" "$raw.rec"' EXIT
+trap 'rm -f "$raw" "$raw.mcu" "$raw.rec" "$raw.campaign" "$raw.campaign.log"' EXIT
 
 echo "== building (release)" >&2
 cargo bench -p fcc_tests --no-run "${BENCHES[@]/#/--bench=}" >&2
@@ -84,6 +84,15 @@ for id in 1a 1b 2a 2b 3a 6; do
     grep -q "^ROW|$id|" <<<"$rows" || { echo "bench output lacks row $id" >&2; exit 1; }
 done
 
+# The flight-safety campaign (issue 13): 72 seeds × 7 scenario families = 504 flights scored on
+# the simulator's truth, full durations (5-minute velocity cruises, 100 s gale hovers).
+echo "== fcc-campaign (504 flights)" >&2
+cargo build -q --release -p fcc_firmware --bin fcc-campaign >&2
+campaign_status=0
+target/release/fcc-campaign --per-family 72 --long --out "$raw.campaign" >"$raw.campaign.log" 2>&1 \
+    || campaign_status=$?
+campaign_wall=$(grep -m1 '^wall time' "$raw.campaign.log" || true)
+
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
 {
     echo "# Benchmarks"
@@ -106,5 +115,11 @@ cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
     echo "- **3b**: parsed from \`scripts/test-mcu.sh\` (the MCU-target work: the core cross-built for thumbv7em-none-eabihf replays a recorded flight in QEMU with -icount, 1 instruction = 1 tick) when that script exists; instructions, not cycles (flash wait states add roughly 1.2–2 cycles per instruction)."
     echo "- **5**: \`fcc-record-bench\` (fcc_report/src/bin/record_bench.rs): the same messages through our recorder and through the \`mcap\` crate's writer with the same write options, best of 3."
     grep -q '^ROW|4|' "$raw" || echo "- **4**: not measured in this run (needs the DDS peer's Python: \`scripts/test.sh\` makes .venv-dds)." 
+    echo
+    echo "## Flight-safety campaign (truth)"
+    echo
+    echo "\`target/release/fcc-campaign --per-family 72 --long\` ($campaign_wall; exit status $campaign_status: 0 = every check held). Families and checks: \`fcc_firmware/src/sitl/campaign.rs\`; every figure is the simulator's truth unless named \`est_\` (the vehicle's own estimate). p50/p95/worst over the family's flights, the worst flight's seed (re-fly it: \`fcc-campaign --only FAMILY:SEED --long --csv log.csv\`). The test command flies the short form (6 seeds per family, 1-minute cruises, \`tests/tests/campaign.rs\`)."
+    echo
+    cat "$raw.campaign"
 } >"$out_md"
 echo "== wrote $out_md" >&2

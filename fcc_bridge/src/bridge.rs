@@ -236,6 +236,8 @@ enum Inbound {
     Setpoint(TwistStamped),
     Arm(Bool),
     Mode(StringMsg),
+    /// `cmd/kill`: the emergency motor stop, confirmed by its text.
+    Kill(StringMsg),
     Clock(Clock),
 }
 
@@ -246,6 +248,7 @@ impl Inbound {
         let (s, field, max) = match self {
             Inbound::Setpoint(t) => (&mut t.header.frame_id, "frame_id", bounded::MAX_FRAME_ID),
             Inbound::Mode(m) => (&mut m.data, "cmd/mode text", bounded::MAX_MODE),
+            Inbound::Kill(m) => (&mut m.data, "cmd/kill text", bounded::MAX_MODE),
             // No strings in std_msgs/Bool and rosgraph_msgs/Clock.
             Inbound::Arm(_) | Inbound::Clock(_) => return None,
         };
@@ -731,6 +734,14 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         tx.clone(),
         Inbound::Mode,
     )?;
+    subscribe::<StringMsg>(
+        &ctx,
+        &node_name,
+        &mut node,
+        &opts.name("cmd/kill"),
+        tx.clone(),
+        Inbound::Kill,
+    )?;
     if opts.use_sim_time && opts.clock == ClockSource::Sync {
         subscribe::<Clock>(
             &ctx,
@@ -879,6 +890,7 @@ fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Optio
         Inbound::Setpoint(x) => tap.received("setpoint/velocity", q, x, t),
         Inbound::Arm(x) => tap.received("cmd/arm", q, x, t),
         Inbound::Mode(x) => tap.received("cmd/mode", q, x, t),
+        Inbound::Kill(x) => tap.received("cmd/kill", q, x, t),
         Inbound::Clock(_) => {}
     }
     // A string that arrived too long (cut on arrival, recorded cut): refused, counted.
@@ -887,7 +899,7 @@ fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Optio
             st.refuse_setpoint(convert::SetpointReject::Oversize(o), now_ns());
             return None;
         }
-        (Inbound::Mode(_), Some(o)) => {
+        (Inbound::Mode(_) | Inbound::Kill(_), Some(o)) => {
             st.refuse_oversize_mode(o, now_ns());
             return None;
         }
@@ -900,6 +912,7 @@ fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Optio
             if b.data { "arm" } else { "disarm" },
         ),
         Inbound::Mode(s) => st.on_command(convert::mode_command(&s), &s.data),
+        Inbound::Kill(s) => st.on_kill(&s),
         Inbound::Clock(c) => {
             st.sim_offset_ns = Some(c.clock.to_nanos() - now_ns());
             None

@@ -604,6 +604,18 @@ pub fn arm_command(m: &Bool) -> link::Command {
     }
 }
 
+/// The text `cmd/kill` must carry, exactly: the emergency kill is never a typo of a mode.
+pub const KILL_TEXT: &str = "KILL";
+
+/// `cmd/kill`: exactly [`KILL_TEXT`] → the MCU's emergency kill with its confirmation; any
+/// other text → `None` (refused).
+pub fn kill_command(m: &StringMsg) -> Option<link::Command> {
+    (m.data == KILL_TEXT).then_some(link::Command {
+        command: link::CommandKind::Kill,
+        confirm: link::KILL_CONFIRM,
+    })
+}
+
 /// `cmd/mode`: `hold`, `land`, `velocity` (also `arm`/`disarm`), case-insensitive; a text over
 /// [`bounded::MAX_MODE`] bytes is no mode.
 pub fn mode_command(m: &StringMsg) -> Option<link::Command> {

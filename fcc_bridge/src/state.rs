@@ -449,6 +449,26 @@ impl LinkState {
 
     /// A command from ROS (`what`: the text it came from, shown escaped and cut). Logs are
     /// rate-limited per kind.
+    /// `cmd/kill`: the emergency motor stop. Logged at ERROR with its source whether it is
+    /// forwarded or refused (a text other than `KILL`, counted as a command refusal).
+    pub fn on_kill(&mut self, m: &StringMsg) -> Option<link::Message> {
+        match crate::convert::kill_command(m) {
+            Some(c) => {
+                tracing::error!("EMERGENCY KILL requested on cmd/kill: stopping the motors");
+                self.on_command(Some(c), "kill")
+            }
+            None => {
+                self.counters.command_rejects += 1;
+                tracing::error!(
+                    "cmd/kill refused: the text must be exactly '{}', got '{}'",
+                    crate::convert::KILL_TEXT,
+                    bounded::log_value(&m.data, bounded::LOG_CHARS)
+                );
+                None
+            }
+        }
+    }
+
     pub fn on_command(&mut self, c: Option<link::Command>, what: &str) -> Option<link::Message> {
         let now = crate::now_ns();
         let what = || bounded::log_value(what, bounded::LOG_CHARS);

@@ -380,21 +380,33 @@ fn sensor_watch_transitions() {
     assert_eq!(unhealthy(&s, Some(0.3), &c), [false; 5]);
     s.landed = false;
     assert_eq!(unhealthy(&s, Some(0.3), &c), [false; 5]);
-    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, true, false, false]);
+    assert_eq!(
+        unhealthy(&s, Some(5.0), &c),
+        [false, false, true, false, false]
+    );
     // Sonar above its range (10.68 m): no fault; below: a fault.
     s.sensors.laser_ok = true;
     s.sensors.sonar_ok = false;
     assert_eq!(unhealthy(&s, Some(20.0), &c), [false; 5]);
-    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, false, true, false]);
+    assert_eq!(
+        unhealthy(&s, Some(5.0), &c),
+        [false, false, false, true, false]
+    );
     // Disarmed: rangefinders are not checked.
     s.armed = false;
     assert_eq!(unhealthy(&s, Some(5.0), &c), [false; 5]);
     // A diverged filter is a fault in any state, named in the text.
     s.sensors.nav_faults = 2;
-    assert_eq!(unhealthy(&s, Some(5.0), &c), [false, false, false, false, true]);
+    assert_eq!(
+        unhealthy(&s, Some(5.0), &c),
+        [false, false, false, false, true]
+    );
     let d = crate::diag::sensors_status(&s, Some(5.0), &c, "fcc");
     assert_eq!(d.level, DiagnosticStatus::WARN);
-    assert!(d.values.iter().any(|kv| kv.key == "nav_faults" && kv.value == "horizontal"));
+    assert!(d
+        .values
+        .iter()
+        .any(|kv| kv.key == "nav_faults" && kv.value == "horizontal"));
 }
 
 /// A rebooted MCU says Hello again with its sequence from 0: one sequence reset, not thousands
@@ -508,4 +520,16 @@ fn state_bounded_refusals_and_rate_limited_warnings() {
     assert!(m(&"hold ".repeat(1000)).is_none());
     assert!(s.on_command(None, "\u{1b}]0;pwned\u{7}").is_none());
     assert_eq!(s.counters.command_rejects, 1);
+}
+
+/// `cmd/kill` needs exactly `KILL`: anything else (a mode name, lower case, padding) is no kill.
+#[test]
+fn kill_needs_its_exact_text() {
+    let s = |d: &str| StringMsg { data: d.into() };
+    let k = kill_command(&s("KILL")).expect("KILL is the kill");
+    assert_eq!(k.command, link::CommandKind::Kill);
+    assert_eq!(k.confirm, link::KILL_CONFIRM);
+    for bad in ["kill", " KILL", "KILL ", "disarm", "", "KILLKILL"] {
+        assert!(kill_command(&s(bad)).is_none(), "{bad:?}");
+    }
 }
