@@ -269,9 +269,8 @@ impl Navigator {
                 );
                 self.vert.baro_alt(z);
                 self.set_vert_aided(self.range_aid.aiding());
-                if self.range_aid.aiding() {
-                    innov.range_alt_m = Some(self.range_aid.innovation_m());
-                }
+                let baro_corr = alt - self.range_aid.baro_offset_m();
+                innov.baro_alt_m = Some(fcc_nav::math::fabsf(baro_corr - self.vert.alt_m()));
             }
         }
         if let Some(g) = s.gps {

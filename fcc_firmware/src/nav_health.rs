@@ -4,14 +4,14 @@
 //!
 //! | bit | filter | innovation | fault when |
 //! |---|---|---|---|
-//! | [`FAULT_VERTICAL`] | vertical (range-aided) | \|range altitude − estimate\| | > [`VERT_INNOV_M`] for [`VERT_FAULT_S`] |
+//! | [`FAULT_VERTICAL`] | vertical | \|barometer (offset-corrected) − estimate\| | > [`VERT_INNOV_M`] for [`VERT_FAULT_S`] |
 //! | [`FAULT_HORIZONTAL`] | horizontal (GPS) | \|GPS position − estimate\| (fix refused beyond the gate) | > [`GPS_GATE_M`] for [`GPS_FAULT_S`] |
 //! | [`FAULT_ATTITUDE`] | roll/pitch | angle between the accelerometer's and the estimate's gravity | > [`TILT_INNOV_RAD`] for [`TILT_FAULT_S`] |
 //!
 //! The magnetometer has its own gate (`fcc_nav::attitude`): a disturbed field is reported, not
 //! a fault (the heading is held on the gyro).
 //! A terrain step is not a vertical fault: the ground filter re-acquires and the range aid
-//! re-anchors, so the innovation stays small.
+//! re-anchors its terrain reference; the barometer is unaffected.
 
 /// Vertical filter fault bit.
 pub const FAULT_VERTICAL: u8 = 1;
@@ -20,8 +20,10 @@ pub const FAULT_HORIZONTAL: u8 = 2;
 /// Attitude (tilt) fault bit.
 pub const FAULT_ATTITUDE: u8 = 4;
 
-/// Range-aided altitude innovation beyond which the vertical filter is suspect, m.
-pub const VERT_INNOV_M: f32 = 1.0;
+/// Barometer-vs-estimate disagreement beyond which the vertical filter is suspect, m (the
+/// barometer's prop-wash noise is ≈1 m at 1σ over seconds; a range-aided estimate that left
+/// it by 3 m, or a baro-only one that did, has diverged).
+pub const VERT_INNOV_M: f32 = 3.0;
 /// … for this long, s.
 pub const VERT_FAULT_S: f32 = 2.0;
 /// A GPS fix further than this from the estimate is refused (multipath, a jump), m.
@@ -36,7 +38,8 @@ pub const TILT_FAULT_S: f32 = 5.0;
 /// Innovations of one step (`None`: no measurement of that kind this step).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Innovations {
-    pub range_alt_m: Option<f32>,
+    /// |offset-corrected barometric altitude − estimate|, m.
+    pub baro_alt_m: Option<f32>,
     /// A GPS fix arrived: its distance from the estimate, m.
     pub gps_m: Option<f32>,
     pub tilt_rad: Option<f32>,
@@ -82,7 +85,7 @@ impl NavHealth {
         };
         bad(
             &mut self.vert_s,
-            x.range_alt_m,
+            x.baro_alt_m,
             VERT_INNOV_M,
             VERT_FAULT_S,
             FAULT_VERTICAL,
@@ -147,7 +150,7 @@ mod tests {
     fn healthy_innovations_raise_nothing() {
         let mut h = NavHealth::new();
         let x = Innovations {
-            range_alt_m: Some(0.3),
+            baro_alt_m: Some(1.5),
             gps_m: Some(2.0),
             tilt_rad: Some(0.1),
         };
@@ -158,7 +161,7 @@ mod tests {
     fn each_divergence_is_flagged_after_its_hold_time() {
         let mut h = NavHealth::new();
         let v = Innovations {
-            range_alt_m: Some(1.5),
+            baro_alt_m: Some(3.5),
             ..Default::default()
         };
         assert_eq!(run(&mut h, v, 1.9), 0);
@@ -203,7 +206,7 @@ mod tests {
     fn nan_innovation_counts_as_bad() {
         let mut h = NavHealth::new();
         let x = Innovations {
-            range_alt_m: Some(f32::NAN),
+            baro_alt_m: Some(f32::NAN),
             ..Default::default()
         };
         assert_eq!(run(&mut h, x, 2.1), FAULT_VERTICAL);

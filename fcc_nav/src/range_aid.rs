@@ -8,8 +8,10 @@
 //!             b ← b + (dt/τ_b)·(h_baro − z_meas − b)      baro offset, low-passed
 //!   unaided:  z_meas = h_baro − b
 //! ```
-//! `t` is anchored (`t = ĥ − h_agl`, with ĥ the current altitude estimate) when the aid starts
-//! and whenever the ground filter re-acquires after a **terrain step**: so over a step the
+//! `t` is anchored (`t = ĥ − h_agl`, with ĥ the current altitude estimate) when the aid starts,
+//! whenever the ground filter re-acquires after a **terrain step**, and when the range altitude
+//! stays more than [`SUSPECT_M`] from the estimate for [`REANCHOR_S`] (an edge the filter is
+//! still re-acquiring, a slope; meanwhile the corrected barometer stands in): so over a step the
 //! vehicle keeps its altitude (it neither jumps nor follows the step); over flat or gently
 //! varying ground the height is held to the rangefinder's few centimetres.
 
@@ -18,6 +20,11 @@ use crate::math::fabsf;
 /// The baro offset's time constant τ_b, s: long against the barometer's prop-wash noise
 /// (coloured, ~1 s), short against its drift (tens of Pa over minutes).
 pub const BARO_OFFSET_TAU_S: f32 = 20.0;
+/// A range altitude this far from the estimate is suspect (a terrain edge, a step the ground
+/// filter is still re-acquiring): the barometer stands in meanwhile, m.
+pub const SUSPECT_M: f32 = 0.3;
+/// Suspect for this long: the terrain changed (a step, a slope) — re-anchor, s.
+pub const REANCHOR_S: f32 = 0.5;
 
 /// Range-aided altitude measurement and baro offset.
 #[derive(Clone, Copy, Debug, Default)]
@@ -27,6 +34,8 @@ pub struct RangeAid {
     baro_offset_m: f32,
     /// Innovation of the last aided measurement against the estimate, m.
     last_innovation_m: f32,
+    /// How long the range altitude has been suspect, s.
+    suspect_s: f32,
 }
 
 impl RangeAid {
@@ -37,6 +46,7 @@ impl RangeAid {
             reinit_seen: 0,
             baro_offset_m: 0.0,
             last_innovation_m: 0.0,
+            suspect_s: 0.0,
         }
     }
 
@@ -57,14 +67,30 @@ impl RangeAid {
             return baro_alt_m - self.baro_offset_m;
         };
         if self.terrain_alt_m.is_none() || reinit_count != self.reinit_seen {
-            self.terrain_alt_m = Some(alt_est_m - h);
+            self.anchor(alt_est_m, h);
             self.reinit_seen = reinit_count;
         }
-        let z = self.terrain_alt_m.unwrap_or(0.0) + h;
+        let mut z = self.terrain_alt_m.unwrap_or(0.0) + h;
         self.last_innovation_m = z - alt_est_m;
+        if fabsf(self.last_innovation_m) > SUSPECT_M {
+            self.suspect_s += dt_s;
+            if self.suspect_s < REANCHOR_S {
+                return baro_alt_m - self.baro_offset_m;
+            }
+            // Persistently off: the ground under the vehicle changed, not the vehicle's height.
+            self.anchor(alt_est_m, h);
+            z = alt_est_m;
+        } else {
+            self.suspect_s = 0.0;
+        }
         let k = (dt_s / BARO_OFFSET_TAU_S).clamp(0.0, 1.0);
         self.baro_offset_m += k * (baro_alt_m - z - self.baro_offset_m);
         z
+    }
+
+    fn anchor(&mut self, alt_est_m: f32, h: f32) {
+        self.terrain_alt_m = Some(alt_est_m - h);
+        self.suspect_s = 0.0;
     }
 
     /// The aid is in use.
@@ -112,6 +138,23 @@ mod tests {
         // Range lost: the corrected baro continues where the range left off.
         assert!((a.measurement(0.02, 5.0, 6.5, None, 0) - 5.0).abs() < 0.01);
         assert!(!a.aiding());
+    }
+
+    #[test]
+    fn an_unannounced_step_is_bridged_by_the_baro_then_re_anchored() {
+        let mut a = RangeAid::new();
+        a.measurement(0.02, 0.0, 0.0, Some(0.25), 0);
+        a.measurement(0.02, 5.0, 5.0, Some(5.25), 0);
+        // The ground drops 0.6 m without a re-acquisition: the baro stands in …
+        let z = a.measurement(0.02, 5.0, 5.1, Some(5.85), 0);
+        assert!((z - 5.1).abs() < 1e-3, "{z}");
+        for _ in 0..30 {
+            a.measurement(0.02, 5.0, 5.0, Some(5.85), 0);
+        }
+        // … then the terrain reference moves, not the altitude.
+        let z = a.measurement(0.02, 5.0, 5.0, Some(5.85), 0);
+        assert!((z - 5.0).abs() < 1e-3, "{z}");
+        assert!((a.terrain_alt_m().unwrap() + 0.85).abs() < 1e-3);
     }
 
     #[test]

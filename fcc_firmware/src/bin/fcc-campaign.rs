@@ -10,6 +10,14 @@ use clap::Parser;
 use fcc_firmware::sitl::campaign;
 use std::process::ExitCode;
 
+/// `println!` that tolerates a closed stdout (e.g. piped into `head`).
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}
+
 #[derive(Parser, Debug)]
 #[command(
     name = "fcc-campaign",
@@ -56,8 +64,8 @@ fn main() -> ExitCode {
     let t0 = std::time::Instant::now();
     let out = campaign::run(args.per_family as usize, args.seed, args.long, threads);
     let table = campaign::table(&out);
-    println!("{table}");
-    println!(
+    say!("{table}");
+    say!(
         "wall time {:.1} s on {threads} threads",
         t0.elapsed().as_secs_f64()
     );
@@ -95,10 +103,10 @@ fn fly_one(only: &str, csv: &std::path::Path, long: bool) -> ExitCode {
         }
     };
     sim.run();
-    println!("{family} seed {seed}: {}", f.what);
-    println!("{}", fcc_firmware::sitl::metrics::summary(&sim.log));
+    say!("{family} seed {seed}: {}", f.what);
+    say!("{}", fcc_firmware::sitl::metrics::summary(&sim.log));
     let o = campaign::fly(&f);
-    println!("failures: {:?}", o.failures);
+    say!("failures: {:?}", o.failures);
     if let Err(e) = fcc_firmware::sitl::log::write_csv(&sim.log, csv) {
         eprintln!("fcc-campaign: {}: {e}", csv.display());
         return ExitCode::from(1);
