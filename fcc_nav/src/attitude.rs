@@ -144,6 +144,8 @@ pub struct AttitudeEstimator {
     pub mag_realign_allowed: bool,
     mag_ref: Option<(f32, f32)>,
     mag_consistent_s: f32,
+    /// The last reading's field matched the reference (magnitude, dip).
+    mag_field_ok: bool,
     mag_realigns: u32,
     mag_rejected_s: f32,
     mag_rejects: u32,
@@ -165,6 +167,7 @@ impl AttitudeEstimator {
             mag_realign_allowed: false,
             mag_ref: None,
             mag_consistent_s: 0.0,
+            mag_field_ok: true,
             mag_realigns: 0,
             mag_rejected_s: 0.0,
             mag_rejects: 0,
@@ -251,12 +254,8 @@ impl AttitudeEstimator {
             } else {
                 heading = None;
                 self.mag_rejects = self.mag_rejects.wrapping_add(1);
-                self.mag_consistent_s = if field_ok {
-                    self.mag_consistent_s + dt_s
-                } else {
-                    0.0
-                };
             }
+            self.mag_field_ok = field_ok;
         }
         if mag_frd_ut.is_some() {
             if heading.is_none() {
@@ -267,6 +266,12 @@ impl AttitudeEstimator {
         } else if self.mag_rejected_s > 0.0 {
             self.mag_rejected_s += dt_s;
         }
+        // Time (every step, not per reading) the field has looked Earth-like while refused.
+        self.mag_consistent_s = if self.mag_rejected_s > 0.0 && self.mag_field_ok {
+            self.mag_consistent_s + dt_s
+        } else {
+            0.0
+        };
         self.yaw.update(rates[2], heading, dt_s);
         self.euler()
     }
