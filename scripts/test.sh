@@ -68,3 +68,6 @@ tests/e2e/four_uav.sh "$FCC_DDS_PYTHON"
 # Robustness through the real pty + bridge (issue 6): bad configuration, a noisy wire under the
 # square mission, the mission node killed mid-leg, the bridge and the serial device lost and back.
 tests/e2e/robust_stack.sh "$FCC_DDS_PYTHON"
+# Uplink budget (issue 14): a 10 kHz setpoint flood through a 921600-baud line (fcc-wire-fault --baud):
+# land/hold at the MCU ≤ 100 ms after the peer's write, uplink ≤ 25 % of the line, ≤ 101 setpoints/s.
+tests/e2e/flood_uplink.sh "$FCC_DDS_PYTHON"

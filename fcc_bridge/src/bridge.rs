@@ -566,7 +566,10 @@ struct Dds {
     _ctx: Context,
     node: Node,
     pubs: Publishers,
+    /// Setpoints and /clock.
     rx: mpsc::Receiver<InboundMsg>,
+    /// Commands (cmd/arm, cmd/mode, cmd/kill).
+    crx: mpsc::Receiver<InboundMsg>,
     lrx: mpsc::Receiver<LinkRequest>,
     shared: Arc<ParamShared>,
 }
@@ -708,7 +711,10 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     step.set("creating the publishers");
     let pubs = Publishers::new(&mut node, opts)?;
     step.set("creating the subscriptions");
+    // Setpoints (and /clock) and commands on separate queues: a command never waits behind a
+    // queue of setpoints from a flooding peer.
     let (tx, rx) = mpsc::channel::<InboundMsg>(64);
+    let (ctx_tx, crx) = mpsc::channel::<InboundMsg>(64);
     let node_name = NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?;
     subscribe::<TwistStamped>(
         &ctx,
@@ -723,7 +729,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         &node_name,
         &mut node,
         &opts.name("cmd/arm"),
-        tx.clone(),
+        ctx_tx.clone(),
         Inbound::Arm,
     )?;
     subscribe::<StringMsg>(
@@ -731,7 +737,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         &node_name,
         &mut node,
         &opts.name("cmd/mode"),
-        tx.clone(),
+        ctx_tx.clone(),
         Inbound::Mode,
     )?;
     subscribe::<StringMsg>(
@@ -739,7 +745,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         &node_name,
         &mut node,
         &opts.name("cmd/kill"),
-        tx.clone(),
+        ctx_tx.clone(),
         Inbound::Kill,
     )?;
     if opts.use_sim_time && opts.clock == ClockSource::Sync {
@@ -778,6 +784,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         )?;
     }
     drop(ltx);
+    drop(ctx_tx);
     tracing::info!(
         "node {}/{} on DDS domain {} ({}), device {} at {} baud",
         opts.namespace.trim_end_matches('/'),
@@ -796,6 +803,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         node,
         pubs,
         rx,
+        crx,
         lrx,
         shared,
     })
@@ -809,10 +817,15 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         _ctx,
         node,
         pubs,
-        mut rx,
+        rx,
+        crx,
         lrx,
         shared,
     } = start_dds(&opts).await?;
+    let mut inbound = InboundRx {
+        setpoints: rx,
+        commands: crx,
+    };
     let mut ros = RosSide {
         node: &node,
         rx: lrx,
@@ -823,6 +836,11 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
     };
 
     let mut st = LinkState::new(opts.cfg.clone(), opts.limits, opts.clock);
+    st.uplink = crate::state::Uplink::for_baud(opts.baud);
+    tracing::info!(
+        "uplink: setpoints at most every {:.1} ms (coalesced to the newest), commands first",
+        st.uplink.interval_ns() as f64 / 1e6
+    );
     let tf_static = convert::static_transforms(Time::from_nanos(now_ns()), &st.cfg);
     tap.published(
         "/tf_static",
@@ -847,7 +865,7 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
                     tracing::warn!("cannot open {}: {e}; retrying every 0.5 s", opts.device);
                     logged_open_error = true;
                 }
-                drain_inbound(&mut rx, &mut st, &tap);
+                drain_inbound(&mut inbound, &mut st, &tap);
                 while let Ok(r) = ros.rx.try_recv() {
                     ros.request(r, &mut st);
                 }
@@ -865,7 +883,14 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         tracing::info!("opened {}", opts.device);
         tap.raw_reset();
         match session(
-            port, &opts, &mut st, &pubs, &mut rx, &mut ros, &mut rates, &tap,
+            port,
+            &opts,
+            &mut st,
+            &pubs,
+            &mut inbound,
+            &mut ros,
+            &mut rates,
+            &tap,
         )
         .await
         {
@@ -876,9 +901,18 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
     }
 }
 
+/// The subscriptions' queues: setpoints and commands apart (see [`setup_dds`]).
+struct InboundRx {
+    setpoints: mpsc::Receiver<InboundMsg>,
+    commands: mpsc::Receiver<InboundMsg>,
+}
+
 /// While disconnected: refuse (and count) what arrives.
-fn drain_inbound(rx: &mut mpsc::Receiver<InboundMsg>, st: &mut LinkState, tap: &Tap) {
-    while let Ok(m) = rx.try_recv() {
+fn drain_inbound(rx: &mut InboundRx, st: &mut LinkState, tap: &Tap) {
+    while let Ok(m) = rx.commands.try_recv() {
+        handle_inbound(m, st, tap);
+    }
+    while let Ok(m) = rx.setpoints.try_recv() {
         handle_inbound(m, st, tap);
     }
 }
@@ -942,7 +976,7 @@ async fn session(
     opts: &Options,
     st: &mut LinkState,
     pubs: &Publishers,
-    rx: &mut mpsc::Receiver<InboundMsg>,
+    rx: &mut InboundRx,
     ros: &mut RosSide<'_>,
     rates: &mut RateMeter,
     tap: &Tap,
@@ -969,6 +1003,10 @@ async fn session(
     let mut buf = vec![0u8; 4096];
     loop {
         let mut to_send: Vec<u8> = Vec::new();
+        // The held setpoint's turn on the uplink (see `state::Uplink`).
+        let due = st.uplink.due_ns();
+        let wait =
+            Duration::from_nanos(due.map_or(0, |d| d.saturating_sub(now_ns()).max(0) as u64));
         tokio::select! {
             r = rd.read(&mut buf) => {
                 let n = match r {
@@ -996,9 +1034,22 @@ async fn session(
                     to_send.extend(st.encode(&msg, now_ns()));
                 }
             }
-            Some(m) = rx.recv() => {
+            // Commands are written in this pass, ahead of any held setpoint.
+            Some(m) = rx.commands.recv() => {
                 if let Some(msg) = handle_inbound(m, st, tap) {
                     to_send.extend(st.encode(&msg, now_ns()));
+                }
+            }
+            // Setpoints: sent at once if their turn has come, else held (the newest wins).
+            Some(m) = rx.setpoints.recv() => {
+                if let Some(msg) = handle_inbound(m, st, tap) {
+                    to_send.extend(st.encode(&msg, now_ns()));
+                }
+            }
+            _ = tokio::time::sleep(wait), if due.is_some() => {
+                let now = now_ns();
+                if let Some(msg) = st.uplink_due(now) {
+                    to_send.extend(st.encode(&msg, now));
                 }
             }
             _ = tick.tick() => {
@@ -1028,6 +1079,12 @@ async fn session(
                     last_diag = now;
                 }
             }
+        }
+        // A held setpoint whose turn came while other branches were busy (a flood keeps the
+        // setpoint queue always ready, and the timer above is re-armed on every pass).
+        let now = now_ns();
+        if let Some(msg) = st.uplink_due(now) {
+            to_send.extend(st.encode(&msg, now));
         }
         if !to_send.is_empty() {
             tap.raw_out(&to_send, rec_time(st));

@@ -361,6 +361,11 @@ pub fn diagnostics(
         hardware_id: hw.clone(),
         values: vec![
             kv("setpoints_forwarded", c.setpoints_forwarded),
+            // The uplink shaper (state::Uplink): sent to the MCU, replaced by a newer one
+            // before their turn, dropped for a hold/land/disarm/kill sent after them.
+            kv("setpoints_sent", st.uplink.sent),
+            kv("setpoints_coalesced", st.uplink.coalesced),
+            kv("setpoints_superseded", st.uplink.superseded),
             kv("setpoint_rejects", c.setpoint_rejects),
             kv("last_setpoint_reject", &c.last_setpoint_reject),
             kv("yaw_rate_ignored", c.yaw_rate_ignored),

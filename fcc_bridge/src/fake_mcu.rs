@@ -3,7 +3,9 @@
 //! It speaks the real link protocol (`fcc_msgs`): sends `Hello` at start and on `HelloRequest`,
 //! answers `TimeSyncPing`, streams telemetry with fixed, known values ([`Script`]) at roughly
 //! the default rates, and logs every `VelocitySetpoint` and `Command` it receives as one JSON
-//! line (`{"t_us":…,"msg":"VelocitySetpoint","vel_ned_mps":[…],…}`).
+//! line (`{"t_us":…,"mono_us":…,"msg":"VelocitySetpoint","vel_ned_mps":[…],…}`; `t_us` from
+//! the fake's start, `mono_us` the same instant on CLOCK_MONOTONIC, comparable with another
+//! process's monotonic clock, e.g. Python's `time.monotonic_ns()`).
 
 use fcc_msgs as link;
 use std::fs::File;
@@ -179,6 +181,16 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
     let mut stats = FakeStats::default();
     let s = o.script;
     let start = Instant::now();
+    // CLOCK_MONOTONIC at `start` (Instant is CLOCK_MONOTONIC on Linux), for the log's mono_us.
+    let mono_start_us = {
+        let mut t = nix::libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: one valid timespec.
+        unsafe { nix::libc::clock_gettime(nix::libc::CLOCK_MONOTONIC, &mut t) };
+        t.tv_sec as u64 * 1_000_000 + t.tv_nsec as u64 / 1000
+    };
     let now_us = || start.elapsed().as_micros() as u64;
     let mut enc = link::Encoder::new();
     let mut dec = link::FrameDecoder::new();
@@ -287,8 +299,8 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                             if let Some(l) = log.as_mut() {
                                 writeln!(
                                         l,
-                                        "{{\"t_us\":{t},\"msg\":\"VelocitySetpoint\",\"vel_ned_mps\":[{},{},{}],\"has_yaw\":{},\"yaw_rad\":{},\"ttl_ms\":{}}}",
-                                        sp.vel_ned_mps[0], sp.vel_ned_mps[1], sp.vel_ned_mps[2], sp.has_yaw, sp.yaw_rad, sp.ttl_ms
+                                        "{{\"t_us\":{t},\"mono_us\":{},\"msg\":\"VelocitySetpoint\",\"vel_ned_mps\":[{},{},{}],\"has_yaw\":{},\"yaw_rad\":{},\"ttl_ms\":{}}}",
+                                        mono_start_us + t, sp.vel_ned_mps[0], sp.vel_ned_mps[1], sp.vel_ned_mps[2], sp.has_yaw, sp.yaw_rad, sp.ttl_ms
                                     )?;
                                 l.flush()?;
                             }
@@ -319,7 +331,8 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                             if let Some(l) = log.as_mut() {
                                 writeln!(
                                     l,
-                                    "{{\"t_us\":{t},\"msg\":\"Command\",\"command\":\"{:?}\"}}",
+                                    "{{\"t_us\":{t},\"mono_us\":{},\"msg\":\"Command\",\"command\":\"{:?}\"}}",
+                                    mono_start_us + t,
                                     c.command
                                 )?;
                                 l.flush()?;

@@ -60,6 +60,7 @@ pub struct Counters {
     pub dropped: u64,
     /// DDS writes that failed.
     pub publish_errors: u64,
+    /// Valid setpoints handed to the uplink (sent, or coalesced/superseded: see [`Uplink`]).
     pub setpoints_forwarded: u64,
     pub setpoint_rejects: u64,
     pub last_setpoint_reject: String,
@@ -145,6 +146,8 @@ pub struct LinkState {
     seq_forgiven: [u32; 3],
     /// Rate limit of the warnings about input (per kind, 1 s).
     pub warn: bounded::WarnLimiter,
+    /// The uplink shaper: setpoints coalesced to the newest at a bounded rate, commands first.
+    pub uplink: Uplink,
 }
 
 fn seq_counters(c: &link::LinkCounters) -> [u32; 3] {
@@ -172,6 +175,7 @@ impl LinkState {
             seq_before: [0; 3],
             seq_forgiven: [0; 3],
             warn: bounded::WarnLimiter::default(),
+            uplink: Uplink::new(SETPOINT_MIN_INTERVAL_NS),
         }
     }
 
@@ -183,6 +187,7 @@ impl LinkState {
         self.seq_forgiven = [0; 3];
         self.handshake = Handshake::Waiting;
         self.timesync.reset();
+        self.uplink.reconnect();
         self.counters.reconnects += 1;
     }
 
@@ -424,7 +429,9 @@ impl LinkState {
                     self.counters.yaw_rate_ignored += 1;
                 }
                 self.counters.setpoints_forwarded += 1;
-                Some(link::Message::VelocitySetpoint(sp))
+                self.uplink
+                    .setpoint(sp, now_ns)
+                    .map(link::Message::VelocitySetpoint)
             }
             Err(e) => {
                 self.refuse_setpoint(e, now_ns);
@@ -475,6 +482,7 @@ impl LinkState {
         match c {
             Some(c) if self.handshake != Handshake::Waiting => {
                 self.counters.commands_forwarded += 1;
+                self.uplink.command(c.command);
                 if let Some(n) = self.warn.check("command", now) {
                     tracing::info!("command {:?}{}", c.command, bounded::suppressed_note(n));
                 }
@@ -505,6 +513,13 @@ impl LinkState {
         }
     }
 
+    /// The held setpoint, if its turn on the uplink has come (see [`Uplink::poll`]).
+    pub fn uplink_due(&mut self, now_ns: i64) -> Option<link::Message> {
+        self.uplink
+            .poll(now_ns)
+            .map(link::Message::VelocitySetpoint)
+    }
+
     /// Encode a message for the MCU.
     pub fn encode(&mut self, m: &link::Message, now_ns: i64) -> Vec<u8> {
         let mut buf = [0u8; link::MAX_FRAME_LEN];
@@ -516,5 +531,310 @@ impl LinkState {
                 Vec::new()
             }
         }
+    }
+}
+
+/// Highest rate at which setpoints go to the MCU: 100 Hz. The flight core runs at 500 Hz but
+/// its velocity loop needs no more than this (the mission node sends 20–50 Hz; the setpoint TTL
+/// is hundreds of ms), and at 921600 baud 100 largest `VelocitySetpoint` frames a second are
+/// `100 × max_frame_len(VELOCITY_SETPOINT)` ≈ 3.5 KB/s, ≈ 4 % of the 92,160 B/s the UART carries
+/// (test `setpoint_rate_fits_the_uplink_budget`), leaving the rest for commands, parameters and
+/// pings. Without a bound, a peer publishing at 10 kHz offered 4× what the UART carries.
+pub const SETPOINT_MAX_HZ: i64 = 100;
+/// [`SETPOINT_MAX_HZ`] as the minimum spacing of two setpoints on the uplink.
+pub const SETPOINT_MIN_INTERVAL_NS: i64 = 1_000_000_000 / SETPOINT_MAX_HZ;
+/// Share of the uplink's bytes/s that setpoints may use at most (at [`SETPOINT_MAX_HZ`] and
+/// 921600 baud they use ≈ 4 %; a slower UART lowers the rate: [`Uplink::for_baud`]).
+pub const SETPOINT_BUDGET_SHARE: f64 = 0.125;
+
+/// The uplink shaper (sans-IO; time is passed in, in ns of any clock that does not jump; a
+/// clock that goes back releases the held setpoint rather than holding it).
+///
+/// * Commands (arm, disarm, land, hold, velocity, kill) are never held or dropped: the IO layer
+///   writes them at once, ahead of any held setpoint ([`Uplink::command`] is told of each).
+/// * Setpoints go out at most one per `interval_ns`: one that arrives when the last went out
+///   longer ago goes at once; otherwise it is held, and a newer one replaces it (counted in
+///   `coalesced`), so the MCU always gets the newest and never a backlog.
+/// * A held setpoint older than a `hold`, `land`, `disarm` or `kill` command is dropped
+///   (counted in `superseded`): sent after the command it would take the MCU out of HOLD
+///   (a fresh setpoint resumes velocity mode), which its sender never asked for.
+#[derive(Clone, Debug)]
+pub struct Uplink {
+    interval_ns: i64,
+    held: Option<link::VelocitySetpoint>,
+    last_sent_ns: Option<i64>,
+    /// Setpoints written to the link.
+    pub sent: u64,
+    /// Setpoints replaced by a newer one before their turn.
+    pub coalesced: u64,
+    /// Held setpoints dropped because a hold/land/disarm/kill command went out after them.
+    pub superseded: u64,
+}
+
+impl Uplink {
+    pub fn new(interval_ns: i64) -> Self {
+        Uplink {
+            interval_ns: interval_ns.max(0),
+            held: None,
+            last_sent_ns: None,
+            sent: 0,
+            coalesced: 0,
+            superseded: 0,
+        }
+    }
+
+    /// The shaper for a UART of `baud` (8N1): [`SETPOINT_MAX_HZ`], or slower if setpoints at
+    /// that rate would take more than [`SETPOINT_BUDGET_SHARE`] of the link.
+    pub fn for_baud(baud: u32) -> Self {
+        Uplink::new(setpoint_interval_ns(baud))
+    }
+
+    pub fn interval_ns(&self) -> i64 {
+        self.interval_ns
+    }
+
+    fn may_send(&self, now_ns: i64) -> bool {
+        match self.last_sent_ns {
+            None => true,
+            Some(t) => now_ns < t || now_ns - t >= self.interval_ns,
+        }
+    }
+
+    /// A valid setpoint: returned if it may go now (replacing a held one, counted), else held
+    /// (replacing, and counting, a setpoint held before it).
+    pub fn setpoint(
+        &mut self,
+        sp: link::VelocitySetpoint,
+        now_ns: i64,
+    ) -> Option<link::VelocitySetpoint> {
+        if self.may_send(now_ns) {
+            if self.held.take().is_some() {
+                self.coalesced += 1;
+            }
+            self.last_sent_ns = Some(now_ns);
+            self.sent += 1;
+            return Some(sp);
+        }
+        if self.held.replace(sp).is_some() {
+            self.coalesced += 1;
+        }
+        None
+    }
+
+    /// The held setpoint, if its turn has come.
+    pub fn poll(&mut self, now_ns: i64) -> Option<link::VelocitySetpoint> {
+        if self.held.is_some() && self.may_send(now_ns) {
+            self.last_sent_ns = Some(now_ns);
+            self.sent += 1;
+            return self.held.take();
+        }
+        None
+    }
+
+    /// When the held setpoint may go (`None`: nothing held).
+    pub fn due_ns(&self) -> Option<i64> {
+        self.held?;
+        Some(
+            self.last_sent_ns
+                .map_or(i64::MIN, |t| t.saturating_add(self.interval_ns)),
+        )
+    }
+
+    /// A command is going out now (never held): drop a held setpoint it supersedes.
+    pub fn command(&mut self, kind: link::CommandKind) {
+        use link::CommandKind as K;
+        if matches!(kind, K::Hold | K::Land | K::Disarm | K::Kill) && self.held.take().is_some() {
+            self.superseded += 1;
+        }
+    }
+
+    /// A new connection: nothing held over from the old one.
+    pub fn reconnect(&mut self) {
+        if self.held.take().is_some() {
+            self.superseded += 1;
+        }
+        self.last_sent_ns = None;
+    }
+}
+
+/// Spacing of setpoints on a UART of `baud` (8N1): the [`SETPOINT_MAX_HZ`] spacing, or longer
+/// if the largest setpoint frame at that rate would exceed [`SETPOINT_BUDGET_SHARE`] of it.
+pub fn setpoint_interval_ns(baud: u32) -> i64 {
+    let frame = link::max_frame_len(link::id::VELOCITY_SETPOINT) as f64;
+    let bytes_per_s = (baud.max(1) as f64 / 10.0) * SETPOINT_BUDGET_SHARE;
+    let by_budget = (frame / bytes_per_s * 1e9).ceil() as i64;
+    SETPOINT_MIN_INTERVAL_NS.max(by_budget)
+}
+
+#[cfg(test)]
+mod uplink_tests {
+    use super::*;
+    const MS: i64 = 1_000_000;
+
+    fn sp(vx: f32) -> link::VelocitySetpoint {
+        link::VelocitySetpoint {
+            vel_ned_mps: [vx, 0.0, 0.0],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn setpoint_rate_fits_the_uplink_budget() {
+        let frame = link::max_frame_len(link::id::VELOCITY_SETPOINT) as i64;
+        let bytes_per_s = SETPOINT_MAX_HZ * frame;
+        let budget = link::BAUD_921600_BYTES_PER_S as i64;
+        assert!(
+            (bytes_per_s as f64) <= SETPOINT_BUDGET_SHARE * budget as f64,
+            "{bytes_per_s} B/s of {budget}"
+        );
+        assert_eq!(setpoint_interval_ns(921_600), 10 * MS);
+        // 57600 baud: 5760 B/s, 1/8 of it = 720 B/s → one frame every frame/720 s.
+        let slow = setpoint_interval_ns(57_600);
+        assert_eq!(slow, (frame as f64 / 720.0 * 1e9).ceil() as i64);
+        assert!(slow > 10 * MS);
+    }
+
+    #[test]
+    fn first_setpoint_goes_at_once_then_at_most_one_per_interval() {
+        let mut u = Uplink::new(10 * MS);
+        let t0 = 5_000 * MS;
+        assert_eq!(u.setpoint(sp(1.0), t0), Some(sp(1.0)));
+        // 10 kHz flood for 1 s: every 0.1 ms a new setpoint; poll as the IO layer would.
+        let mut out = Vec::new();
+        for i in 1..=10_000i64 {
+            let t = t0 + i * MS / 10;
+            if let Some(s) = u.setpoint(sp(i as f32), t) {
+                out.push((t, s));
+            }
+            if let Some(s) = u.poll(t) {
+                out.push((t, s));
+            }
+        }
+        // 100 more in the second (t0+10 ms … t0+1000 ms), each the newest at its time.
+        assert_eq!(out.len(), 100, "{}", out.len());
+        for (k, (t, s)) in out.iter().enumerate() {
+            assert_eq!(*t, t0 + (k as i64 + 1) * 10 * MS);
+            assert_eq!(s.vel_ned_mps[0], ((t - t0) / (MS / 10)) as f32);
+        }
+        assert_eq!(u.sent, 101);
+        // Every setpoint offered was sent or replaced by a newer one (the last, at t0 + 1 s,
+        // went out on its turn).
+        assert_eq!(u.sent + u.coalesced, 10_001);
+        assert_eq!(u.due_ns(), None);
+        // One more, 0.05 ms later: held until t0 + 1010 ms.
+        assert_eq!(u.setpoint(sp(-1.0), t0 + 1000 * MS + MS / 20), None);
+        assert_eq!(u.due_ns(), Some(t0 + 1010 * MS));
+        assert_eq!(u.poll(t0 + 1010 * MS - 1), None);
+        assert_eq!(u.poll(t0 + 1010 * MS), Some(sp(-1.0)));
+        assert_eq!(u.due_ns(), None);
+    }
+
+    #[test]
+    fn slow_setpoints_pass_unchanged() {
+        let mut u = Uplink::new(10 * MS);
+        for i in 0..50 {
+            // 50 Hz: never held.
+            assert!(u.setpoint(sp(i as f32), i * 20 * MS).is_some());
+            assert_eq!(u.due_ns(), None);
+        }
+        assert_eq!((u.sent, u.coalesced, u.superseded), (50, 0, 0));
+    }
+
+    #[test]
+    fn hold_land_disarm_kill_drop_an_older_held_setpoint() {
+        use link::CommandKind as K;
+        for (kind, drops) in [
+            (K::Hold, true),
+            (K::Land, true),
+            (K::Disarm, true),
+            (K::Kill, true),
+            (K::Arm, false),
+            (K::Velocity, false),
+        ] {
+            let mut u = Uplink::new(10 * MS);
+            assert!(u.setpoint(sp(1.0), 0).is_some());
+            assert!(u.setpoint(sp(2.0), 2 * MS).is_none());
+            u.command(kind);
+            assert_eq!(u.poll(10 * MS).is_some(), !drops, "{kind:?}");
+            assert_eq!(u.superseded, drops as u64, "{kind:?}");
+            // A setpoint after the command goes as usual.
+            assert!(u.setpoint(sp(3.0), 30 * MS).is_some());
+        }
+    }
+
+    #[test]
+    fn clock_going_back_releases_the_held_setpoint() {
+        let mut u = Uplink::new(10 * MS);
+        assert!(u.setpoint(sp(1.0), 1_000 * MS).is_some());
+        assert!(u.setpoint(sp(2.0), 1_001 * MS).is_none());
+        assert_eq!(u.poll(500 * MS), Some(sp(2.0)));
+    }
+
+    #[test]
+    fn reconnect_forgets_the_held_setpoint() {
+        let mut u = Uplink::new(10 * MS);
+        assert!(u.setpoint(sp(1.0), 0).is_some());
+        assert!(u.setpoint(sp(2.0), MS).is_none());
+        u.reconnect();
+        assert_eq!(u.due_ns(), None);
+        assert_eq!(u.superseded, 1);
+        assert!(u.setpoint(sp(3.0), 2 * MS).is_some());
+    }
+
+    /// Through the state machine: commands are never held, even in a setpoint flood.
+    #[test]
+    fn commands_pass_a_setpoint_flood() {
+        use crate::ros_types::{Header, Twist, TwistStamped, Vector3};
+        let mut s = LinkState::new(
+            Config::default(),
+            SetpointLimits::default(),
+            ClockSource::Sync,
+        );
+        s.handshake = Handshake::Ok {
+            firmware: [0, 1, 0],
+        };
+        let t0 = crate::now_ns();
+        let tw = |i: i64| TwistStamped {
+            header: Header {
+                stamp: Time::from_nanos(t0),
+                frame_id: "map".into(),
+            },
+            twist: Twist {
+                linear: Vector3 {
+                    x: (i % 5) as f64,
+                    y: 0.0,
+                    z: 0.0,
+                },
+                angular: Vector3::default(),
+            },
+        };
+        let mut sent = 0;
+        for i in 0..1000i64 {
+            let t = t0 + i * MS / 10;
+            sent += s.on_setpoint(&tw(i), t).is_some() as u64;
+            sent += s.uplink_due(t).is_some() as u64;
+            // 0.5 ms after a setpoint went out: one is held when the land goes.
+            if i == 505 {
+                let land = link::Command {
+                    command: link::CommandKind::Land,
+                    confirm: 0,
+                };
+                assert!(matches!(
+                    s.on_command(Some(land), "land"),
+                    Some(link::Message::Command(c)) if c.command == link::CommandKind::Land
+                ));
+            }
+        }
+        assert_eq!(s.counters.setpoints_forwarded, 1000);
+        assert_eq!(s.uplink.sent, sent);
+        assert_eq!(sent, 10); // 0, 10, … 90 ms
+        assert_eq!(
+            s.uplink.sent
+                + s.uplink.coalesced
+                + s.uplink.superseded
+                + s.uplink.due_ns().is_some() as u64,
+            1000
+        );
+        assert_eq!(s.uplink.superseded, 1);
     }
 }
