@@ -144,7 +144,11 @@ impl Sim {
         let gear = scenario.vehicle.gear_height_m;
         let start_down = scenario.terrain.ground_down_at(0.0, 0.0) - gear;
         let body = Octorotor::new(
-            scenario.vehicle.clone(),
+            air_at(
+                &scenario.vehicle,
+                scenario.air_temp_c,
+                scenario.sensors.baro.p0_pa,
+            ),
             Vector3::new(0.0, 0.0, start_down),
             0.0,
         );
@@ -536,6 +540,26 @@ impl Sim {
         events.sort_by(|a, b| a.0.total_cmp(&b.0));
         self.log.events = events;
         &self.log
+    }
+}
+
+/// The vehicle in the scenario's air: density `ρ = p0/(R_d·T)` from the air temperature (ISA
+/// 15 °C → 1.225 kg/m³), and the rotors' thrust and drag, both ∝ ρ (`T = C_T·ρ·n²·D⁴`), scaled
+/// from their sea-level figures: a hot day lifts less.
+fn air_at(
+    v: &super::physics::VehicleParams,
+    air_temp_c: f64,
+    p0_pa: f64,
+) -> super::physics::VehicleParams {
+    const R_DRY_AIR: f64 = 287.05;
+    const RHO_ISA: f64 = 1.225;
+    let rho = p0_pa / (R_DRY_AIR * (air_temp_c + 273.15));
+    let k = rho / RHO_ISA;
+    super::physics::VehicleParams {
+        air_density_kgpm3: v.air_density_kgpm3 * k,
+        max_thrust_per_motor_n: v.max_thrust_per_motor_n * k,
+        rotor_drag_n_per_mps: v.rotor_drag_n_per_mps * k,
+        ..v.clone()
     }
 }
 
