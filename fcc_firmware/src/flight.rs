@@ -426,7 +426,10 @@ impl FlightCore {
             .iter()
             .all(|v| v.is_finite() && v.abs() <= SETPOINT_ABS_LIMIT_MPS)
             && sp.yaw_rad.map_or(true, |y| y.is_finite());
-        if !finite {
+        // The time-to-live is the stale-setpoint failsafe: bounded to a few seconds.
+        let ttl_ok =
+            (fcc_msgs::SETPOINT_TTL_MS_MIN..=fcc_msgs::SETPOINT_TTL_MS_MAX).contains(&sp.ttl_ms);
+        if !finite || !ttl_ok {
             return Err(CommandError::InvalidSetpoint);
         }
         if !self.armed() {

@@ -89,6 +89,14 @@ pub enum CommandKind {
 /// without it ([`CommandResult::KillNotConfirmed`]).
 pub const KILL_CONFIRM: u32 = 0x4B49_4C4C;
 
+/// The setpoint time-to-live range both ends enforce (issue 14): the MCU refuses a
+/// `VelocitySetpoint` whose `ttl_ms` is outside it (`CommandResult::InvalidSetpoint`), and the
+/// bridge's `ttl_ms` parameter has this range. Above a few seconds one setpoint would fly on
+/// with no stale-setpoint failsafe; below 50 ms (25 ticks) normal link jitter would trip it.
+pub const SETPOINT_TTL_MS_MIN: u16 = 50;
+/// Upper end of the setpoint time-to-live range (see [`SETPOINT_TTL_MS_MIN`]).
+pub const SETPOINT_TTL_MS_MAX: u16 = 3000;
+
 /// Outcome of a command or setpoint on the MCU (mirror of `fcc_firmware::commands::CommandError`
 /// plus `Accepted` and link-level refusals).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]

@@ -132,6 +132,36 @@ fn setpoint_while_disarmed_reaches_core_and_is_counted_as_rejected() {
     );
     assert_eq!(link.stats().setpoint_rejects, 2);
     assert_eq!(link.stats().last_reject, CommandResult::InvalidSetpoint);
+    // A time-to-live outside the safe range (issue 14: 65535 ms flew 169 m on one setpoint) is
+    // refused as invalid too, before the arming check; the range ends are fine (Disarmed).
+    for (ttl_ms, want) in [
+        (65535, CommandResult::InvalidSetpoint),
+        (
+            fcc_msgs::SETPOINT_TTL_MS_MAX + 1,
+            CommandResult::InvalidSetpoint,
+        ),
+        (
+            fcc_msgs::SETPOINT_TTL_MS_MIN - 1,
+            CommandResult::InvalidSetpoint,
+        ),
+        (0, CommandResult::InvalidSetpoint),
+        (fcc_msgs::SETPOINT_TTL_MS_MIN, CommandResult::Disarmed),
+        (fcc_msgs::SETPOINT_TTL_MS_MAX, CommandResult::Disarmed),
+    ] {
+        let sp2 = VelocitySetpoint { ttl_ms, ..sp };
+        link.on_bytes(
+            2_000,
+            &linux.frame(Message::VelocitySetpoint(sp2)),
+            &mut core,
+        );
+        assert_eq!(link.stats().last_reject, want, "ttl_ms {ttl_ms}");
+    }
+    assert_eq!(link.stats().setpoint_rejects, 8);
+    link.on_bytes(
+        2_000,
+        &linux.frame(Message::VelocitySetpoint(bad)),
+        &mut core,
+    );
     // The rejects show up in Status.
     let frames = linux.receive(&tx(&mut link, 3_000, &core, &SensorInputs::default()));
     let status = frames.iter().find_map(|f| match f.message {
@@ -141,9 +171,9 @@ fn setpoint_while_disarmed_reaches_core_and_is_counted_as_rejected() {
     let status = status.expect("status is due at start");
     assert_eq!(
         (status.setpoint_rejects, status.last_reject),
-        (2, CommandResult::InvalidSetpoint)
+        (9, CommandResult::InvalidSetpoint)
     );
-    assert_eq!(status.link_rx.rx_frames, 2);
+    assert_eq!(status.link_rx.rx_frames, 9);
     assert_eq!(status.mode, FlightMode::Disarmed);
 }
 
