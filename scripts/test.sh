@@ -71,3 +71,7 @@ tests/e2e/robust_stack.sh "$FCC_DDS_PYTHON"
 # Uplink budget (issue 14): a 10 kHz setpoint flood through a 921600-baud line (fcc-wire-fault --baud):
 # land/hold at the MCU ≤ 100 ms after the peer's write, uplink ≤ 25 % of the line, ≤ 101 setpoints/s.
 tests/e2e/flood_uplink.sh "$FCC_DDS_PYTHON"
+# Command safety through the real pty + bridge (issue 14): cmd/arm false, cmd/mode disarm and arm
+# toggled at 100 Hz at 5 m refused and counted with the vehicle holding ±0.5 m on the CSV truth,
+# the emergency kill only by cmd/kill "KILL"; bridge parameters outside their safe range refused.
+tests/e2e/command_safety.sh "$FCC_DDS_PYTHON"
