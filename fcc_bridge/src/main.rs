@@ -23,8 +23,9 @@ use std::time::Duration;
 MCU parameters (ROS parameters, set on the MCU): limits.max_horiz_speed_mps, limits.max_tilt_deg,\n\
   control.cross_track_k_per_s, control.vel_p_per_s, limits.max_climb_mps, limits.max_descent_mps.\n\
 Services: arm (std_srvs/SetBool), land, hold (std_srvs/Trigger).\n\
-Parameters: localhost_only (true), ttl_ms (300), max_speed_mps (20), max_stamp_age_ms (500),\n\
-  max_stamp_future_ms (500), clock_source (sync | mcu), ping_period_ms (1000),\n\
+Parameters: localhost_only (true), ttl_ms (300, 50..=3000), max_speed_mps (20, 0.1..=30),\n\
+  max_stamp_age_ms (500, 10..=5000), max_stamp_future_ms (500, 10..=5000), clock_source (sync | mcu),\n\
+  ping_period_ms (1000, 100..=10000), use_sim_time,\n\
   map_frame (map), base_frame (base_link), imu_frame (imu_link), gps_frame (gps_link),\n\
   laser_frame (laser_link), sonar_frame (sonar_link),\n\
   record (off: PATH), record_on_arm (false), record_split_s, record_split_mb (off),\n\
@@ -104,23 +105,19 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
                 })
                 .transpose()
         };
-        if let Some(v) = num("ttl_ms")? {
-            if !(1.0..=65535.0).contains(&v) {
-                return Err(format!("parameter ttl_ms: {v} out of range 1..=65535"));
+        // The numeric bridge parameters, each checked against its safe range (the table the
+        // run-time validator uses too).
+        for bp in fcc_bridge::ros_api::BRIDGE_PARAMS {
+            let Some(v) = p.get(bp.name) else { continue };
+            let x = bp.parse(v).map_err(|e| format!("parameter {e}"))?;
+            match bp.name {
+                "ttl_ms" => o.limits.ttl_ms = x as u16,
+                "max_speed_mps" => o.limits.max_speed_mps = x,
+                "max_stamp_age_ms" => o.limits.max_age_ns = (x * 1e6) as i64,
+                "max_stamp_future_ms" => o.limits.max_future_ns = (x * 1e6) as i64,
+                "ping_period_ms" => o.ping_period = Duration::from_millis(x as u64),
+                other => return Err(format!("parameter {other}: not handled at start-up")),
             }
-            o.limits.ttl_ms = v as u16;
-        }
-        if let Some(v) = num("max_speed_mps")? {
-            o.limits.max_speed_mps = v;
-        }
-        if let Some(v) = num("max_stamp_age_ms")? {
-            o.limits.max_age_ns = (v * 1e6) as i64;
-        }
-        if let Some(v) = num("max_stamp_future_ms")? {
-            o.limits.max_future_ns = (v * 1e6) as i64;
-        }
-        if let Some(v) = num("ping_period_ms")? {
-            o.ping_period = Duration::from_millis(v.max(10.0) as u64);
         }
         if let Some(v) = p.get("clock_source") {
             o.clock = match v.as_str() {

@@ -59,7 +59,176 @@ pub enum LinkRequest {
 
 // --------------------------------------------------------------------------- parameters
 
-/// Bridge parameters that can be changed at run time (the rest are read-only after start).
+/// Kind of a bridge parameter's ROS value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    Integer,
+    Double,
+}
+
+/// One numeric bridge parameter: the ONE table its start-up (`-p`, `--params-file`) check, the
+/// run-time validator (`ros2 param set`) and its ROS descriptor are derived from. Every range is
+/// what is physically safe (issue 14): finite, strictly positive, bounded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BridgeParam {
+    pub name: &'static str,
+    pub kind: Kind,
+    pub default: f64,
+    pub min: f64,
+    pub max: f64,
+    pub unit: &'static str,
+    /// Can be changed at run time (else read-only after start).
+    pub dynamic: bool,
+    pub description: &'static str,
+}
+
+/// The bridge's numeric parameters. `ttl_ms` uses the link's range, which the MCU enforces on
+/// every setpoint too ([`fcc_msgs::SETPOINT_TTL_MS_MIN`] / `_MAX`).
+pub const BRIDGE_PARAMS: &[BridgeParam] = &[
+    BridgeParam {
+        name: "ttl_ms",
+        kind: Kind::Integer,
+        default: 300.0,
+        min: fcc_msgs::SETPOINT_TTL_MS_MIN as f64,
+        max: fcc_msgs::SETPOINT_TTL_MS_MAX as f64,
+        unit: "ms",
+        dynamic: true,
+        description:
+            "time-to-live of each velocity setpoint on the MCU (its stale-setpoint failsafe)",
+    },
+    BridgeParam {
+        name: "max_speed_mps",
+        kind: Kind::Double,
+        default: 20.0,
+        min: 0.1,
+        max: 30.0,
+        unit: "m/s",
+        dynamic: true,
+        description: "setpoints faster than this on any axis are refused",
+    },
+    BridgeParam {
+        name: "max_stamp_age_ms",
+        kind: Kind::Double,
+        default: 500.0,
+        min: 10.0,
+        max: 5000.0,
+        unit: "ms",
+        dynamic: true,
+        description: "setpoints stamped longer ago than this are refused",
+    },
+    BridgeParam {
+        name: "max_stamp_future_ms",
+        kind: Kind::Double,
+        default: 500.0,
+        min: 10.0,
+        max: 5000.0,
+        unit: "ms",
+        dynamic: true,
+        description: "setpoints stamped further in the future than this are refused",
+    },
+    BridgeParam {
+        name: "ping_period_ms",
+        kind: Kind::Integer,
+        default: 1000.0,
+        min: 100.0,
+        max: 10000.0,
+        unit: "ms",
+        dynamic: false,
+        description: "period of the link's time-sync pings",
+    },
+];
+
+/// The table entry of a bridge parameter.
+pub fn bridge_param(name: &str) -> Option<&'static BridgeParam> {
+    BRIDGE_PARAMS.iter().find(|p| p.name == name)
+}
+
+impl BridgeParam {
+    /// `[min, max] unit`, as the refusals print it.
+    pub fn range_text(&self) -> String {
+        format!("[{}, {}] {}", self.min, self.max, self.unit)
+    }
+
+    /// The value if it is finite, inside the range and (for an integer) whole; else the reason
+    /// with the range.
+    pub fn check(&self, x: f64) -> Result<f64, String> {
+        let whole = self.kind == Kind::Double || x.fract() == 0.0;
+        if x.is_finite() && whole && x >= self.min && x <= self.max {
+            Ok(x)
+        } else {
+            Err(format!(
+                "{}: {x:?} out of range {}{}",
+                self.name,
+                self.range_text(),
+                if whole { "" } else { " (an integer)" }
+            ))
+        }
+    }
+
+    /// [`Self::check`] on a ROS value (an integer parameter takes only integers).
+    pub fn check_value(&self, v: &ParameterValue) -> Result<f64, String> {
+        match (self.kind, v) {
+            (Kind::Integer, ParameterValue::Integer(i)) => self.check(*i as f64),
+            (Kind::Double, ParameterValue::Double(d)) => self.check(*d),
+            (Kind::Double, ParameterValue::Integer(i)) => self.check(*i as f64),
+            _ => Err(format!(
+                "{}: expected {} in {}",
+                self.name,
+                if self.kind == Kind::Integer {
+                    "an integer"
+                } else {
+                    "a number"
+                },
+                self.range_text()
+            )),
+        }
+    }
+
+    /// A start-up (`-p` / `--params-file`) text value, checked.
+    pub fn parse(&self, v: &str) -> Result<f64, String> {
+        let x = v.trim().parse::<f64>().map_err(|_| {
+            format!(
+                "{}: '{v}' is not a number in {}",
+                self.name,
+                self.range_text()
+            )
+        })?;
+        self.check(x)
+    }
+
+    /// The ROS parameter descriptor (type, range, read-only) derived from the table.
+    /// ros2-client 0.12.1 answers `describe_parameters` from the value alone and takes no
+    /// user descriptors, so this is what a describe would say once it can be served.
+    pub fn descriptor(&self) -> ros2_client::parameters::ParameterDescriptor {
+        use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType};
+        ParameterDescriptor {
+            name: self.name.to_string(),
+            param_type: match self.kind {
+                Kind::Integer => ParameterType::Integer,
+                Kind::Double => ParameterType::Double,
+            },
+            description: format!("{} ({})", self.description, self.unit),
+            additional_constraints: format!("finite, in {}", self.range_text()),
+            read_only: !self.dynamic,
+            dynamic_typing: false,
+            range: match self.kind {
+                Kind::Integer => NumericRange::IntegerRange {
+                    from_value: self.min as i64,
+                    to_value: self.max as i64,
+                    step: 1,
+                },
+                Kind::Double => NumericRange::FloatingPointRange {
+                    from_value: self.min,
+                    to_value: self.max,
+                    step: 0.0,
+                },
+            },
+        }
+    }
+}
+
+/// Bridge parameters that can be changed at run time (the rest are read-only after start):
+/// the `dynamic` entries of [`BRIDGE_PARAMS`] (a test keeps the two equal).
 pub const DYNAMIC_BRIDGE_PARAMS: [&str; 4] = [
     "ttl_ms",
     "max_speed_mps",
@@ -84,21 +253,17 @@ pub fn as_f64(v: &ParameterValue) -> Option<f64> {
     }
 }
 
-/// Validate a bridge (non-MCU) parameter value.
+/// Validate a bridge (non-MCU) parameter value: the numeric ones against [`BRIDGE_PARAMS`],
+/// the others are read-only once the node is up.
 pub fn check_bridge_param(name: &str, v: &ParameterValue, live: bool) -> Result<(), String> {
-    let num = |lo: f64, hi: f64| -> Result<(), String> {
-        match as_f64(v) {
-            Some(x) if x.is_finite() && x >= lo && x <= hi => Ok(()),
-            Some(x) => Err(format!("{name}: {x} out of range [{lo}, {hi}]")),
-            None => Err(format!("{name}: expected a number")),
-        }
-    };
-    match name {
-        "ttl_ms" => num(1.0, 65535.0),
-        "max_speed_mps" => num(0.0, 100.0),
-        "max_stamp_age_ms" | "max_stamp_future_ms" => num(0.0, 3.6e6),
-        _ if live => Err(format!("{name} is read-only (set it at start-up with -p)")),
-        _ => Ok(()),
+    match bridge_param(name) {
+        Some(p) if live && !p.dynamic => Err(format!(
+            "{name} is read-only (set it at start-up with -p, range {})",
+            p.range_text()
+        )),
+        Some(p) => p.check_value(v).map(|_| ()),
+        None if live => Err(format!("{name} is read-only (set it at start-up with -p)")),
+        None => Ok(()),
     }
 }
 
@@ -246,5 +411,110 @@ mod tests {
         );
         h.join().unwrap();
         assert_eq!(logger_name("/uav1", "fcc_bridge"), "uav1.fcc_bridge");
+    }
+
+    #[test]
+    fn bridge_param_table_is_safe() {
+        for p in BRIDGE_PARAMS {
+            assert!(
+                p.min.is_finite() && p.max.is_finite() && p.min > 0.0 && p.min < p.max,
+                "{p:?}"
+            );
+            assert!(p.check(p.default).is_ok(), "default of {} in range", p.name);
+            assert!(
+                p.check(p.min).is_ok() && p.check(p.max).is_ok(),
+                "{}",
+                p.name
+            );
+            for bad in [
+                -0.0,
+                0.0,
+                5e-324,
+                -1.0,
+                f64::NAN,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                p.max * 1.001,
+            ] {
+                let e = p.check(bad).unwrap_err();
+                assert!(e.contains(&p.range_text()) && e.starts_with(p.name), "{e}");
+            }
+        }
+        // The table's defaults are the ones in use.
+        let l = crate::convert::SetpointLimits::default();
+        let def = |n: &str| bridge_param(n).unwrap().default;
+        assert_eq!(def("ttl_ms"), l.ttl_ms as f64);
+        assert_eq!(def("max_speed_mps"), l.max_speed_mps);
+        assert_eq!(def("max_stamp_age_ms"), l.max_age_ns as f64 / 1e6);
+        assert_eq!(def("max_stamp_future_ms"), l.max_future_ns as f64 / 1e6);
+        assert_eq!(
+            def("ping_period_ms"),
+            crate::bridge::Options::default().ping_period.as_millis() as f64
+        );
+        let dynamic: Vec<&str> = BRIDGE_PARAMS
+            .iter()
+            .filter(|p| p.dynamic)
+            .map(|p| p.name)
+            .collect();
+        assert_eq!(dynamic, DYNAMIC_BRIDGE_PARAMS);
+        // The setpoint TTL: a few seconds at most, the link's (and the MCU's) range.
+        let ttl = bridge_param("ttl_ms").unwrap();
+        assert_eq!((ttl.min, ttl.max), (50.0, 3000.0));
+        assert_eq!(
+            ttl.check(65535.0).unwrap_err(),
+            "ttl_ms: 65535.0 out of range [50, 3000] ms"
+        );
+        assert!(ttl.check(300.5).unwrap_err().contains("an integer"));
+        assert_eq!(ttl.parse(" 500 "), Ok(500.0));
+        assert!(ttl.parse("fast").unwrap_err().contains("[50, 3000] ms"));
+        let e = bridge_param("max_speed_mps")
+            .unwrap()
+            .check(5e-324)
+            .unwrap_err();
+        assert_eq!(e, "max_speed_mps: 5e-324 out of range [0.1, 30] m/s");
+        let e = bridge_param("max_stamp_age_ms")
+            .unwrap()
+            .check(-0.0)
+            .unwrap_err();
+        assert_eq!(e, "max_stamp_age_ms: -0.0 out of range [10, 5000] ms");
+        // The validator (start-up and live) uses the same table; types are checked.
+        use ParameterValue as V;
+        assert!(check_bridge_param("ttl_ms", &V::Integer(65535), true).is_err());
+        assert!(check_bridge_param("ttl_ms", &V::Integer(0), false).is_err());
+        assert!(check_bridge_param("ttl_ms", &V::Integer(500), true).is_ok());
+        assert!(check_bridge_param("ttl_ms", &V::Double(500.0), true).is_err());
+        assert!(check_bridge_param("max_speed_mps", &V::Double(-0.0), true).is_err());
+        assert!(check_bridge_param("max_speed_mps", &V::Integer(5), true).is_ok());
+        assert!(check_bridge_param("max_stamp_future_ms", &V::Double(f64::NAN), true).is_err());
+        assert!(check_bridge_param("ping_period_ms", &V::Integer(1000), false).is_ok());
+        assert!(check_bridge_param("ping_period_ms", &V::Integer(5), false).is_err());
+        let e = check_bridge_param("ping_period_ms", &V::Integer(1000), true).unwrap_err();
+        assert!(
+            e.contains("read-only") && e.contains("[100, 10000] ms"),
+            "{e}"
+        );
+        // Descriptors carry the same ranges.
+        use ros2_client::parameters::NumericRange;
+        let d = ttl.descriptor();
+        assert!(matches!(
+            d.range,
+            NumericRange::IntegerRange {
+                from_value: 50,
+                to_value: 3000,
+                step: 1
+            }
+        ));
+        assert!(!d.read_only);
+        let d = bridge_param("max_speed_mps").unwrap().descriptor();
+        assert!(
+            matches!(d.range, NumericRange::FloatingPointRange { from_value, to_value, .. }
+            if from_value == 0.1 && to_value == 30.0)
+        );
+        assert!(
+            bridge_param("ping_period_ms")
+                .unwrap()
+                .descriptor()
+                .read_only
+        );
     }
 }
