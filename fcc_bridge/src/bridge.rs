@@ -462,6 +462,35 @@ impl RosSide<'_> {
         }
     }
 
+    /// `use_sim_time` set at run time: ros2-client keeps that parameter itself (it calls
+    /// neither our validator nor our set action for it), so it is read back here and applied:
+    /// with `clock_source:=sync` the stamps follow `/clock` while it is true (the Linux clock
+    /// until the first `/clock`, and again when false); with `clock_source:=mcu` the bridge is
+    /// the clock and stamps with MCU time either way.
+    fn sim_time(&self, st: &mut LinkState) {
+        let on = matches!(
+            self.node.get_parameter("use_sim_time"),
+            Some(ParameterValue::Boolean(true))
+        );
+        if on == st.sim_time {
+            return;
+        }
+        st.sim_time = on;
+        if !on {
+            st.sim_offset_ns = None;
+        }
+        match st.clock {
+            ClockSource::Sync => tracing::info!(
+                "use_sim_time {on}: stamps now follow {}",
+                if on { "/clock" } else { "the Linux clock" }
+            ),
+            ClockSource::Mcu => tracing::info!(
+                "use_sim_time {on}: with clock_source:=mcu the bridge publishes /clock and \
+                 stamps with MCU time either way"
+            ),
+        }
+    }
+
     /// Time out requests the MCU did not answer.
     fn expire(&mut self) {
         let now = tokio::time::Instant::now();
@@ -748,7 +777,9 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         ctx_tx.clone(),
         Inbound::Kill,
     )?;
-    if opts.use_sim_time && opts.clock == ClockSource::Sync {
+    // With clock_source:=sync, /clock is read whatever use_sim_time says now: it can be set at
+    // run time, and the link task applies /clock only while it is true.
+    if opts.clock == ClockSource::Sync {
         subscribe::<Clock>(
             &ctx,
             &node_name,
@@ -836,6 +867,7 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
     };
 
     let mut st = LinkState::new(opts.cfg.clone(), opts.limits, opts.clock);
+    st.sim_time = opts.use_sim_time;
     st.uplink = crate::state::Uplink::for_baud(opts.baud);
     tracing::info!(
         "uplink: setpoints at most every {:.1} ms (coalesced to the newest), commands first",
@@ -948,7 +980,9 @@ fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Optio
         Inbound::Mode(s) => st.on_command(convert::mode_command(&s), &s.data),
         Inbound::Kill(s) => st.on_kill(&s),
         Inbound::Clock(c) => {
-            st.sim_offset_ns = Some(c.clock.to_nanos() - now_ns());
+            if st.sim_time {
+                st.sim_offset_ns = Some(c.clock.to_nanos() - now_ns());
+            }
             None
         }
     }
@@ -1074,6 +1108,7 @@ async fn session(
                     }
                 }
                 ros.expire();
+                ros.sim_time(st);
                 if now - last_diag >= Duration::from_secs(1) {
                     publish_diag(pubs, st, rates, &opts.device, true, tap);
                     last_diag = now;

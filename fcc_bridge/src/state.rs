@@ -132,6 +132,9 @@ pub struct LinkState {
     /// `use_sim_time` with `clock_source:=sync`: `/clock` minus the Linux clock at the latest
     /// `/clock` (added to every stamp and to "now").
     pub sim_offset_ns: Option<i64>,
+    /// `use_sim_time` in effect (start-up value, then as set at run time): with
+    /// `clock_source:=sync`, `/clock` sets [`LinkState::sim_offset_ns`] only while true.
+    pub sim_time: bool,
     /// `CommandAck`s and `ParamAck`s received, for the IO layer to answer services with.
     pub acks: Vec<link::Message>,
     /// Height above ground of the latest altitude fusion (for the sensor-health rules).
@@ -169,6 +172,7 @@ impl LinkState {
             yaw_ned: None,
             last_mcu_us: None,
             sim_offset_ns: None,
+            sim_time: false,
             acks: Vec::new(),
             ground_height_m: None,
             sensors: Default::default(),

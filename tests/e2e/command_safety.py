@@ -13,12 +13,15 @@ fcc-sitl --link-pty ⇄ fcc-bridge ⇄ this independent Cyclone DDS peer:
           last_reject not_landed), armed throughout. Then cmd/kill "kill" and "KILL " are
           refused by the bridge (counted on /diagnostics, motors still running) and "KILL"
           stops the motors: status failsafe emergency_kill, disarmed; CSV disarmed.
+  sim time  use_sim_time set at run time on a second bridge (clock_source:=sync, fcc-fake-mcu):
+          IMU stamps follow the peer's /clock while true, the Linux clock when false again.
 Prints its figures; exit 0 = every check passed. Run ONLY inside a loopback-only network
 namespace (tests/e2e/command_safety.sh does that).
 usage: command_safety.py [--bin DIR] [--speed N] [--keep DIR]
 """
 import argparse
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -76,6 +79,79 @@ def params_checks(c, peer, fq):
     c.check("  ttl_ms reads back 500", v is not None and v.integer_value == 500, v and v.integer_value)
     r = set_("ttl_ms", st.ParameterValue(type=P_INT, integer_value=300))
     c.check("set ttl_ms=300 accepted (back to the default)", r is not None and r.successful, r)
+
+
+def sim_time_checks(c, a, tmp, peer):
+    """use_sim_time set at run time on a bridge with clock_source:=sync (fcc-fake-mcu on a pty):
+    the IMU stamps follow the peer's /clock (1000 s + wall) while true, the Linux clock again
+    when false. ros2-client keeps use_sim_time itself; the bridge reads it back and applies it."""
+    import ros_srv_types as st
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.topic import Topic
+    from peer_ros import Service
+    pr = Procs(tmp)
+    rt = peer.rt
+    clock_w = DataWriter(peer.dp, Topic(peer.dp, "rt/clock", st.Clock))
+    set_p = Service(peer.dp, "/fcc/fcc_bridge/set_parameters", st.SetParametersRequest, st.SetParametersResponse)
+    t0 = time.time()
+
+    def tick():
+        el = time.time() - t0
+        clock_w.write(st.Clock(rt.Time(sec=1000 + int(el), nanosec=int((el % 1) * 1e9))))
+
+    def stamps_after(wall):
+        return [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for w, m in peer.got["imu/data_raw"] if w > wall]
+
+    def set_sim(on):
+        r = set_p.call(st.SetParametersRequest(parameters=[st.Parameter(
+            "use_sim_time", st.ParameterValue(type=P_BOOL, bool_value=on))]))
+        return r.results[0] if r and r.results else None
+    try:
+        fake = pr.start("fake", [f"{a.bin}/fcc-fake-mcu", "--duration", "60"])
+        pty = None
+        for _ in range(100):
+            out = pr.log("fake", "out")
+            if out.startswith("PTY"):
+                pty = out.split()[1]
+                break
+            time.sleep(0.05)
+        if not c.check("sim time: fcc-fake-mcu gives its pty", pty is not None, pr.log("fake")):
+            return
+        bridge = pr.start("bridge_sync", [f"{a.bin}/fcc-bridge", "--device", pty, "--ros-args", "-r", "__ns:=/fcc"])
+        c.check("sim time: IMU from the bridge (clock_source sync)",
+                peer.wait(lambda: len(stamps_after(t0)) > 20, 20, "imu", tick), len(stamps_after(t0)))
+        peer.sleep(1.0, tick)
+        w = time.time()
+        peer.sleep(1.0, tick)
+        before = stamps_after(w)
+        r = set_sim(True)
+        c.check("sim time: set use_sim_time true accepted", r is not None and r.successful, r)
+        peer.sleep(0.5, tick)
+        w = time.time()
+        peer.sleep(1.0, tick)
+        during = stamps_after(w)
+        r = set_sim(False)
+        c.check("sim time: set use_sim_time false accepted", r is not None and r.successful, r)
+        peer.sleep(0.5, tick)
+        w = time.time()
+        peer.sleep(1.0, tick)
+        after = stamps_after(w)
+        now = time.time()
+        sim = 1000 + now - t0
+        fmt = (lambda x: f"{len(x)} stamps, {min(x):.2f}..{max(x):.2f} s" if x else "none")
+        print(f"sim time: IMU stamps before: {fmt(before)}; with use_sim_time true (peer /clock ≈ {sim:.1f} s): "
+              f"{fmt(during)}; after false: {fmt(after)} (Linux clock {now:.2f})", flush=True)
+        c.check("sim time: before, IMU stamped with the Linux clock",
+                bool(before) and all(abs(t - now) < 10 for t in before), fmt(before))
+        c.check("sim time: use_sim_time true at run time → IMU stamped with the peer's /clock",
+                bool(during) and all(1000 <= t <= sim + 1 for t in during), fmt(during))
+        c.check("sim time: use_sim_time false again → the Linux clock",
+                bool(after) and all(abs(t - now) < 10 for t in after), fmt(after))
+        c.check("sim time: bridge still running", bridge.poll() is None, bridge.poll())
+        pr.stop(bridge, signal.SIGINT)
+        pr.stop(fake)
+    finally:
+        pr.cleanup()
 
 
 def main():
@@ -252,6 +328,7 @@ def main():
     c.check("CSV: after cmd/kill \"KILL\" the motors stopped (disarmed, failsafe EmergencyKill)",
             bool(after) and all(r["armed"] == 0.0 for r in after) and after[-1]["failsafe"] == "EmergencyKill",
             (sorted({int(r["armed"]) for r in after}), after[-1]["failsafe"] if after else None))
+    sim_time_checks(c, a, tmp, peer)
     print(f"wall time {time.time() - t_wall:.1f} s", flush=True)
     rc = c.done()
     if not a.keep and rc == 0:
