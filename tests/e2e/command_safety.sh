@@ -6,10 +6,12 @@
 # still flying (true altitude within ±0.5 m of the hold height), every refusal counted on `status`
 # (command_rejects, last_reject not_landed); then cmd/kill with a wrong text is refused and "KILL"
 # stops the motors (failsafe emergency_kill, disarmed). Also: SetParameters with ttl_ms=65535,
-# max_speed_mps=-0.0 / 5e-324, max_stamp_age_ms=-0.0 and use_sim_time refused with the range.
+# max_speed_mps=-0.0 / 5e-324 / inf, max_stamp_age_ms=-0.0 / 5e-324 refused with the range; and
+# use_sim_time set at run time on a second bridge (clock_source:=sync, fcc-fake-mcu) moves the
+# IMU stamps onto the peer's /clock and back.
 # Simulated time runs at FCC_SAFETY_SPEED (default 2) × real time; ROS time = the MCU's.
 #   usage: tests/e2e/command_safety.sh [PYTHON]   (PYTHON must import cyclonedds)
-# Needs: release builds of fcc-sitl and fcc-bridge (FCC_BIN_DIR). Takes ~40 s.
+# Needs: release builds of fcc-sitl, fcc-bridge and fcc-fake-mcu (FCC_BIN_DIR). Takes ~25 s.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
