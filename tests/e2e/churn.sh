@@ -10,12 +10,8 @@ root="$(cd "$here/../.." && pwd)"
 py="${1:-${FCC_DDS_PYTHON:-python3}}"
 . "$root/tests/lib/loopback_only.sh"
 loopback_only "$0" "$py"
-bin="${FCC_BIN_DIR:-$root/target/release}"
-tmp="$(mktemp -d)"
-trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$tmp"' EXIT
-"$bin/fcc-fake-mcu" --duration 600 > "$tmp/fake.out" 2> "$tmp/fake.err" &
-for _ in $(seq 50); do grep -q '^PTY' "$tmp/fake.out" && break; sleep 0.1; done
-pty="$(awk '/^PTY/{print $2}' "$tmp/fake.out")"
+. "$root/tests/lib/fake_mcu.sh"
+start_fake_mcu 600
 ${FCC_BRIDGE_ENV:-} "$bin/fcc-bridge" --device "$pty" --ros-args -r __ns:=/fcc > "$tmp/bridge.log" 2>&1 &
 bridge=$!
 rc=0

@@ -13,12 +13,8 @@ root="$(cd "$here/../.." && pwd)"
 py="${1:-${FCC_DDS_PYTHON:-python3}}"
 . "$root/tests/lib/loopback_only.sh"
 loopback_only "$0" "$py"
-bin="${FCC_BIN_DIR:-$root/target/release}"
-tmp="$(mktemp -d)"
-trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$tmp"' EXIT
-"$bin/fcc-fake-mcu" --duration 30 > "$tmp/fake.out" 2>/dev/null &
-for _ in $(seq 50); do grep -q '^PTY' "$tmp/fake.out" && break; sleep 0.1; done
-pty=$(awk '/^PTY/{print $2}' "$tmp/fake.out")
+. "$root/tests/lib/fake_mcu.sh"
+start_fake_mcu 30
 "$bin/fcc-bridge" --device "$pty" --record "$tmp/k.mcap" > "$tmp/k.log" 2>&1 &
 b=$!; sleep 6.3; kill -KILL $b; kill_ns=$(date +%s%N); wait $b 2>/dev/null || true
 ls -l "$tmp/k.mcap" | awk '{print "killed bag: " $5 " B"}'
