@@ -104,8 +104,8 @@ pub struct FlightCore {
     above_floor: bool,
     /// Time the tilt has been at its limit while the velocity command is not followed, s.
     wind_sat_s: f32,
-    /// Time since an estimator fault put the vehicle in hold, s.
-    fault_hold_s: f32,
+    /// When an estimator fault was first seen in this flight (MCU µs); cleared at arming.
+    fault_since_us: Option<u64>,
     yaw_hold_rad: f32,
     takeoff_alt_m: f32,
     /// On the ground or in the air ([`crate::land_detector`]).
@@ -158,7 +158,7 @@ impl FlightCore {
             vel_slew_ne: None,
             above_floor: false,
             wind_sat_s: 0.0,
-            fault_hold_s: 0.0,
+            fault_since_us: None,
             yaw_hold_rad: 0.0,
             takeoff_alt_m: 0.0,
             land: LandDetector::new(),
@@ -377,6 +377,7 @@ impl FlightCore {
                 }
                 self.reset_controllers();
                 self.nav.clear_faults();
+                self.fault_since_us = None;
                 self.takeoff_alt_m = -nav.pos_ned_m[2];
                 self.enter_hold(&nav);
                 self.failsafe = FailsafeCause::None;
@@ -570,7 +571,7 @@ impl FlightCore {
             }
             _ => {}
         }
-        self.estimator_failsafe(nav);
+        self.estimator_failsafe(now_us, nav);
         // Wind beyond authority: the tilt at its limit and still blown off → land here
         // (the wind weakens towards the ground).
         if self.wind_sat_s >= WIND_LIMIT_S && self.mode != Mode::Land && !self.land.landed() {
@@ -591,27 +592,21 @@ impl FlightCore {
 
     /// A diverged navigation filter ([`crate::nav_health`]): a horizontal fault lands at once
     /// (holding needs the position), any other holds for [`FAULT_HOLD_S`] and then lands.
-    fn estimator_failsafe(&mut self, nav: &NavState) {
+    fn estimator_failsafe(&mut self, now_us: u64, nav: &NavState) {
         if nav.nav_faults == 0 || self.land.landed() || self.mode == Mode::Land {
             return;
         }
-        let dt_s = 0.002;
-        if self.failsafe != FailsafeCause::EstimatorFault {
-            self.failsafe = FailsafeCause::EstimatorFault;
-            self.fault_hold_s = 0.0;
-            if nav.nav_faults & crate::nav_health::FAULT_HORIZONTAL != 0 {
-                self.enter_land(nav);
-            } else {
-                self.enter_hold(nav);
-            }
-            return;
-        }
-        self.fault_hold_s += dt_s;
-        if self.fault_hold_s >= FAULT_HOLD_S
-            || nav.nav_faults & crate::nav_health::FAULT_HORIZONTAL != 0
-        {
+        // The clock runs from the first detection: an operator's velocity or hold command
+        // cannot restart it (the fault bits stay latched until the next arming).
+        let since_us = *self.fault_since_us.get_or_insert(now_us);
+        let held_s = now_us.saturating_sub(since_us) as f32 * 1e-6;
+        let horizontal = nav.nav_faults & crate::nav_health::FAULT_HORIZONTAL != 0;
+        if horizontal || held_s >= FAULT_HOLD_S {
             self.enter_land(nav);
+        } else if self.mode != Mode::Hold {
+            self.enter_hold(nav);
         }
+        self.failsafe = FailsafeCause::EstimatorFault;
     }
 
     /// Velocity command (NED north/east, down) and heading command for the current mode.

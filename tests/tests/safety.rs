@@ -99,3 +99,41 @@ fn emergency_kill_needs_its_confirmation_and_disarm_is_refused_in_flight() {
     assert!(!sim.core.armed());
     assert_eq!(sim.core.failsafe(), FailsafeCause::EmergencyKill);
 }
+
+#[test]
+fn an_estimator_fault_landing_cannot_be_cancelled_by_the_operator() {
+    use fcc_firmware::commands::VelocitySetpoint;
+    let mut s = common::load("hover");
+    s.faults.push(Fault::GpsJump {
+        start_s: 30.0,
+        end_s: 1e6,
+        offset_ned_m: [30.0, -20.0, 0.0],
+    });
+    let mut sim = Sim::new(s).unwrap();
+    while sim.core.nav().nav_faults == 0 {
+        assert!(sim.t_s() < 40.0, "no fault by 40 s");
+        sim.tick();
+    }
+    let t_fault = sim.t_s();
+    // The operator insists: velocity mode and fresh setpoints every tick for 3 s.
+    while sim.t_s() < t_fault + 3.0 {
+        let t = sim.t_us;
+        let _ = sim.core.command(t, Command::Velocity);
+        let _ = sim.core.setpoint(
+            t,
+            VelocitySetpoint {
+                vel_ned_mps: [1.0, 0.0, 0.0],
+                yaw_rad: None,
+                ttl_ms: 300,
+            },
+        );
+        sim.tick();
+    }
+    println!(
+        "fault at {t_fault:.2} s; after 3 s of operator commands: {:?} ({:?})",
+        sim.core.mode(),
+        sim.core.failsafe()
+    );
+    assert_eq!(sim.core.mode(), Mode::Land);
+    assert_eq!(sim.core.failsafe(), FailsafeCause::EstimatorFault);
+}
