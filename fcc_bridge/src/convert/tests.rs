@@ -533,3 +533,48 @@ fn kill_needs_its_exact_text() {
         assert!(kill_command(&s(bad)).is_none(), "{bad:?}");
     }
 }
+
+/// The status codes and names the bridge publishes are the `.msg` file's constants: every
+/// failsafe cause and mode of the link maps to `FAILSAFE_<NAME>` / `MODE_<NAME>` with the same
+/// value in `msg/msg/Status.msg` (the interface package other ROS nodes build against).
+#[test]
+fn status_codes_match_the_msg_constants() {
+    use crate::ros_types::RosMsg;
+    let def = Status::DEFINITION;
+    let constant = |name: &str| -> Option<u8> {
+        def.lines().find_map(|l| {
+            let l = l.split('#').next()?.trim();
+            let rest = l.strip_prefix("uint8 ")?;
+            let (n, v) = rest.split_once('=')?;
+            (n.trim() == name).then(|| v.trim().parse().ok())?
+        })
+    };
+    let causes = [
+        link::FailsafeCause::None,
+        link::FailsafeCause::SetpointStale,
+        link::FailsafeCause::SetpointLost,
+        link::FailsafeCause::Geofence,
+        link::FailsafeCause::GpsLost,
+        link::FailsafeCause::WindLimit,
+        link::FailsafeCause::EstimatorFault,
+        link::FailsafeCause::EmergencyKill,
+    ];
+    for c in causes {
+        let (code, name) = failsafe_code(c);
+        let key = format!("FAILSAFE_{}", name.to_ascii_uppercase());
+        assert_eq!(constant(&key), Some(code), "{c:?}: {key}");
+        assert!(def.contains(name), "failsafe_name comment lists {name}");
+    }
+    let modes = [
+        link::FlightMode::Disarmed,
+        link::FlightMode::Hold,
+        link::FlightMode::Velocity,
+        link::FlightMode::Land,
+        link::FlightMode::Pilot,
+    ];
+    for m in modes {
+        let (code, name) = mode_code(m);
+        let key = format!("MODE_{}", name.to_ascii_uppercase());
+        assert_eq!(constant(&key), Some(code), "{m:?}: {key}");
+    }
+}
