@@ -21,6 +21,8 @@ use fcc_nav::vertical::{pressure_to_alt_m, VerticalEstimator};
 
 /// Largest accelerometer bias the navigation filters may attribute (m/s²).
 const ACCEL_BIAS_LIMIT_MPS2: f32 = 1.5;
+/// The tilt innovation monitor runs on every this-many IMU samples.
+const TILT_CHECK_EVERY: u8 = 10;
 /// A fused ground height with a larger variance than this does not aid the height, m².
 const AID_MAX_VAR_M2: f32 = 0.05;
 
@@ -97,6 +99,7 @@ pub struct Navigator {
     range_aid: RangeAid,
     /// Innovation monitors of every filter.
     health: NavHealth,
+    tilt_check_tick: u8,
     vert_aided: bool,
     last_baro_us: Option<u64>,
     state: NavState,
@@ -143,6 +146,7 @@ impl Navigator {
             air_temp_c: 15.0,
             range_aid: RangeAid::new(),
             health: NavHealth::new(),
+            tilt_check_tick: 0,
             vert_aided: false,
             last_baro_us: None,
             state: NavState::default(),
@@ -230,10 +234,14 @@ impl Navigator {
             } else {
                 self.att.euler()
             };
+            // The tilt monitor samples at 50 Hz (its hold time is seconds; asin/atan2 at 500 Hz
+            // would cost the MCU ~10 % of a step).
+            self.tilt_check_tick = (self.tilt_check_tick + 1) % TILT_CHECK_EVERY;
             let n_f = fcc_nav::math::sqrtf(
                 f_tilt[0] * f_tilt[0] + f_tilt[1] * f_tilt[1] + f_tilt[2] * f_tilt[2],
             );
             if self.calibrated
+                && self.tilt_check_tick == 0
                 && fcc_nav::math::fabsf(n_f - fcc_nav::GRAVITY_MPS2) <= self.params.accel_gate_mps2
             {
                 let (r_a, p_a) = accel_tilt_rad(f_tilt);

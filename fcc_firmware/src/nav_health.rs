@@ -45,12 +45,44 @@ pub struct Innovations {
     pub tilt_rad: Option<f32>,
 }
 
-/// Per-filter timers and the latched fault bits.
+/// One monitor: whether its latest innovation was beyond the limit, and for how long (the
+/// timer runs every step, between samples too, while the latest sample is bad).
+#[derive(Clone, Copy, Debug, Default)]
+struct Monitor {
+    bad: bool,
+    bad_s: f32,
+}
+
+impl Monitor {
+    const fn new() -> Self {
+        Self {
+            bad: false,
+            bad_s: 0.0,
+        }
+    }
+
+    /// A sample (`None`: none this step), its limit; returns the time it has been bad.
+    fn update(&mut self, dt_s: f32, sample: Option<f32>, limit: f32) -> f32 {
+        if let Some(v) = sample {
+            // NaN counts as bad.
+            self.bad = !(v <= limit);
+            if !self.bad {
+                self.bad_s = 0.0;
+            }
+        }
+        if self.bad {
+            self.bad_s += dt_s;
+        }
+        self.bad_s
+    }
+}
+
+/// Per-filter monitors and the latched fault bits.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NavHealth {
-    vert_s: f32,
-    gps_s: f32,
-    tilt_s: f32,
+    vert: Monitor,
+    gps: Monitor,
+    tilt: Monitor,
     faults: u8,
     gps_refused: u32,
 }
@@ -58,9 +90,9 @@ pub struct NavHealth {
 impl NavHealth {
     pub const fn new() -> Self {
         Self {
-            vert_s: 0.0,
-            gps_s: 0.0,
-            tilt_s: 0.0,
+            vert: Monitor::new(),
+            gps: Monitor::new(),
+            tilt: Monitor::new(),
             faults: 0,
             gps_refused: 0,
         }
@@ -71,49 +103,21 @@ impl NavHealth {
         distance_m <= GPS_GATE_M
     }
 
-    /// One step; returns the fault bits (latched until [`Self::clear`]).
+    /// One step (`dt_s`: the step's length; samples arrive at their own rates); returns the
+    /// fault bits (latched until [`Self::clear`]).
     pub fn update(&mut self, dt_s: f32, x: &Innovations) -> u8 {
-        let bad = |t: &mut f32, v: Option<f32>, limit: f32, hold: f32, bit: u8, f: &mut u8| {
-            match v {
-                Some(v) if !(v <= limit) => *t += dt_s,
-                Some(_) => *t = 0.0,
-                None => {}
-            }
-            if *t >= hold {
-                *f |= bit;
-            }
-        };
-        bad(
-            &mut self.vert_s,
-            x.baro_alt_m,
-            VERT_INNOV_M,
-            VERT_FAULT_S,
-            FAULT_VERTICAL,
-            &mut self.faults,
-        );
-        if let Some(d) = x.gps_m {
-            if !Self::gps_acceptable(d) {
-                self.gps_refused = self.gps_refused.wrapping_add(1);
-            }
+        if x.gps_m.is_some_and(|d| !Self::gps_acceptable(d)) {
+            self.gps_refused = self.gps_refused.wrapping_add(1);
         }
-        // GPS: the timer runs between fixes too while the last one was refused.
-        match x.gps_m {
-            Some(d) if Self::gps_acceptable(d) => self.gps_s = 0.0,
-            Some(_) => self.gps_s += dt_s,
-            None if self.gps_s > 0.0 => self.gps_s += dt_s,
-            None => {}
+        if self.vert.update(dt_s, x.baro_alt_m, VERT_INNOV_M) >= VERT_FAULT_S {
+            self.faults |= FAULT_VERTICAL;
         }
-        if self.gps_s >= GPS_FAULT_S {
+        if self.gps.update(dt_s, x.gps_m, GPS_GATE_M) >= GPS_FAULT_S {
             self.faults |= FAULT_HORIZONTAL;
         }
-        bad(
-            &mut self.tilt_s,
-            x.tilt_rad,
-            TILT_INNOV_RAD,
-            TILT_FAULT_S,
-            FAULT_ATTITUDE,
-            &mut self.faults,
-        );
+        if self.tilt.update(dt_s, x.tilt_rad, TILT_INNOV_RAD) >= TILT_FAULT_S {
+            self.faults |= FAULT_ATTITUDE;
+        }
         self.faults
     }
 
@@ -200,6 +204,25 @@ mod tests {
         );
         h.clear();
         assert_eq!(h.faults(), 0);
+    }
+
+    #[test]
+    fn sparse_samples_time_in_real_time() {
+        // A bad baro innovation every 10th step (50 Hz): the fault comes after VERT_FAULT_S of
+        // real time, not ten times later.
+        let mut h = NavHealth::new();
+        let mut k = 0u32;
+        let mut t = 0.0f32;
+        while h.faults() == 0 && t < 10.0 {
+            let x = Innovations {
+                baro_alt_m: (k % 10 == 0).then_some(4.0),
+                ..Default::default()
+            };
+            h.update(0.002, &x);
+            k += 1;
+            t += 0.002;
+        }
+        assert!((t - VERT_FAULT_S).abs() < 0.03, "fault after {t} s");
     }
 
     #[test]
