@@ -13,7 +13,7 @@
 //! | [`observer`] | Luenberger linear-acceleration observer (eqs. 10–14) | tilt, tilt command \[rad], measured accel \[m/s²] | filtered accel \[m/s²] |
 //! | [`geodesy`] | WGS-84 LLA ↔ ECEF ↔ local NED (`f64`) | lat/lon \[deg], alt \[m] | ECEF \[m], NED \[m] |
 //! | [`math`] | the `f32` elementary functions every module uses (no `f64` on the single-precision FPU) | | |
-//! | [`sysid`] | streaming least-squares fit of `a = k1·θ − k2·v` ("3D curve fitting") | tilt \[rad], vel \[m/s], accel \[m/s²] | k1 \[m/s²/rad], k2 \[1/s] |
+//! | [`sysid`] | paper A's "3D curve fitting" of `a = k1·θ − k2·v`: streaming least squares ([`PlaneFit`]), and with a wind term per window by least squares (`WindPlaneFit`) or instrumental variables (`WindIvFit`, setpoints as instruments), with standard errors | tilt \[rad], vel \[m/s], accel \[m/s²] (+ instruments) | k1 \[m/s²/rad], k2 \[1/s], intervals |
 //!
 //! # Conventions
 //!
