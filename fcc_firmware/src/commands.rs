@@ -23,12 +23,14 @@ pub enum Command {
     Velocity,
     /// Emergency motor stop, in the air too (the only way to disarm while flying). Carries
     /// the confirmation [`KILL_CONFIRM`]; anything else is refused.
-    Kill { confirm: u32 },
+    Kill {
+        confirm: u32,
+    },
 }
 
-/// The confirmation an emergency kill must carry ("KILL" in ASCII): a kill is never the
-/// accident of a flipped bit or a mistyped mode.
-pub const KILL_CONFIRM: u32 = 0x4B49_4C4C;
+/// The confirmation an emergency kill must carry ("KILL" in ASCII), the link's own constant:
+/// a kill is never the accident of a flipped bit or a mistyped mode.
+pub use fcc_msgs::KILL_CONFIRM;
 
 /// Why a command was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -313,9 +313,6 @@ impl FlightCore {
     pub fn landed(&self) -> bool {
         self.land.landed()
     }
-    pub fn land_state(&self) -> LandState {
-        self.land.state()
-    }
     pub fn nav(&self) -> &NavState {
         self.nav.state()
     }
@@ -626,11 +623,7 @@ impl FlightCore {
         };
         let (mut v_ne, mut vz_down, yaw) = match self.mode {
             Mode::Hold => {
-                let vz = fcc_nav::math::clampf(
-                    -(c.alt_p_per_s * (self.hold_alt_m - alt)),
-                    -l.max_climb_mps,
-                    l.max_descent_mps,
-                );
+                let vz = self.height_loop(0.0, self.hold_alt_m, alt);
                 (hold_ne(self), vz, self.yaw_hold_rad)
             }
             Mode::Velocity => match self.setpoint {
@@ -678,11 +671,7 @@ impl FlightCore {
                         self.hold_alt_m = alt;
                         -up
                     }
-                    None => fcc_nav::math::clampf(
-                        -(c.alt_p_per_s * (self.hold_alt_m - alt)),
-                        -l.max_climb_mps,
-                        l.max_descent_mps,
-                    ),
+                    None => self.height_loop(0.0, self.hold_alt_m, alt),
                 };
                 let lead = fcc_nav::math::clampf(
                     wrap_pi(self.yaw_hold_rad + d.yaw_rate_radps * dt_s - nav.euler.yaw_rad),
@@ -751,15 +740,22 @@ impl FlightCore {
     /// `h_t ← h_t − v_z,cmd·dt` (kept within [`VEL_ALT_LEAD_M`] of ĥ),
     /// `v_z = v_z,cmd − k_alt·(h_t − ĥ)`, limited to the climb/descent limits (NED down).
     fn velocity_climb(&mut self, dt_s: f32, vz_cmd_down: f32, alt_m: f32) -> f32 {
-        let l = self.params.limits;
         let t = self.vel_alt_m.get_or_insert(alt_m);
         *t = fcc_nav::math::clampf(
             *t - vz_cmd_down * dt_s,
             alt_m - VEL_ALT_LEAD_M,
             alt_m + VEL_ALT_LEAD_M,
         );
+        let target_m = *t;
+        self.height_loop(vz_cmd_down, target_m, alt_m)
+    }
+
+    /// The height loop of every mode that holds a height: `v_z = v_ff − k_alt·(h_t − ĥ)`
+    /// (NED down), limited to the climb and descent limits.
+    fn height_loop(&self, vz_ff_down: f32, target_alt_m: f32, alt_m: f32) -> f32 {
+        let l = self.params.limits;
         fcc_nav::math::clampf(
-            vz_cmd_down - self.params.control.alt_p_per_s * (*t - alt_m),
+            vz_ff_down - self.params.control.alt_p_per_s * (target_alt_m - alt_m),
             -l.max_climb_mps,
             l.max_descent_mps,
         )
@@ -988,7 +984,7 @@ impl FlightCore {
 
     /// Run the land detector (every armed mode); in LAND, a confirmed touchdown disarms.
     fn detect_touchdown(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) {
-        if self.land.landed() && self.mode != Mode::Disarmed {
+        if self.land.landed() {
             if self.mode == Mode::Land {
                 self.disarm_landed();
             }

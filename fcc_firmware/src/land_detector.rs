@@ -104,11 +104,6 @@ impl LandDetector {
         self.landed_s = 0.0;
     }
 
-    /// Force the landed state (disarmed on the ground, e.g. at start-up).
-    pub fn set_landed(&mut self) {
-        self.state = LandState::Landed;
-    }
-
     /// One step. `landed_s`: how long the full landed condition must hold (parameter
     /// `limits.touchdown_s`). Returns the new state. `Landed` is left only by [`Self::take_off`].
     pub fn update(&mut self, dt_s: f32, x: &LandInputs, landed_s: f32) -> LandState {

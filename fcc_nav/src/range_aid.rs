@@ -32,8 +32,6 @@ pub struct RangeAid {
     terrain_alt_m: Option<f32>,
     reinit_seen: u32,
     baro_offset_m: f32,
-    /// Innovation of the last aided measurement against the estimate, m.
-    last_innovation_m: f32,
     /// How long the range altitude has been suspect, s.
     suspect_s: f32,
 }
@@ -45,7 +43,6 @@ impl RangeAid {
             terrain_alt_m: None,
             reinit_seen: 0,
             baro_offset_m: 0.0,
-            last_innovation_m: 0.0,
             suspect_s: 0.0,
         }
     }
@@ -71,8 +68,7 @@ impl RangeAid {
             self.reinit_seen = reinit_count;
         }
         let mut z = self.terrain_alt_m.unwrap_or(0.0) + h;
-        self.last_innovation_m = z - alt_est_m;
-        if fabsf(self.last_innovation_m) > SUSPECT_M {
+        if fabsf(z - alt_est_m) > SUSPECT_M {
             self.suspect_s += dt_s;
             if self.suspect_s < REANCHOR_S {
                 return baro_alt_m - self.baro_offset_m;
@@ -106,11 +102,6 @@ impl RangeAid {
     /// Learnt barometer offset (baro altitude − true altitude), m.
     pub fn baro_offset_m(&self) -> f32 {
         self.baro_offset_m
-    }
-
-    /// |range altitude − estimate| of the last aided measurement, m.
-    pub fn innovation_m(&self) -> f32 {
-        fabsf(self.last_innovation_m)
     }
 }
 

@@ -95,19 +95,11 @@ fn fly_one(only: &str, csv: &std::path::Path, long: bool) -> ExitCode {
         return ExitCode::from(2);
     };
     let f = campaign::generate(family, seed, long);
-    let mut sim = match fcc_firmware::sitl::sim::Sim::new(f.scenario.clone()) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("fcc-campaign: {e}");
-            return ExitCode::from(1);
-        }
-    };
-    sim.run();
+    let (o, log) = campaign::fly_logged(&f);
     say!("{family} seed {seed}: {}", f.what);
-    say!("{}", fcc_firmware::sitl::metrics::summary(&sim.log));
-    let o = campaign::fly(&f);
+    say!("{}", fcc_firmware::sitl::metrics::summary(&log));
     say!("failures: {:?}", o.failures);
-    if let Err(e) = fcc_firmware::sitl::log::write_csv(&sim.log, csv) {
+    if let Err(e) = fcc_firmware::sitl::log::write_csv(&log, csv) {
         eprintln!("fcc-campaign: {}: {e}", csv.display());
         return ExitCode::from(1);
     }

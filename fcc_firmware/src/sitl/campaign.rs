@@ -16,6 +16,7 @@
 //! flyaway, touchdown ≤ 0.5 m/s down, ≤ 0.3 m/s horizontal, ≤ 5° tilt, and no time truly
 //! airborne with the attitude loops off.
 
+use super::log::FlightLog;
 use super::metrics;
 use super::scenario::Scenario;
 use super::sim::Sim;
@@ -179,11 +180,22 @@ fn fnv(s: &str) -> u64 {
 
 /// Fly one flight and score it.
 pub fn fly(f: &Flight) -> Outcome {
-    let limits = f.scenario.params.limits;
+    fly_logged(f).0
+}
+
+/// Fly one flight; its score and its log (for a CSV of the flight that failed).
+pub fn fly_logged(f: &Flight) -> (Outcome, FlightLog) {
     let mut sim = Sim::new(f.scenario.clone()).unwrap_or_else(|e| panic!("{e}"));
     sim.run();
     let still_armed = sim.core.armed();
-    let log = sim.finish().clone();
+    sim.finish();
+    let log = std::mem::take(&mut sim.log);
+    (score(f, &log, still_armed), log)
+}
+
+/// Score a flown flight against the checks of its family (module doc).
+fn score(f: &Flight, log: &FlightLog, still_armed: bool) -> Outcome {
+    let limits = f.scenario.params.limits;
     let mut o = Outcome {
         family: f.family,
         seed: f.seed,
@@ -329,7 +341,7 @@ pub fn fly(f: &Flight) -> Outcome {
 }
 
 /// Velocity cruise, truth: max |alt − commanded|, max horizontal speed, max tilt (deg).
-fn velocity_truth(log: &super::log::FlightLog) -> [f64; 3] {
+fn velocity_truth(log: &FlightLog) -> [f64; 3] {
     use super::log::PlanPhase;
     let mut m = [0.0f64; 3];
     let start = log.truth.start_down_m;

@@ -313,8 +313,7 @@ impl Sim {
             return;
         }
         self.airborne_since_contact = false;
-        let z_body = q.transform_vector(&Vector3::z());
-        let tilt_deg = z_body.z.clamp(-1.0, 1.0).acos().to_degrees();
+        let tilt_deg = tilt_deg(&q);
         let mode = self.core.mode();
         let (vz, vh) = (v.z, v.x.hypot(v.y));
         let outcome =
@@ -351,13 +350,7 @@ impl Sim {
         if self.core.armed() && !self.core.telemetry().attitude_active {
             c.attitude_off_airborne_s += dt;
         }
-        let tilt = st
-            .q_body_to_ned
-            .transform_vector(&Vector3::z())
-            .z
-            .clamp(-1.0, 1.0)
-            .acos();
-        c.max_tilt_deg = c.max_tilt_deg.max(tilt.to_degrees());
+        c.max_tilt_deg = c.max_tilt_deg.max(tilt_deg(&st.q_body_to_ned));
         c.max_speed_mps = c
             .max_speed_mps
             .max(st.vel_ned_mps.x.hypot(st.vel_ned_mps.y));
@@ -561,6 +554,15 @@ fn air_at(
         rotor_drag_n_per_mps: v.rotor_drag_n_per_mps * k,
         ..v.clone()
     }
+}
+
+/// Tilt of the body z axis from the vertical, deg.
+fn tilt_deg(q: &UnitQuaternion<f64>) -> f64 {
+    q.transform_vector(&Vector3::z())
+        .z
+        .clamp(-1.0, 1.0)
+        .acos()
+        .to_degrees()
 }
 
 /// The operator's pre-flight calibrations: offsets measured with a residual error (see

@@ -61,12 +61,7 @@ pub struct WindParams {
     /// spec's W20 height); `z0` = 0.15 ft (0.046 m) for category C flight phases (terminal:
     /// take-off, approach, landing), the spec's value for flight near the ground. 0 = no
     /// shear (the same mean wind at every height).
-    #[serde(default = "default_z0_m")]
     pub shear_z0_m: f64,
-}
-
-fn default_z0_m() -> f64 {
-    SHEAR_Z0_CAT_C_M
 }
 
 impl Default for WindParams {
