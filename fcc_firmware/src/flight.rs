@@ -16,6 +16,7 @@ use crate::nav::{NavNotReady, NavState, Navigator};
 use crate::params::{ParamError, Params};
 use crate::pilot::{PilotInput, PilotReceiver};
 use crate::sensors::SensorInputs;
+use crate::touchdown_gate::{GateAction, TouchdownGate, GATE_CLEARANCE_M};
 use fcc_nav::ground_altitude::GroundSource;
 use fcc_nav::observer::AccelObserver;
 use fcc_nav::GRAVITY_MPS2;
@@ -110,6 +111,7 @@ pub struct FlightCore {
     takeoff_alt_m: f32,
     /// On the ground or in the air ([`crate::land_detector`]).
     land: LandDetector,
+    touchdown_gate: TouchdownGate,
     cross_track: CrossTrack,
     vel_ctrl: VelocityController,
     accel_ctrl: [AccelController; 2],
@@ -162,6 +164,7 @@ impl FlightCore {
             yaw_hold_rad: 0.0,
             takeoff_alt_m: 0.0,
             land: LandDetector::new(),
+            touchdown_gate: TouchdownGate::new(),
             cross_track: CrossTrack::new(c.cross_track_k_per_s),
             vel_ctrl: VelocityController::new(
                 c.vel_p_per_s,
@@ -493,6 +496,7 @@ impl FlightCore {
         self.vel_alt_m = None;
         self.vel_slew_ne = None;
         self.mode = Mode::Land;
+        self.touchdown_gate.reset();
         self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         self.yaw_hold_rad = nav.euler.yaw_rad;
         self.cross_track.reset();
@@ -645,7 +649,7 @@ impl FlightCore {
                     // Final descent: zero horizontal velocity (no position corrections that
                     // would slide the gear at touchdown); where it is becomes the hold point.
                     self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
-                    ([0.0; 2], l.land_final_speed_mps, self.yaw_hold_rad)
+                    ([0.0; 2], self.final_descent(dt_s, nav), self.yaw_hold_rad)
                 }
             }
             Mode::Pilot => {
@@ -710,6 +714,32 @@ impl FlightCore {
         }
         let _ = now_us;
         (v_ne, vz_down, yaw)
+    }
+
+    /// LAND's final descent (NED down, m/s): the final speed, except that the gear waits at
+    /// the touchdown gate's clearance for a lull ([`crate::touchdown_gate`]).
+    fn final_descent(&mut self, dt_s: f32, nav: &NavState) -> f32 {
+        let l = self.params.limits;
+        if !self.ground_usable(nav) {
+            return l.land_final_speed_mps;
+        }
+        let clearance_m =
+            self.height_above_ground_m(nav) - self.params.airframe.sensor_height_on_ground_m;
+        let (_, cr) = fcc_nav::math::sincosf(nav.euler.roll_rad);
+        let (_, cp) = fcc_nav::math::sincosf(nav.euler.pitch_rad);
+        let tilt_rad = fcc_nav::math::acosf(fcc_nav::math::clampf(cr * cp, -1.0, 1.0));
+        let speed_mps = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
+        match self
+            .touchdown_gate
+            .update(dt_s, clearance_m, tilt_rad, speed_mps)
+        {
+            GateAction::Descend => l.land_final_speed_mps,
+            GateAction::Hold => fcc_nav::math::clampf(
+                -self.params.control.alt_p_per_s * (GATE_CLEARANCE_M - clearance_m),
+                -l.max_climb_mps,
+                l.land_final_speed_mps,
+            ),
+        }
     }
 
     /// Velocity mode: the horizontal command moves towards the setpoint at no more than

@@ -35,6 +35,7 @@ pub mod params;
 pub mod pilot;
 pub mod scheduler;
 pub mod sensors;
+pub mod touchdown_gate;
 
 #[cfg(feature = "sitl")]
 pub mod sitl;

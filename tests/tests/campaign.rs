@@ -9,9 +9,11 @@
 //! Asserted on every flight: no crash or tip-over, no unplanned ground contact, the attitude
 //! loops on whenever truly airborne, every flight landed and disarmed; hover true altitude
 //! within ±0.3 m and the estimated box within half of paper A's; mission cross-track; yaw under
-//! a 25 µT disturbance; paper B's rig at every height and air temperature. The checks in
-//! `campaign::OPEN_CHECKS` are printed with their failures but not asserted: the vehicle does
-//! not meet them yet (the issue stays open on them).
+//! a 25 µT disturbance; paper B's rig at every height and air temperature; touchdown ≤ 0.5 m/s
+//! down, ≤ 0.3 m/s horizontal, ≤ 5° tilt in every family but the gale hover. The gale hover's
+//! `campaign::OPEN_CHECKS` (touchdown horizontal speed and tilt, the 2 m true excursion) are
+//! printed with their failures but not asserted: the vehicle does not meet them yet (the issue
+//! stays open on them).
 
 use fcc_firmware::sitl::campaign;
 
@@ -25,7 +27,7 @@ fn short_campaign_on_truth() {
     let mut open = 0;
     for o in &out {
         for (name, what) in &o.failures {
-            if campaign::OPEN_CHECKS.contains(name) {
+            if campaign::is_open(o.family, name) {
                 open += 1;
             } else {
                 asserted.push(format!("{} seed {} ({}): {what}", o.family, o.seed, o.what));

@@ -57,18 +57,26 @@ pub struct Outcome {
     pub failures: Vec<(&'static str, String)>,
 }
 
-/// Acceptance checks of the flight-safety issue that the vehicle does **not** meet yet across
-/// the campaign (measured, printed and listed as failures by `fcc-campaign`; the test command's
-/// short campaign asserts every other check): touchdown horizontal speed and tilt in wind and
-/// turbulence near the ground (a vehicle holding against the wind leans into it; limiting the
-/// tilt lets the gusts push it sideways — the land controller keeps tip-over, not these, at
-/// zero), and the 2 m true excursion of the gale hover (GPS-limited: the estimate's box is
-/// ≈0.3 m, and the 3 m/s hover's true excursion from its start is as large).
+/// The family whose acceptance checks the vehicle does **not** meet yet across the campaign:
+/// the gale hover (8 m/s + W20 30 kt). Its [`OPEN_CHECKS`] are measured, printed and listed as
+/// failures by `fcc-campaign`, but the test command's short campaign does not assert them; every
+/// other family's touchdown checks are asserted. Why they stay open: near the ground the gusts
+/// keep σ_u ≈ 3 m/s while the mean drops, so even the touchdown gate's lull
+/// (`fcc_firmware::touchdown_gate`) does not last through the last 0.15 m on every
+/// landing; and the 2 m true excursion is GPS-limited (the estimate's box is ≈ 0.3 m).
+pub const OPEN_FAMILY: &str = "hover_gale";
+
+/// The checks that are open in [`OPEN_FAMILY`].
 pub const OPEN_CHECKS: [&str; 3] = [
     "touchdown_horiz_mps",
     "touchdown_tilt_deg",
     "hold_excursion_m",
 ];
+
+/// Is `check` of a flight of `family` one the vehicle does not meet yet (not asserted)?
+pub fn is_open(family: &str, check: &str) -> bool {
+    family == OPEN_FAMILY && OPEN_CHECKS.contains(&check)
+}
 
 fn wind_yaml(speed: f64, dir: f64, w20: f64) -> String {
     format!(
@@ -90,7 +98,7 @@ pub fn generate(family: &'static str, seed: u64, long: bool) -> Flight {
             let v = rng.gen_range(6.0..8.0);
             (
                 format!("{v:.1} m/s + W20 30 kt from {dir:.0}°"),
-                format!("name: hover_gale\nduration_s: 130\n{}flight: {{kind: hover, alt_m: 5.0, hold_s: {}}}\n", wind_yaml(v, dir, 30.0), if long { 100.0 } else { 60.0 }),
+                format!("name: hover_gale\nduration_s: 170\n{}flight: {{kind: hover, alt_m: 5.0, hold_s: {}}}\n", wind_yaml(v, dir, 30.0), if long { 100.0 } else { 60.0 }),
             )
         }
         "mission" => mission(&mut rng, dir),
