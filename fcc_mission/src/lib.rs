@@ -15,8 +15,9 @@
 //!   (pause and resume around an R/C pilot override), [`progress`] (phase names, distance to
 //!   go, cross-track on the legs), [`ending`] (hover in HOLD, then land; the MCU's modes) and
 //!   [`status_report`] (the `mission/status` JSON and its rate).
-//! * Reports: [`track`] (the cross-track report of a full-stack flight from the simulator's
-//!   CSV, for `fcc-launch`).
+//! * The launcher (`fcc-launch`, feature `ros`, does the process I/O): [`launch`] (its config,
+//!   `${NAME}` variables, the supervision rules) and [`track`] (the cross-track report of a
+//!   full-stack flight from the simulator's CSV).
 //!
 //! # Inputs
 //! * A [`Mission`] (YAML via [`from_yaml_str`], validated by
@@ -63,6 +64,7 @@
 pub mod arming;
 pub mod ending;
 pub mod follower;
+pub mod launch;
 pub mod mission;
 pub mod pilot_pause;
 pub mod progress;

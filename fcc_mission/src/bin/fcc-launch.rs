@@ -41,9 +41,9 @@
 //! temporary directory, removed at the end), `vars`, command-line `name:=value`, and the
 //! environment. `env:` per process adds environment variables.
 
+use fcc_mission::launch::{expand, next_after_exit, Config, Next, Proc, Report, Reports, Slot};
 use nix::sys::signal::{self, SigHandler, Signal};
 use nix::unistd::Pid;
-use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
 use std::os::unix::process::CommandExt;
@@ -51,79 +51,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-struct Config {
-    #[serde(default)]
-    vars: BTreeMap<String, String>,
-    #[serde(default = "default_stop")]
-    stop_timeout_s: f64,
-    processes: Vec<Proc>,
-    #[serde(default)]
-    report: Option<Reports>,
-}
-
-/// `report:` is one entry or a list of them.
-#[derive(Deserialize, Debug)]
-#[serde(untagged)]
-enum Reports {
-    One(Report),
-    Many(Vec<Report>),
-}
-
-impl Reports {
-    fn list(&self) -> Vec<&Report> {
-        match self {
-            Reports::One(r) => vec![r],
-            Reports::Many(v) => v.iter().collect(),
-        }
-    }
-}
-
-fn default_stop() -> f64 {
-    10.0
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct Proc {
-    name: String,
-    cmd: Vec<String>,
-    #[serde(default)]
-    env: BTreeMap<String, String>,
-    /// Wait until this path exists before starting the next process.
-    #[serde(default)]
-    wait_for: Option<String>,
-    #[serde(default = "default_wait")]
-    wait_timeout_s: f64,
-    /// The launcher exits when this process exits, with its code (with several main
-    /// processes: when all have exited, with the worst code).
-    #[serde(default)]
-    main: bool,
-    /// Processes of a group (e.g. one vehicle) are stopped when all the group's main processes
-    /// have exited.
-    #[serde(default)]
-    group: Option<String>,
-    /// Wait this long after starting it before starting the next one.
-    #[serde(default)]
-    delay_s: f64,
-}
-
-fn default_wait() -> f64 {
-    15.0
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct Report {
-    csv: String,
-    mission: String,
-    #[serde(default)]
-    append_to: Option<String>,
-    #[serde(default)]
-    title: Option<String>,
-}
 
 static STOP: AtomicBool = AtomicBool::new(false);
 
@@ -134,41 +61,6 @@ extern "C" fn on_signal(_: nix::libc::c_int) {
 fn die(msg: String) -> ! {
     eprintln!("fcc-launch: {msg}");
     std::process::exit(2)
-}
-
-/// Expand `${NAME}` from `vars`, then the environment; values may use other variables.
-fn expand(s: &str, vars: &BTreeMap<String, String>) -> Result<String, String> {
-    let mut cur = s.to_string();
-    for _ in 0..8 {
-        let next = expand_once(&cur, vars)?;
-        if next == cur {
-            return Ok(next);
-        }
-        cur = next;
-    }
-    Err(format!("variables nest too deeply in '{s}'"))
-}
-
-fn expand_once(s: &str, vars: &BTreeMap<String, String>) -> Result<String, String> {
-    let mut out = String::new();
-    let mut rest = s;
-    while let Some(i) = rest.find("${") {
-        out.push_str(&rest[..i]);
-        let j = rest[i..]
-            .find('}')
-            .ok_or(format!("unclosed ${{ in '{s}'"))?
-            + i;
-        let name = &rest[i + 2..j];
-        let v = vars
-            .get(name)
-            .cloned()
-            .or_else(|| std::env::var(name).ok())
-            .ok_or(format!("unknown variable ${{{name}}} in '{s}'"))?;
-        out.push_str(&v);
-        rest = &rest[j + 1..];
-    }
-    out.push_str(rest);
-    Ok(out)
 }
 
 fn pipe_lines(name: String, r: impl std::io::Read + Send + 'static, err: bool) {
@@ -252,76 +144,6 @@ fn rusage_s(who: nix::sys::resource::UsageWho) -> (f64, f64) {
     nix::sys::resource::getrusage(who)
         .map(|u| (tv(u.user_time()), tv(u.system_time())))
         .unwrap_or((0.0, 0.0))
-}
-
-/// A started process as the supervision rules see it.
-#[derive(Clone, Debug, PartialEq)]
-struct Slot {
-    main: bool,
-    group: Option<String>,
-    /// Exit code once exited.
-    code: Option<i32>,
-    /// The launcher is stopping it (its group is done).
-    stopping: bool,
-}
-
-/// What to do after process `i` of `slots` exited (its `code` is already set).
-#[derive(Debug, PartialEq)]
-enum Next {
-    /// Keep supervising.
-    Continue,
-    /// Stop these still-running processes (a group whose main processes all exited).
-    Stop(Vec<usize>),
-    /// Every main process has exited: stop everything and exit with this code (the worst).
-    Done(i32),
-    /// A non-main process exited on its own while it was still needed: stop everything, exit 1.
-    Early,
-}
-
-fn next_after_exit(slots: &[Slot], i: usize) -> Next {
-    let s = &slots[i];
-    if s.stopping {
-        return Next::Continue;
-    }
-    let mains_running = |g: Option<&String>| {
-        slots
-            .iter()
-            .any(|x| x.main && x.code.is_none() && (g.is_none() || x.group.as_ref() == g))
-    };
-    if !s.main {
-        // Without a group (or in a group without a main process), a process is needed while
-        // any main process runs.
-        let g = s
-            .group
-            .as_ref()
-            .filter(|g| slots.iter().any(|x| x.main && x.group.as_ref() == Some(*g)));
-        return if mains_running(g) {
-            Next::Early
-        } else {
-            Next::Continue
-        };
-    }
-    if !mains_running(None) {
-        let worst = slots
-            .iter()
-            .filter(|x| x.main)
-            .filter_map(|x| x.code)
-            .max()
-            .unwrap_or(1);
-        return Next::Done(worst);
-    }
-    match &s.group {
-        Some(g) if !mains_running(Some(g)) => Next::Stop(
-            (0..slots.len())
-                .rev()
-                .filter(|&k| {
-                    let x = &slots[k];
-                    x.group.as_ref() == Some(g) && x.code.is_none() && !x.stopping
-                })
-                .collect(),
-        ),
-        _ => Next::Continue,
-    }
 }
 
 fn code_of(s: &ExitStatus) -> i32 {
@@ -423,46 +245,30 @@ impl Launch {
             .or_insert_with(|| exe_dir.display().to_string());
         vars.insert("CONFIG_DIR".into(), cfg_dir.display().to_string());
         vars.insert("RUN".into(), run_dir.display().to_string());
-        let launch = Launch {
+        Launch {
             cfg,
             cfg_path,
             vars,
             run_dir,
-        };
-        if !launch.cfg.processes.iter().any(|p| p.main) {
-            die(format!(
-                "{}: at least one process must have main: true",
-                launch.cfg_path.display()
-            ));
         }
-        launch
     }
 
     /// `s` with its variables expanded; exits (code 2) on an unknown variable.
     fn x(&self, s: &str) -> String {
-        expand(s, &self.vars).unwrap_or_else(|e| die(format!("{}: {e}", self.cfg_path.display())))
+        let env = |name: &str| std::env::var(name).ok();
+        expand(s, &self.vars, &env)
+            .unwrap_or_else(|e| die(format!("{}: {e}", self.cfg_path.display())))
     }
 }
 
-/// Parses the config file and checks its times; exits (code 2) on bad input.
+/// Parses and checks the config file; exits (code 2) on bad input.
 fn read_config(cfg_path: &Path) -> Config {
     let text = std::fs::read_to_string(cfg_path)
         .unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
-    let cfg: Config =
-        serde_yaml::from_str(&text).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
-    let secs = |field: String, v: f64| {
-        if !(v.is_finite() && (0.0..=86_400.0).contains(&v)) {
-            die(format!(
-                "{}: {field}: must be a number of seconds in [0, 86400], got {v}",
-                cfg_path.display()
-            ));
-        }
-    };
-    secs("stop_timeout_s".into(), cfg.stop_timeout_s);
-    for (i, p) in cfg.processes.iter().enumerate() {
-        secs(format!("processes[{i}].delay_s"), p.delay_s);
-        secs(format!("processes[{i}].wait_timeout_s"), p.wait_timeout_s);
-    }
+    let cfg = Config::from_yaml_str(&text)
+        .unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
+    cfg.check()
+        .unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
     cfg
 }
 
@@ -729,96 +535,4 @@ fn report_text(launch: &Launch, r: &Report, wall_s: f64) -> Result<String, Strin
         .map(|t| launch.x(&t))
         .unwrap_or_else(|| "full-stack flight".into());
     Ok(format!("== {title} ({wall_s:.1} s wall)\n{rep}\n"))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn slot(main: bool, group: Option<&str>) -> Slot {
-        Slot {
-            main,
-            group: group.map(str::to_string),
-            code: None,
-            stopping: false,
-        }
-    }
-
-    #[test]
-    fn one_main_as_before() {
-        // sitl, bridge, mission (main): the mission's exit ends the run with its code.
-        let mut s = vec![slot(false, None), slot(false, None), slot(true, None)];
-        s[2].code = Some(3);
-        assert_eq!(next_after_exit(&s, 2), Next::Done(3));
-        // Another process first: early exit.
-        let mut s = vec![slot(false, None), slot(false, None), slot(true, None)];
-        s[0].code = Some(0);
-        assert_eq!(next_after_exit(&s, 0), Next::Early);
-    }
-
-    #[test]
-    fn several_mains_with_groups() {
-        // Two vehicles: [sitl, bridge, mission] × 2.
-        let g = |n| Some(if n == 1 { "uav1" } else { "uav2" });
-        let mut s = vec![
-            slot(false, g(1)),
-            slot(false, g(1)),
-            slot(true, g(1)),
-            slot(false, g(2)),
-            slot(false, g(2)),
-            slot(true, g(2)),
-        ];
-        // uav1's mission ends: its bridge and sitl are stopped (reverse order), uav2 flies on.
-        s[2].code = Some(0);
-        assert_eq!(next_after_exit(&s, 2), Next::Stop(vec![1, 0]));
-        s[0].stopping = true;
-        s[1].stopping = true;
-        s[0].code = Some(0);
-        assert_eq!(next_after_exit(&s, 0), Next::Continue);
-        // uav2's bridge dying while its mission runs is an early exit.
-        let mut e = s.clone();
-        e[4].code = Some(1);
-        assert_eq!(next_after_exit(&e, 4), Next::Early);
-        // uav2's mission fails: all mains done, the worst code wins.
-        s[5].code = Some(1);
-        assert_eq!(next_after_exit(&s, 5), Next::Done(1));
-        s[5].code = Some(0);
-        assert_eq!(next_after_exit(&s, 5), Next::Done(0));
-    }
-
-    #[test]
-    fn several_mains_without_groups_wait_for_all() {
-        let mut s = vec![slot(false, None), slot(true, None), slot(true, None)];
-        s[1].code = Some(2);
-        assert_eq!(next_after_exit(&s, 1), Next::Continue);
-        s[2].code = Some(0);
-        assert_eq!(next_after_exit(&s, 2), Next::Done(2));
-        // A shared process that exits while a main runs: early.
-        let mut s = vec![slot(false, None), slot(true, None), slot(true, None)];
-        s[1].code = Some(0);
-        s[0].code = Some(0);
-        assert_eq!(next_after_exit(&s, 0), Next::Early);
-        // Same for a process in a group that has no main process.
-        let mut s = vec![slot(false, Some("tools")), slot(true, Some("uav1"))];
-        s[0].code = Some(0);
-        assert_eq!(next_after_exit(&s, 0), Next::Early);
-    }
-
-    #[test]
-    fn report_one_or_many() {
-        let one: Config = serde_yaml::from_str(
-            "processes: [{name: a, cmd: [x], main: true}]\nreport: {csv: a.csv, mission: m.yaml}\n",
-        )
-        .unwrap();
-        assert_eq!(one.report.unwrap().list().len(), 1);
-        let many: Config = serde_yaml::from_str(
-            "processes: [{name: a, cmd: [x], main: true, group: g}]\nreport:\n  - {csv: a.csv, mission: m.yaml}\n  - {csv: b.csv, mission: m.yaml}\n",
-        )
-        .unwrap();
-        assert_eq!(many.report.unwrap().list().len(), 2);
-        assert!(serde_yaml::from_str::<Config>(
-            "processes: [{name: a, cmd: [x], main: true}]\nreport: {csv: a.csv, bogus: 1}\n"
-        )
-        .is_err());
-    }
 }
