@@ -315,19 +315,9 @@ impl WaypointFollower {
     /// brakes towards zero at the acceleration limit (before home is known the
     /// follower stays `Idle`).
     pub fn update(&mut self, t_s: f64, pos_ned_m: [f32; 3], vel_ned_mps: [f32; 3]) -> Guidance {
-        let dt = match (self.last_t, t_s.is_finite()) {
-            (Some(last), true) => (t_s - last).clamp(0.0, MAX_DT_S),
-            _ => 0.0,
-        };
-        if t_s.is_finite() {
-            self.last_t = Some(t_s);
-        }
-        self.clock += dt;
-        let dt = dt as f32;
-
+        let dt = self.advance_clock(t_s);
         let prev_speed = self.speed;
         let prev_axis = self.axis;
-        let mut want_corr = [0.0f32; 3];
         let inputs_ok = t_s.is_finite() && finite3(pos_ned_m) && finite3(vel_ned_mps);
         if self.home.is_none() {
             if !inputs_ok {
@@ -341,90 +331,124 @@ impl WaypointFollower {
             return self.output();
         }
         let rel = sub(pos_ned_m, self.home.unwrap_or([0.0; 3]));
-        let accept = self.mission.accept_radius_m;
-        let vmax = self.mission.speed_mps;
+        let want_corr = match self.phase {
+            Phase::Idle => [0.0; 3],
+            Phase::Takeoff => self.takeoff_step(rel, dt),
+            Phase::Leg(i) => self.leg_step(i, rel, dt),
+            Phase::Hold(i) => self.hold_step(i, rel, dt),
+            Phase::Landing => self.landing_step(rel, vel_ned_mps),
+            Phase::Done => self.done_step(rel),
+        };
+        self.slew(want_corr, prev_speed, prev_axis, dt);
+        self.hold_timer(rel);
+        self.output()
+    }
 
-        match self.phase {
-            Phase::Idle => {}
-            Phase::Takeoff => {
-                // Remaining climb, m (positive: below the takeoff altitude).
-                let h_rem = self.mission.takeoff_alt_m + rel[2];
-                if h_rem <= accept {
-                    self.takeoff_braking = true;
-                }
-                let horiz_err = {
-                    let e = sub(self.takeoff_point(), rel);
-                    norm([e[0], e[1], 0.0])
-                };
-                let waited = *self.hold_entered.get_or_insert(self.clock);
-                if self.takeoff_braking {
-                    self.speed = self.brake(h_rem, dt);
-                    let settled = horiz_err <= HOLD_SETTLE_M
-                        || self.clock - waited >= HOLD_SETTLE_TIMEOUT_S + 30.0;
-                    if self.speed == 0.0 && settled {
-                        let next = self.after(None);
-                        self.enter(next);
-                    }
-                } else {
-                    let target = vmax.min(self.stop_curve(h_rem));
-                    self.speed = self.accelerate(target, dt);
-                }
-                // Keep above the take-off point horizontally while climbing.
-                let c = station_keep(sub(self.takeoff_point(), rel));
-                want_corr = [c[0], c[1], 0.0];
-            }
-            Phase::Leg(i) => {
-                let (_, to) = self.leg_rel(i);
-                let (u, len) = self.leg_dir(i);
-                let to_go = sub(to, rel);
-                let along = dot(to_go, u);
-                // Reached: inside the acceptance sphere, or past the plane
-                // through the waypoint normal to the leg (overshoot while
-                // off track — never stall in front of the waypoint).
-                if norm(to_go) <= accept || along <= 0.0 || len <= 1e-6 {
-                    self.phase = Phase::Hold(i);
-                    self.hold_since = None;
-                    self.speed = self.brake(along, dt);
-                } else {
-                    let target = vmax.min(self.stop_curve(along));
-                    self.speed = self.accelerate(target, dt);
-                }
-            }
-            Phase::Hold(i) => {
-                let (_, to) = self.leg_rel(i);
-                let along = dot(sub(to, rel), self.axis);
-                self.speed = self.brake(along, dt);
-                if self.speed == 0.0 {
-                    want_corr = station_keep(sub(to, rel));
-                }
-            }
-            Phase::Landing => {
-                self.speed = 0.0;
-                let landed_now = -rel[2] <= LANDED_ALT_M && vel_ned_mps[2].abs() <= LANDED_VZ_MPS;
-                if landed_now {
-                    let since = *self.landed_since.get_or_insert(self.clock);
-                    if self.clock - since >= LANDED_CONFIRM_S {
-                        self.enter(Phase::Done);
-                        self.landed = true;
-                    }
-                } else {
-                    self.landed_since = None;
-                }
-            }
-            Phase::Done => {
-                self.speed = 0.0;
-                // Ended without landing: keep station on the last waypoint.
-                if !self.landed {
-                    if let Some(w) = self.mission.waypoints.last() {
-                        want_corr = station_keep(sub(w.ned_m(), rel));
-                    }
-                }
-            }
+    /// The time step since the last update, s (0 for the first or a non-finite `t_s`, clamped
+    /// to [0, `MAX_DT_S`]); advances the internal clock.
+    fn advance_clock(&mut self, t_s: f64) -> f32 {
+        let dt = match (self.last_t, t_s.is_finite()) {
+            (Some(last), true) => (t_s - last).clamp(0.0, MAX_DT_S),
+            _ => 0.0,
+        };
+        if t_s.is_finite() {
+            self.last_t = Some(t_s);
         }
+        self.clock += dt;
+        dt as f32
+    }
 
-        // The station-keeping term slews first (so a leg starts without a sideways leftover);
-        // the along-leg speed gets what the acceleration limit leaves, so the total command
-        // never changes faster than `accel_limit_mps2`.
+    /// Takeoff: climb to the takeoff altitude, brake, and go on once settled above home; the
+    /// horizontal station-keeping wanted (`rel`: position from home, NED m).
+    fn takeoff_step(&mut self, rel: [f32; 3], dt: f32) -> [f32; 3] {
+        // Remaining climb, m (positive: below the takeoff altitude).
+        let h_rem = self.mission.takeoff_alt_m + rel[2];
+        if h_rem <= self.mission.accept_radius_m {
+            self.takeoff_braking = true;
+        }
+        let horiz_err = {
+            let e = sub(self.takeoff_point(), rel);
+            norm([e[0], e[1], 0.0])
+        };
+        let waited = *self.hold_entered.get_or_insert(self.clock);
+        if self.takeoff_braking {
+            self.speed = self.brake(h_rem, dt);
+            let settled =
+                horiz_err <= HOLD_SETTLE_M || self.clock - waited >= HOLD_SETTLE_TIMEOUT_S + 30.0;
+            if self.speed == 0.0 && settled {
+                let next = self.after(None);
+                self.enter(next);
+            }
+        } else {
+            let target = self.mission.speed_mps.min(self.stop_curve(h_rem));
+            self.speed = self.accelerate(target, dt);
+        }
+        // Keep above the take-off point horizontally while climbing.
+        let c = station_keep(sub(self.takeoff_point(), rel));
+        [c[0], c[1], 0.0]
+    }
+
+    /// Leg `i`: along the leg at the profile's speed until the waypoint is reached.
+    fn leg_step(&mut self, i: usize, rel: [f32; 3], dt: f32) -> [f32; 3] {
+        let (_, to) = self.leg_rel(i);
+        let (u, len) = self.leg_dir(i);
+        let to_go = sub(to, rel);
+        let along = dot(to_go, u);
+        // Reached: inside the acceptance sphere, or past the plane
+        // through the waypoint normal to the leg (overshoot while
+        // off track — never stall in front of the waypoint).
+        if norm(to_go) <= self.mission.accept_radius_m || along <= 0.0 || len <= 1e-6 {
+            self.phase = Phase::Hold(i);
+            self.hold_since = None;
+            self.speed = self.brake(along, dt);
+        } else {
+            let target = self.mission.speed_mps.min(self.stop_curve(along));
+            self.speed = self.accelerate(target, dt);
+        }
+        [0.0; 3]
+    }
+
+    /// Hold at waypoint `i`: brake, then keep station on it.
+    fn hold_step(&mut self, i: usize, rel: [f32; 3], dt: f32) -> [f32; 3] {
+        let (_, to) = self.leg_rel(i);
+        let along = dot(sub(to, rel), self.axis);
+        self.speed = self.brake(along, dt);
+        if self.speed == 0.0 {
+            station_keep(sub(to, rel))
+        } else {
+            [0.0; 3]
+        }
+    }
+
+    /// Landing (the MCU descends): done once on the ground for `LANDED_CONFIRM_S`.
+    fn landing_step(&mut self, rel: [f32; 3], vel_ned_mps: [f32; 3]) -> [f32; 3] {
+        self.speed = 0.0;
+        let landed_now = -rel[2] <= LANDED_ALT_M && vel_ned_mps[2].abs() <= LANDED_VZ_MPS;
+        if landed_now {
+            let since = *self.landed_since.get_or_insert(self.clock);
+            if self.clock - since >= LANDED_CONFIRM_S {
+                self.enter(Phase::Done);
+                self.landed = true;
+            }
+        } else {
+            self.landed_since = None;
+        }
+        [0.0; 3]
+    }
+
+    /// Done: ended without landing, keep station on the last waypoint.
+    fn done_step(&mut self, rel: [f32; 3]) -> [f32; 3] {
+        self.speed = 0.0;
+        match self.mission.waypoints.last() {
+            Some(w) if !self.landed => station_keep(sub(w.ned_m(), rel)),
+            _ => [0.0; 3],
+        }
+    }
+
+    /// The station-keeping term slews first (so a leg starts without a sideways leftover);
+    /// the along-leg speed gets what the acceleration limit leaves, so the total command
+    /// never changes faster than `accel_limit_mps2`.
+    fn slew(&mut self, want_corr: [f32; 3], prev_speed: f32, prev_axis: [f32; 3], dt: f32) {
         let budget = self.a() * dt;
         let d = sub(want_corr, self.correction);
         let dn = norm(d);
@@ -441,29 +465,30 @@ impl WaypointFollower {
         } else {
             self.speed = self.speed.min(leg_budget);
         }
-        let _ = dt;
+    }
 
-        // Hold timer runs once the command has reached zero and the vehicle has settled on the
-        // waypoint (or has tried for HOLD_SETTLE_TIMEOUT_S), so the next leg starts on it.
-        if let Phase::Hold(i) = self.phase {
-            let (_, to) = self.leg_rel(i);
-            let settled = norm(sub(to, rel)) <= HOLD_SETTLE_M;
-            let entered = *self.hold_entered.get_or_insert(self.clock);
-            let timed_out =
-                self.clock - entered >= f64::from(self.mission.hold_s) + HOLD_SETTLE_TIMEOUT_S;
-            if self.speed == 0.0 && !settled && !timed_out {
-                // Drifted off the point: the hold restarts once back on it.
-                self.hold_since = None;
-            }
-            if self.speed == 0.0 && (settled || timed_out) {
-                let since = *self.hold_since.get_or_insert(self.clock);
-                if self.clock - since >= f64::from(self.mission.hold_s) {
-                    let next = self.after(Some(i));
-                    self.enter(next);
-                }
+    /// Hold timer runs once the command has reached zero and the vehicle has settled on the
+    /// waypoint (or has tried for HOLD_SETTLE_TIMEOUT_S), so the next leg starts on it.
+    fn hold_timer(&mut self, rel: [f32; 3]) {
+        let Phase::Hold(i) = self.phase else {
+            return;
+        };
+        let (_, to) = self.leg_rel(i);
+        let settled = norm(sub(to, rel)) <= HOLD_SETTLE_M;
+        let entered = *self.hold_entered.get_or_insert(self.clock);
+        let timed_out =
+            self.clock - entered >= f64::from(self.mission.hold_s) + HOLD_SETTLE_TIMEOUT_S;
+        if self.speed == 0.0 && !settled && !timed_out {
+            // Drifted off the point: the hold restarts once back on it.
+            self.hold_since = None;
+        }
+        if self.speed == 0.0 && (settled || timed_out) {
+            let since = *self.hold_since.get_or_insert(self.clock);
+            if self.clock - since >= f64::from(self.mission.hold_s) {
+                let next = self.after(Some(i));
+                self.enter(next);
             }
         }
-        self.output()
     }
 
     fn output(&mut self) -> Guidance {

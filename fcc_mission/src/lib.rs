@@ -5,6 +5,20 @@
 //! Pure logic: `std` only, no I/O besides parsing a YAML string. A ROS 2 node
 //! or the simulator calls it in-process.
 //!
+//! # Layers and modules
+//! * The mission and its guidance (the simulator uses these too): [`mission`] (the YAML
+//!   file, validation), [`follower`] (the waypoint follower: phases, speed profile, velocity
+//!   command).
+//! * The mission node's sequencing, time passed in, no ROS types (the `fcc-mission` binary,
+//!   feature `ros`, only wires them to topics): [`run`] (one run, cycle by cycle: what to send
+//!   and log), built from [`arming`] (arm command re-sends and timeout), [`pilot_pause`]
+//!   (pause and resume around an R/C pilot override), [`progress`] (phase names, distance to
+//!   go, cross-track on the legs), [`ending`] (hover in HOLD, then land; the MCU's modes) and
+//!   [`status_report`] (the `mission/status` JSON and its rate).
+//! * The launcher (`fcc-launch`, feature `ros`, does the process I/O): [`launch`] (its config,
+//!   `${NAME}` variables, the supervision rules) and [`track`] (the cross-track report of a
+//!   full-stack flight from the simulator's CSV).
+//!
 //! # Inputs
 //! * A [`Mission`] (YAML via [`from_yaml_str`], validated by
 //!   [`Mission::validate`]): takeoff altitude, speed, acceleration limit,
@@ -47,11 +61,18 @@
 //!
 //! Not yet supported: lat/lon waypoints (rejected as unknown fields).
 
+pub mod arming;
 pub mod ending;
 pub mod follower;
+pub mod launch;
 pub mod mission;
+pub mod pilot_pause;
+pub mod progress;
+pub mod run;
+pub mod status_report;
 
 pub use ending::{EndEvent, EndPhase, EndSequence, EndStep, McuMode, ModeCommand};
 pub use follower::{Guidance, LegInfo, Phase, Request, WaypointFollower};
 pub use mission::{from_yaml_str, Mission, MissionError, Waypoint};
+pub use run::{MissionRun, RunConfig};
 pub mod track;

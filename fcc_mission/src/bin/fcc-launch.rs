@@ -41,9 +41,9 @@
 //! temporary directory, removed at the end), `vars`, command-line `name:=value`, and the
 //! environment. `env:` per process adds environment variables.
 
+use fcc_mission::launch::{expand, next_after_exit, Config, Next, Proc, Report, Reports, Slot};
 use nix::sys::signal::{self, SigHandler, Signal};
 use nix::unistd::Pid;
-use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
 use std::os::unix::process::CommandExt;
@@ -51,79 +51,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-struct Config {
-    #[serde(default)]
-    vars: BTreeMap<String, String>,
-    #[serde(default = "default_stop")]
-    stop_timeout_s: f64,
-    processes: Vec<Proc>,
-    #[serde(default)]
-    report: Option<Reports>,
-}
-
-/// `report:` is one entry or a list of them.
-#[derive(Deserialize, Debug)]
-#[serde(untagged)]
-enum Reports {
-    One(Report),
-    Many(Vec<Report>),
-}
-
-impl Reports {
-    fn list(&self) -> Vec<&Report> {
-        match self {
-            Reports::One(r) => vec![r],
-            Reports::Many(v) => v.iter().collect(),
-        }
-    }
-}
-
-fn default_stop() -> f64 {
-    10.0
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct Proc {
-    name: String,
-    cmd: Vec<String>,
-    #[serde(default)]
-    env: BTreeMap<String, String>,
-    /// Wait until this path exists before starting the next process.
-    #[serde(default)]
-    wait_for: Option<String>,
-    #[serde(default = "default_wait")]
-    wait_timeout_s: f64,
-    /// The launcher exits when this process exits, with its code (with several main
-    /// processes: when all have exited, with the worst code).
-    #[serde(default)]
-    main: bool,
-    /// Processes of a group (e.g. one vehicle) are stopped when all the group's main processes
-    /// have exited.
-    #[serde(default)]
-    group: Option<String>,
-    /// Wait this long after starting it before starting the next one.
-    #[serde(default)]
-    delay_s: f64,
-}
-
-fn default_wait() -> f64 {
-    15.0
-}
-
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-struct Report {
-    csv: String,
-    mission: String,
-    #[serde(default)]
-    append_to: Option<String>,
-    #[serde(default)]
-    title: Option<String>,
-}
 
 static STOP: AtomicBool = AtomicBool::new(false);
 
@@ -134,41 +61,6 @@ extern "C" fn on_signal(_: nix::libc::c_int) {
 fn die(msg: String) -> ! {
     eprintln!("fcc-launch: {msg}");
     std::process::exit(2)
-}
-
-/// Expand `${NAME}` from `vars`, then the environment; values may use other variables.
-fn expand(s: &str, vars: &BTreeMap<String, String>) -> Result<String, String> {
-    let mut cur = s.to_string();
-    for _ in 0..8 {
-        let next = expand_once(&cur, vars)?;
-        if next == cur {
-            return Ok(next);
-        }
-        cur = next;
-    }
-    Err(format!("variables nest too deeply in '{s}'"))
-}
-
-fn expand_once(s: &str, vars: &BTreeMap<String, String>) -> Result<String, String> {
-    let mut out = String::new();
-    let mut rest = s;
-    while let Some(i) = rest.find("${") {
-        out.push_str(&rest[..i]);
-        let j = rest[i..]
-            .find('}')
-            .ok_or(format!("unclosed ${{ in '{s}'"))?
-            + i;
-        let name = &rest[i + 2..j];
-        let v = vars
-            .get(name)
-            .cloned()
-            .or_else(|| std::env::var(name).ok())
-            .ok_or(format!("unknown variable ${{{name}}} in '{s}'"))?;
-        out.push_str(&v);
-        rest = &rest[j + 1..];
-    }
-    out.push_str(rest);
-    Ok(out)
 }
 
 fn pipe_lines(name: String, r: impl std::io::Read + Send + 'static, err: bool) {
@@ -202,6 +94,24 @@ impl Running {
         self.status = s;
         self.cpu_s = Some(cpu.delta());
     }
+
+    /// Asks it to stop.
+    fn sigterm(&self) {
+        println!("fcc-launch: stopping {} (SIGTERM)", self.name);
+        let _ = signal::kill(Pid::from_raw(self.child.id() as i32), Signal::SIGTERM);
+    }
+
+    /// It did not stop within `timeout` of the SIGTERM: SIGKILL, and reap it.
+    fn kill_after(&mut self, timeout: Duration, cpu: &mut CpuMeter) {
+        eprintln!(
+            "fcc-launch: {} did not stop in {:.0} s; SIGKILL",
+            self.name,
+            timeout.as_secs_f64()
+        );
+        let _ = self.child.kill();
+        let s = self.child.wait().ok();
+        self.reaped(s, cpu);
+    }
 }
 
 /// CPU time of the reaped processes: `getrusage(RUSAGE_CHILDREN)` grows by each child's
@@ -213,11 +123,7 @@ struct CpuMeter {
 
 impl CpuMeter {
     fn children() -> (f64, f64) {
-        use nix::sys::resource::{getrusage, UsageWho};
-        let tv = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
-        getrusage(UsageWho::RUSAGE_CHILDREN)
-            .map(|u| (tv(u.user_time()), tv(u.system_time())))
-            .unwrap_or((0.0, 0.0))
+        rusage_s(nix::sys::resource::UsageWho::RUSAGE_CHILDREN)
     }
     fn new() -> Self {
         CpuMeter {
@@ -232,74 +138,12 @@ impl CpuMeter {
     }
 }
 
-/// A started process as the supervision rules see it.
-#[derive(Clone, Debug, PartialEq)]
-struct Slot {
-    main: bool,
-    group: Option<String>,
-    /// Exit code once exited.
-    code: Option<i32>,
-    /// The launcher is stopping it (its group is done).
-    stopping: bool,
-}
-
-/// What to do after process `i` of `slots` exited (its `code` is already set).
-#[derive(Debug, PartialEq)]
-enum Next {
-    /// Keep supervising.
-    Continue,
-    /// Stop these still-running processes (a group whose main processes all exited).
-    Stop(Vec<usize>),
-    /// Every main process has exited: stop everything and exit with this code (the worst).
-    Done(i32),
-    /// A non-main process exited on its own while it was still needed: stop everything, exit 1.
-    Early,
-}
-
-fn next_after_exit(slots: &[Slot], i: usize) -> Next {
-    let s = &slots[i];
-    if s.stopping {
-        return Next::Continue;
-    }
-    let mains_running = |g: Option<&String>| {
-        slots
-            .iter()
-            .any(|x| x.main && x.code.is_none() && (g.is_none() || x.group.as_ref() == g))
-    };
-    if !s.main {
-        // Without a group (or in a group without a main process), a process is needed while
-        // any main process runs.
-        let g = s
-            .group
-            .as_ref()
-            .filter(|g| slots.iter().any(|x| x.main && x.group.as_ref() == Some(*g)));
-        return if mains_running(g) {
-            Next::Early
-        } else {
-            Next::Continue
-        };
-    }
-    if !mains_running(None) {
-        let worst = slots
-            .iter()
-            .filter(|x| x.main)
-            .filter_map(|x| x.code)
-            .max()
-            .unwrap_or(1);
-        return Next::Done(worst);
-    }
-    match &s.group {
-        Some(g) if !mains_running(Some(g)) => Next::Stop(
-            (0..slots.len())
-                .rev()
-                .filter(|&k| {
-                    let x = &slots[k];
-                    x.group.as_ref() == Some(g) && x.code.is_none() && !x.stopping
-                })
-                .collect(),
-        ),
-        _ => Next::Continue,
-    }
+/// CPU time (user, system) of `who`, s (0 when unavailable).
+fn rusage_s(who: nix::sys::resource::UsageWho) -> (f64, f64) {
+    let tv = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
+    nix::sys::resource::getrusage(who)
+        .map(|u| (tv(u.user_time()), tv(u.system_time())))
+        .unwrap_or((0.0, 0.0))
 }
 
 fn code_of(s: &ExitStatus) -> i32 {
@@ -315,8 +159,7 @@ fn stop_all(procs: &mut [Running], timeout: Duration, cpu: &mut CpuMeter) {
                 p.reaped(Some(s), cpu);
                 continue;
             }
-            println!("fcc-launch: stopping {} (SIGTERM)", p.name);
-            let _ = signal::kill(Pid::from_raw(p.child.id() as i32), Signal::SIGTERM);
+            p.sigterm();
             let t0 = Instant::now();
             loop {
                 if let Ok(Some(s)) = p.child.try_wait() {
@@ -324,14 +167,7 @@ fn stop_all(procs: &mut [Running], timeout: Duration, cpu: &mut CpuMeter) {
                     break;
                 }
                 if t0.elapsed() > timeout {
-                    eprintln!(
-                        "fcc-launch: {} did not stop in {:.0} s; SIGKILL",
-                        p.name,
-                        timeout.as_secs_f64()
-                    );
-                    let _ = p.child.kill();
-                    let s = p.child.wait().ok();
-                    p.reaped(s, cpu);
+                    p.kill_after(timeout, cpu);
                     break;
                 }
                 std::thread::sleep(Duration::from_millis(20));
@@ -346,56 +182,97 @@ fn main() {
         println!("usage: fcc-launch CONFIG.yaml [name:=value ...]\n(see launch_configs/square_flight.yaml)");
         std::process::exit(if args.is_empty() { 2 } else { 0 });
     }
-    let cfg_path = PathBuf::from(&args[0]);
-    let text = std::fs::read_to_string(&cfg_path)
-        .unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
-    let cfg: Config =
-        serde_yaml::from_str(&text).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
-    let secs = |field: String, v: f64| {
-        if !(v.is_finite() && (0.0..=86_400.0).contains(&v)) {
-            die(format!(
-                "{}: {field}: must be a number of seconds in [0, 86400], got {v}",
-                cfg_path.display()
-            ));
+    let launch = Launch::load(&args);
+    install_signal_handlers();
+    let stop_timeout = Duration::from_secs_f64(launch.cfg.stop_timeout_s);
+    let mut running: Vec<Running> = Vec::new();
+    let mut cpu = CpuMeter::new();
+    let t_start = Instant::now();
+    let mut code = match start_all(&launch, &mut running, &mut cpu) {
+        Err(e) => {
+            eprintln!("fcc-launch: {e}");
+            1
         }
+        Ok(()) => supervise(&mut running, stop_timeout, &mut cpu, t_start),
     };
-    secs("stop_timeout_s".into(), cfg.stop_timeout_s);
-    for (i, p) in cfg.processes.iter().enumerate() {
-        secs(format!("processes[{i}].delay_s"), p.delay_s);
-        secs(format!("processes[{i}].wait_timeout_s"), p.wait_timeout_s);
+    stop_all(&mut running, stop_timeout, &mut cpu);
+    // Let the output threads flush the last lines.
+    std::thread::sleep(Duration::from_millis(100));
+    print_cpu(&running, t_start.elapsed().as_secs_f64());
+    let _ = std::fs::remove_dir_all(&launch.run_dir);
+    if code == 0 {
+        code = write_reports(&launch, t_start);
     }
-    let mut vars = cfg.vars.clone();
-    for a in &args[1..] {
-        let (k, v) = a
-            .split_once(":=")
-            .unwrap_or_else(|| die(format!("argument '{a}': expected name:=value")));
-        vars.insert(k.to_string(), v.to_string());
-    }
-    let exe_dir = std::env::current_exe()
-        .ok()
-        .and_then(|p| p.parent().map(Path::to_path_buf))
-        .unwrap_or_else(|| PathBuf::from("."));
-    let cfg_dir = cfg_path
-        .canonicalize()
-        .ok()
-        .and_then(|p| p.parent().map(Path::to_path_buf))
-        .unwrap_or_else(|| PathBuf::from("."));
-    let run_dir = std::env::temp_dir().join(format!("fcc-launch.{}", std::process::id()));
-    std::fs::create_dir_all(&run_dir)
-        .unwrap_or_else(|e| die(format!("{}: {e}", run_dir.display())));
-    vars.entry("BIN".into())
-        .or_insert_with(|| exe_dir.display().to_string());
-    vars.insert("CONFIG_DIR".into(), cfg_dir.display().to_string());
-    vars.insert("RUN".into(), run_dir.display().to_string());
-    let x =
-        |s: &str| expand(s, &vars).unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
-    if !cfg.processes.iter().any(|p| p.main) {
-        die(format!(
-            "{}: at least one process must have main: true",
-            cfg_path.display()
-        ));
+    let _ = std::io::stdout().flush();
+    std::process::exit(code)
+}
+
+/// The config with its variables, as given on the command line.
+struct Launch {
+    cfg: Config,
+    cfg_path: PathBuf,
+    vars: BTreeMap<String, String>,
+    /// `${RUN}`: a fresh temporary directory, removed at the end.
+    run_dir: PathBuf,
+}
+
+impl Launch {
+    /// Reads and checks the config `args[0]`, with the `name:=value` arguments that follow;
+    /// exits (code 2) on bad input.
+    fn load(args: &[String]) -> Launch {
+        let cfg_path = PathBuf::from(&args[0]);
+        let cfg = read_config(&cfg_path);
+        let mut vars = cfg.vars.clone();
+        for a in &args[1..] {
+            let (k, v) = a
+                .split_once(":=")
+                .unwrap_or_else(|| die(format!("argument '{a}': expected name:=value")));
+            vars.insert(k.to_string(), v.to_string());
+        }
+        let exe_dir = std::env::current_exe()
+            .ok()
+            .and_then(|p| p.parent().map(Path::to_path_buf))
+            .unwrap_or_else(|| PathBuf::from("."));
+        let cfg_dir = cfg_path
+            .canonicalize()
+            .ok()
+            .and_then(|p| p.parent().map(Path::to_path_buf))
+            .unwrap_or_else(|| PathBuf::from("."));
+        let run_dir = std::env::temp_dir().join(format!("fcc-launch.{}", std::process::id()));
+        std::fs::create_dir_all(&run_dir)
+            .unwrap_or_else(|e| die(format!("{}: {e}", run_dir.display())));
+        vars.entry("BIN".into())
+            .or_insert_with(|| exe_dir.display().to_string());
+        vars.insert("CONFIG_DIR".into(), cfg_dir.display().to_string());
+        vars.insert("RUN".into(), run_dir.display().to_string());
+        Launch {
+            cfg,
+            cfg_path,
+            vars,
+            run_dir,
+        }
     }
 
+    /// `s` with its variables expanded; exits (code 2) on an unknown variable.
+    fn x(&self, s: &str) -> String {
+        let env = |name: &str| std::env::var(name).ok();
+        expand(s, &self.vars, &env)
+            .unwrap_or_else(|e| die(format!("{}: {e}", self.cfg_path.display())))
+    }
+}
+
+/// Parses and checks the config file; exits (code 2) on bad input.
+fn read_config(cfg_path: &Path) -> Config {
+    let text = std::fs::read_to_string(cfg_path)
+        .unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
+    let cfg = Config::from_yaml_str(&text)
+        .unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
+    cfg.check()
+        .unwrap_or_else(|e| die(format!("{}: {e}", cfg_path.display())));
+    cfg
+}
+
+fn install_signal_handlers() {
     let handler = SigHandler::Handler(on_signal);
     for s in [Signal::SIGINT, Signal::SIGTERM] {
         // SAFETY: the handler only stores to an atomic.
@@ -403,38 +280,18 @@ fn main() {
             let _ = signal::signal(s, handler);
         }
     }
+}
 
-    let stop_timeout = Duration::from_secs_f64(cfg.stop_timeout_s);
-    let mut running: Vec<Running> = Vec::new();
-    let mut cpu = CpuMeter::new();
-    let t_start = Instant::now();
-    let mut fail_early: Option<String> = None;
-    'start: for p in &cfg.processes {
-        let argv: Vec<String> = p.cmd.iter().map(|s| x(s)).collect();
-        if argv.is_empty() {
-            die(format!("process {}: empty cmd", p.name));
-        }
-        println!("fcc-launch: starting {}: {}", p.name, argv.join(" "));
-        let mut c = Command::new(&argv[0]);
-        c.args(&argv[1..])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            // Own process group: a terminal Ctrl-C reaches only the launcher, which stops the
-            // processes in order.
-            .process_group(0);
-        for (k, v) in &p.env {
-            c.env(k, x(v));
-        }
-        let mut child = match c.spawn() {
-            Ok(ch) => ch,
-            Err(e) => {
-                fail_early = Some(format!("cannot start {} ({}): {e}", p.name, argv[0]));
-                break 'start;
-            }
-        };
-        pipe_lines(p.name.clone(), child.stdout.take().unwrap(), false);
-        pipe_lines(p.name.clone(), child.stderr.take().unwrap(), true);
+/// Starts the processes in order (each after the previous one's `wait_for` and `delay_s`);
+/// an error when one cannot start, exits before its `wait_for` path appears, or the path does
+/// not appear in time (or the launcher is stopped meanwhile).
+fn start_all(
+    launch: &Launch,
+    running: &mut Vec<Running>,
+    cpu: &mut CpuMeter,
+) -> Result<(), String> {
+    for p in &launch.cfg.processes {
+        let child = spawn(launch, p)?;
         running.push(Running {
             name: p.name.clone(),
             child,
@@ -445,158 +302,179 @@ fn main() {
             cpu_s: None,
         });
         if let Some(w) = &p.wait_for {
-            let path = PathBuf::from(x(w));
-            let t0 = Instant::now();
-            while !path.exists() {
-                let r = running.last_mut().unwrap();
-                if let Ok(Some(s)) = r.child.try_wait() {
-                    r.reaped(Some(s), &mut cpu);
-                    fail_early = Some(format!(
-                        "{} exited ({}) before {} appeared",
-                        p.name,
-                        code_of(&s),
-                        path.display()
-                    ));
-                    break 'start;
-                }
-                if t0.elapsed().as_secs_f64() > p.wait_timeout_s || STOP.load(Ordering::SeqCst) {
-                    fail_early = Some(format!(
-                        "{} did not appear within {:.0} s",
-                        path.display(),
-                        p.wait_timeout_s
-                    ));
-                    break 'start;
-                }
-                std::thread::sleep(Duration::from_millis(20));
-            }
+            let r = running.last_mut().expect("just pushed");
+            wait_for_path(r, &PathBuf::from(launch.x(w)), p.wait_timeout_s, cpu)?;
         }
         if p.delay_s > 0.0 {
             std::thread::sleep(Duration::from_secs_f64(p.delay_s));
         }
     }
+    Ok(())
+}
 
-    let mut code = 1;
-    if let Some(e) = fail_early {
-        eprintln!("fcc-launch: {e}");
-    } else {
-        loop {
-            if STOP.load(Ordering::SeqCst) {
-                eprintln!("fcc-launch: interrupted; stopping everything");
-                code = 130;
-                break;
-            }
-            // Processes of a finished group that ignore SIGTERM: SIGKILL after the timeout.
-            for r in running.iter_mut() {
-                if let (None, Some(t0)) = (r.status, r.stopping_since) {
-                    if t0.elapsed() > stop_timeout {
-                        eprintln!(
-                            "fcc-launch: {} did not stop in {:.0} s; SIGKILL",
-                            r.name,
-                            stop_timeout.as_secs_f64()
-                        );
-                        let _ = r.child.kill();
-                        let s = r.child.wait().ok();
-                        r.reaped(s, &mut cpu);
-                    }
+/// Starts one process, its output piped through `[name]` prefixes.
+fn spawn(launch: &Launch, p: &Proc) -> Result<Child, String> {
+    let argv: Vec<String> = p.cmd.iter().map(|s| launch.x(s)).collect();
+    if argv.is_empty() {
+        die(format!("process {}: empty cmd", p.name));
+    }
+    println!("fcc-launch: starting {}: {}", p.name, argv.join(" "));
+    let mut c = Command::new(&argv[0]);
+    c.args(&argv[1..])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        // Own process group: a terminal Ctrl-C reaches only the launcher, which stops the
+        // processes in order.
+        .process_group(0);
+    for (k, v) in &p.env {
+        c.env(k, launch.x(v));
+    }
+    let mut child = c
+        .spawn()
+        .map_err(|e| format!("cannot start {} ({}): {e}", p.name, argv[0]))?;
+    pipe_lines(p.name.clone(), child.stdout.take().unwrap(), false);
+    pipe_lines(p.name.clone(), child.stderr.take().unwrap(), true);
+    Ok(child)
+}
+
+/// Waits until `path` exists while `r` runs.
+fn wait_for_path(
+    r: &mut Running,
+    path: &Path,
+    timeout_s: f64,
+    cpu: &mut CpuMeter,
+) -> Result<(), String> {
+    let t0 = Instant::now();
+    while !path.exists() {
+        if let Ok(Some(s)) = r.child.try_wait() {
+            r.reaped(Some(s), cpu);
+            return Err(format!(
+                "{} exited ({}) before {} appeared",
+                r.name,
+                code_of(&s),
+                path.display()
+            ));
+        }
+        if t0.elapsed().as_secs_f64() > timeout_s || STOP.load(Ordering::SeqCst) {
+            return Err(format!(
+                "{} did not appear within {:.0} s",
+                path.display(),
+                timeout_s
+            ));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    Ok(())
+}
+
+/// Supervises the started processes until the run is over (see [`next_after_exit`]); the exit
+/// code (130 when the launcher is stopped).
+fn supervise(
+    running: &mut [Running],
+    stop_timeout: Duration,
+    cpu: &mut CpuMeter,
+    t_start: Instant,
+) -> i32 {
+    loop {
+        if STOP.load(Ordering::SeqCst) {
+            eprintln!("fcc-launch: interrupted; stopping everything");
+            return 130;
+        }
+        // Processes of a finished group that ignore SIGTERM: SIGKILL after the timeout.
+        for r in running.iter_mut() {
+            if let (None, Some(t0)) = (r.status, r.stopping_since) {
+                if t0.elapsed() > stop_timeout {
+                    r.kill_after(stop_timeout, cpu);
                 }
             }
-            let mut ended = None;
-            for (i, r) in running.iter_mut().enumerate() {
-                if r.status.is_none() {
-                    if let Ok(Some(s)) = r.child.try_wait() {
-                        r.reaped(Some(s), &mut cpu);
-                        ended = Some(i);
-                        break;
+        }
+        let ended = running.iter_mut().position(|r| {
+            r.status.is_none()
+                && match r.child.try_wait() {
+                    Ok(Some(s)) => {
+                        r.reaped(Some(s), cpu);
+                        true
                     }
+                    _ => false,
+                }
+        });
+        match ended {
+            Some(i) => {
+                if let Some(code) = on_exit(running, i, t_start.elapsed().as_secs_f64()) {
+                    return code;
                 }
             }
-            if let Some(i) = ended {
-                let slots: Vec<Slot> = running
-                    .iter()
-                    .map(|r| Slot {
-                        main: r.main,
-                        group: r.group.clone(),
-                        code: r.status.as_ref().map(code_of),
-                        stopping: r.stopping_since.is_some(),
-                    })
-                    .collect();
-                let c = code_of(&running[i].status.unwrap());
-                let el = t_start.elapsed().as_secs_f64();
-                match next_after_exit(&slots, i) {
-                    Next::Continue if running[i].stopping_since.is_some() => {}
-                    Next::Continue => println!(
-                        "fcc-launch: {} exited with code {c} after {el:.1} s",
-                        running[i].name
-                    ),
-                    Next::Stop(list) => {
-                        println!(
-                            "fcc-launch: {} exited with code {c} after {el:.1} s; stopping group {}",
-                            running[i].name,
-                            running[i].group.as_deref().unwrap_or("")
-                        );
-                        for k in list {
-                            let r = &mut running[k];
-                            println!("fcc-launch: stopping {} (SIGTERM)", r.name);
-                            let _ =
-                                signal::kill(Pid::from_raw(r.child.id() as i32), Signal::SIGTERM);
-                            r.stopping_since = Some(Instant::now());
-                        }
-                    }
-                    Next::Done(worst) => {
-                        code = worst;
-                        let mains: Vec<String> = running
-                            .iter()
-                            .filter(|r| r.main)
-                            .map(|r| {
-                                format!(
-                                    "{} {}",
-                                    r.name,
-                                    r.status.as_ref().map(code_of).unwrap_or(-1)
-                                )
-                            })
-                            .collect();
-                        if mains.len() == 1 {
-                            println!(
-                                "fcc-launch: {} exited with code {code} after {el:.1} s; stopping the others",
-                                running[i].name
-                            );
-                        } else {
-                            println!(
-                                "fcc-launch: all {} main processes exited after {el:.1} s ({}); exit code {code}; stopping the others",
-                                mains.len(),
-                                mains.join(", ")
-                            );
-                        }
-                        break;
-                    }
-                    Next::Early => {
-                        eprintln!(
-                            "fcc-launch: {} exited early with code {c}; stopping everything",
-                            running[i].name
-                        );
-                        code = 1;
-                        break;
-                    }
-                }
-                continue;
-            }
-            std::thread::sleep(Duration::from_millis(50));
+            None => std::thread::sleep(Duration::from_millis(50)),
         }
     }
-    stop_all(&mut running, stop_timeout, &mut cpu);
-    // Let the output threads flush the last lines.
-    std::thread::sleep(Duration::from_millis(100));
-    // CPU use of the run: each process, the launcher itself, the sum (% of one core).
-    let wall_s = t_start.elapsed().as_secs_f64();
-    let own = {
-        use nix::sys::resource::{getrusage, UsageWho};
-        let tv = |t: nix::sys::time::TimeVal| t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6;
-        getrusage(UsageWho::RUSAGE_SELF)
-            .map(|u| (tv(u.user_time()), tv(u.system_time())))
-            .unwrap_or((0.0, 0.0))
-    };
+}
+
+/// Process `i` has exited (after `el` s): say so and apply the supervision rules; the exit code
+/// when the run is over.
+fn on_exit(running: &mut [Running], i: usize, el: f64) -> Option<i32> {
+    let slots: Vec<Slot> = running
+        .iter()
+        .map(|r| Slot {
+            main: r.main,
+            group: r.group.clone(),
+            code: r.status.as_ref().map(code_of),
+            stopping: r.stopping_since.is_some(),
+        })
+        .collect();
+    let c = code_of(&running[i].status.unwrap());
+    let name = running[i].name.clone();
+    match next_after_exit(&slots, i) {
+        Next::Continue if running[i].stopping_since.is_some() => {}
+        Next::Continue => println!("fcc-launch: {name} exited with code {c} after {el:.1} s"),
+        Next::Stop(list) => {
+            println!(
+                "fcc-launch: {name} exited with code {c} after {el:.1} s; stopping group {}",
+                running[i].group.as_deref().unwrap_or("")
+            );
+            for k in list {
+                running[k].sigterm();
+                running[k].stopping_since = Some(Instant::now());
+            }
+        }
+        Next::Done(code) => {
+            let mains: Vec<String> = running
+                .iter()
+                .filter(|r| r.main)
+                .map(|r| {
+                    format!(
+                        "{} {}",
+                        r.name,
+                        r.status.as_ref().map(code_of).unwrap_or(-1)
+                    )
+                })
+                .collect();
+            if mains.len() == 1 {
+                println!(
+                    "fcc-launch: {name} exited with code {code} after {el:.1} s; stopping the others"
+                );
+            } else {
+                println!(
+                    "fcc-launch: all {} main processes exited after {el:.1} s ({}); exit code {code}; stopping the others",
+                    mains.len(),
+                    mains.join(", ")
+                );
+            }
+            return Some(code);
+        }
+        Next::Early => {
+            eprintln!("fcc-launch: {name} exited early with code {c}; stopping everything");
+            return Some(1);
+        }
+    }
+    None
+}
+
+/// CPU use of the run: each process, the launcher itself, the sum (% of one core).
+fn print_cpu(running: &[Running], wall_s: f64) {
+    let own = rusage_s(nix::sys::resource::UsageWho::RUSAGE_SELF);
     let mut total = own.0 + own.1;
-    for r in &running {
+    for r in running {
         if let Some((u, s)) = r.cpu_s {
             total += u + s;
             println!(
@@ -612,144 +490,49 @@ fn main() {
         own.1,
         100.0 * total / wall_s.max(1e-9)
     );
-    let _ = std::fs::remove_dir_all(&run_dir);
+}
 
-    if code == 0 {
-        for r in cfg.report.iter().flat_map(Reports::list) {
-            let (csv, mission) = (x(&r.csv), x(&r.mission));
-            let rep = std::fs::read_to_string(&csv)
-                .map_err(|e| format!("{csv}: {e}"))
-                .and_then(|c| {
-                    let m =
-                        std::fs::read_to_string(&mission).map_err(|e| format!("{mission}: {e}"))?;
-                    let m =
-                        fcc_mission::from_yaml_str(&m).map_err(|e| format!("{mission}: {e}"))?;
-                    fcc_mission::track::report(&c, &m)
-                });
-            match rep {
-                Ok(rep) => {
-                    let title = r
-                        .title
-                        .clone()
-                        .map(|t| x(&t))
-                        .unwrap_or_else(|| "full-stack flight".into());
-                    let text = format!(
-                        "== {title} ({:.1} s wall)\n{rep}\n",
-                        t_start.elapsed().as_secs_f64()
-                    );
-                    print!("{text}");
-                    if let Some(a) = &r.append_to {
-                        let a = x(a);
-                        let res = std::fs::OpenOptions::new()
-                            .create(true)
-                            .append(true)
-                            .open(&a)
-                            .and_then(|mut f| f.write_all(text.as_bytes()));
-                        if let Err(e) = res {
-                            eprintln!("fcc-launch: {a}: {e}");
-                            code = 1;
-                        }
-                    }
-                }
-                Err(e) => {
-                    eprintln!("fcc-launch: report: {e}");
-                    code = 1;
-                }
+/// The `report:` entries (after a run whose main processes all exited with 0); the exit code:
+/// 1 when a report could not be made or appended.
+fn write_reports(launch: &Launch, t_start: Instant) -> i32 {
+    let mut code = 0;
+    for r in launch.cfg.report.iter().flat_map(Reports::list) {
+        let text = match report_text(launch, r, t_start.elapsed().as_secs_f64()) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("fcc-launch: report: {e}");
+                code = 1;
+                continue;
+            }
+        };
+        print!("{text}");
+        if let Some(a) = &r.append_to {
+            let a = launch.x(a);
+            let res = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&a)
+                .and_then(|mut f| f.write_all(text.as_bytes()));
+            if let Err(e) = res {
+                eprintln!("fcc-launch: {a}: {e}");
+                code = 1;
             }
         }
     }
-    let _ = std::io::stdout().flush();
-    std::process::exit(code)
+    code
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn slot(main: bool, group: Option<&str>) -> Slot {
-        Slot {
-            main,
-            group: group.map(str::to_string),
-            code: None,
-            stopping: false,
-        }
-    }
-
-    #[test]
-    fn one_main_as_before() {
-        // sitl, bridge, mission (main): the mission's exit ends the run with its code.
-        let mut s = vec![slot(false, None), slot(false, None), slot(true, None)];
-        s[2].code = Some(3);
-        assert_eq!(next_after_exit(&s, 2), Next::Done(3));
-        // Another process first: early exit.
-        let mut s = vec![slot(false, None), slot(false, None), slot(true, None)];
-        s[0].code = Some(0);
-        assert_eq!(next_after_exit(&s, 0), Next::Early);
-    }
-
-    #[test]
-    fn several_mains_with_groups() {
-        // Two vehicles: [sitl, bridge, mission] × 2.
-        let g = |n| Some(if n == 1 { "uav1" } else { "uav2" });
-        let mut s = vec![
-            slot(false, g(1)),
-            slot(false, g(1)),
-            slot(true, g(1)),
-            slot(false, g(2)),
-            slot(false, g(2)),
-            slot(true, g(2)),
-        ];
-        // uav1's mission ends: its bridge and sitl are stopped (reverse order), uav2 flies on.
-        s[2].code = Some(0);
-        assert_eq!(next_after_exit(&s, 2), Next::Stop(vec![1, 0]));
-        s[0].stopping = true;
-        s[1].stopping = true;
-        s[0].code = Some(0);
-        assert_eq!(next_after_exit(&s, 0), Next::Continue);
-        // uav2's bridge dying while its mission runs is an early exit.
-        let mut e = s.clone();
-        e[4].code = Some(1);
-        assert_eq!(next_after_exit(&e, 4), Next::Early);
-        // uav2's mission fails: all mains done, the worst code wins.
-        s[5].code = Some(1);
-        assert_eq!(next_after_exit(&s, 5), Next::Done(1));
-        s[5].code = Some(0);
-        assert_eq!(next_after_exit(&s, 5), Next::Done(0));
-    }
-
-    #[test]
-    fn several_mains_without_groups_wait_for_all() {
-        let mut s = vec![slot(false, None), slot(true, None), slot(true, None)];
-        s[1].code = Some(2);
-        assert_eq!(next_after_exit(&s, 1), Next::Continue);
-        s[2].code = Some(0);
-        assert_eq!(next_after_exit(&s, 2), Next::Done(2));
-        // A shared process that exits while a main runs: early.
-        let mut s = vec![slot(false, None), slot(true, None), slot(true, None)];
-        s[1].code = Some(0);
-        s[0].code = Some(0);
-        assert_eq!(next_after_exit(&s, 0), Next::Early);
-        // Same for a process in a group that has no main process.
-        let mut s = vec![slot(false, Some("tools")), slot(true, Some("uav1"))];
-        s[0].code = Some(0);
-        assert_eq!(next_after_exit(&s, 0), Next::Early);
-    }
-
-    #[test]
-    fn report_one_or_many() {
-        let one: Config = serde_yaml::from_str(
-            "processes: [{name: a, cmd: [x], main: true}]\nreport: {csv: a.csv, mission: m.yaml}\n",
-        )
-        .unwrap();
-        assert_eq!(one.report.unwrap().list().len(), 1);
-        let many: Config = serde_yaml::from_str(
-            "processes: [{name: a, cmd: [x], main: true, group: g}]\nreport:\n  - {csv: a.csv, mission: m.yaml}\n  - {csv: b.csv, mission: m.yaml}\n",
-        )
-        .unwrap();
-        assert_eq!(many.report.unwrap().list().len(), 2);
-        assert!(serde_yaml::from_str::<Config>(
-            "processes: [{name: a, cmd: [x], main: true}]\nreport: {csv: a.csv, bogus: 1}\n"
-        )
-        .is_err());
-    }
+/// One report: the cross-track figures of the flight in `csv` against `mission`.
+fn report_text(launch: &Launch, r: &Report, wall_s: f64) -> Result<String, String> {
+    let (csv, mission) = (launch.x(&r.csv), launch.x(&r.mission));
+    let c = std::fs::read_to_string(&csv).map_err(|e| format!("{csv}: {e}"))?;
+    let m = std::fs::read_to_string(&mission).map_err(|e| format!("{mission}: {e}"))?;
+    let m = fcc_mission::from_yaml_str(&m).map_err(|e| format!("{mission}: {e}"))?;
+    let rep = fcc_mission::track::report(&c, &m)?;
+    let title = r
+        .title
+        .clone()
+        .map(|t| launch.x(&t))
+        .unwrap_or_else(|| "full-stack flight".into());
+    Ok(format!("== {title} ({wall_s:.1} s wall)\n{rep}\n"))
 }

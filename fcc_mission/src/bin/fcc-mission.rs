@@ -8,7 +8,8 @@
 //!
 //! After the last waypoint it lands (`cmd/mode` "land"), or with `-p hover_s:=S` (S > 0) first
 //! hovers S seconds of ROS time in the MCU's HOLD mode (`cmd/mode` "hold", no setpoints; paper A
-//! Fig. 16), then lands; the sequencing is `fcc_mission::EndSequence`.
+//! Fig. 16), then lands. The sequencing (arming, the pilot's pause, the phases, the end) is
+//! `fcc_mission::run::MissionRun` (pure, unit-tested); this file does the ROS/DDS I/O.
 //!
 //! Exit codes: 0 when the vehicle is landed and disarmed after the mission, or on SIGTERM/SIGINT
 //! (served by a thread of their own; a second signal, or a stop not begun within 1.5 s, exits
@@ -24,7 +25,8 @@ use fcc_bridge::ros_types::{
     Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
 };
 use fcc_bridge::startup;
-use fcc_mission::{EndPhase, EndSequence, McuMode, Mission, Phase, Request, WaypointFollower};
+use fcc_mission::run::{Input, Level, McuStatus, MissionRun, Outcome, RunConfig, Sample, Step};
+use fcc_mission::{McuMode, Mission};
 use futures::StreamExt;
 use ros2_client::log::LogLevel;
 use ros2_client::{NodeLoggingHandle, RosoutRaw};
@@ -182,51 +184,6 @@ fn odom_to_ned(o: &Odometry) -> ([f32; 3], [f32; 3]) {
     (f(pos), f(vel))
 }
 
-fn phase_name(p: Phase) -> (&'static str, Option<usize>) {
-    match p {
-        Phase::Idle => ("idle", None),
-        Phase::Takeoff => ("takeoff", None),
-        Phase::Leg(i) => ("leg", Some(i)),
-        Phase::Hold(i) => ("hold", Some(i)),
-        Phase::Landing => ("landing", None),
-        Phase::Done => ("done", None),
-    }
-}
-
-/// Cross-track statistics of the estimated position on the legs (as the node sees it).
-#[derive(Default)]
-struct Track {
-    n: usize,
-    sum_sq: f64,
-    max: f64,
-}
-
-impl Track {
-    fn add(&mut self, from: [f32; 3], to: [f32; 3], pos: [f32; 3]) {
-        let (dn, de) = ((to[0] - from[0]) as f64, (to[1] - from[1]) as f64);
-        let len = (dn * dn + de * de).sqrt();
-        if len < 1.0 {
-            return;
-        }
-        let (pn, pe) = ((pos[0] - from[0]) as f64, (pos[1] - from[1]) as f64);
-        let along = (pn * dn + pe * de) / len;
-        if along < 0.0 || along > len {
-            return;
-        }
-        let xt = (pn * de - pe * dn).abs() / len;
-        self.n += 1;
-        self.sum_sq += xt * xt;
-        self.max = self.max.max(xt);
-    }
-    fn rms(&self) -> f64 {
-        if self.n == 0 {
-            0.0
-        } else {
-            (self.sum_sq / self.n as f64).sqrt()
-        }
-    }
-}
-
 /// Wall time the node stays alive after its last message (reliable re-sends), before exiting.
 const LINGER: Duration = Duration::from_millis(1000);
 
@@ -260,28 +217,35 @@ impl Log {
     fn info(&self, now_ns: Option<i64>, msg: &str) {
         self.log(LogLevel::Info, now_ns, msg)
     }
-    fn warn(&self, now_ns: Option<i64>, msg: &str) {
-        self.log(LogLevel::Warn, now_ns, msg)
+    /// A line of the mission logic, at its level.
+    fn line(&self, level: Level, now_ns: Option<i64>, msg: &str) {
+        let level = match level {
+            Level::Info => LogLevel::Info,
+            Level::Warn => LogLevel::Warn,
+        };
+        self.log(level, now_ns, msg)
     }
 }
 
-/// The mission's view of a pilot override: paused while the MCU is in Pilot mode; after it,
-/// `cmd/mode` "velocity" is re-sent (at most once a second) until the MCU flies velocity again.
-#[derive(Default)]
-struct PilotPause {
-    paused: bool,
-    last_resume_s: Option<f64>,
-}
-
-/// The MCU's mode and whether a failsafe is active, from `status`.
-fn mcu_mode(st: &Status) -> (McuMode, bool) {
+/// The MCU's status as the mission logic reads it: the ONE place where `fcc_msgs/Status`
+/// modes become [`McuMode`] (Pilot is a flag of its own; other modes read as disarmed).
+fn mcu_status(st: &Status) -> McuStatus<'_> {
     let mode = match st.mode {
         Status::MODE_HOLD => McuMode::Hold,
         Status::MODE_VELOCITY => McuMode::Velocity,
         Status::MODE_LAND => McuMode::Land,
         _ => McuMode::Disarmed,
     };
-    (mode, st.failsafe != Status::FAILSAFE_NONE)
+    McuStatus {
+        armed: st.armed,
+        landed: st.landed,
+        mode,
+        pilot: st.mode == Status::MODE_PILOT,
+        failsafe: st.failsafe != Status::FAILSAFE_NONE,
+        mode_name: &st.mode_name,
+        failsafe_name: &st.failsafe_name,
+        last_reject: &st.last_reject,
+    }
 }
 
 /// fcc-mission, for `fcc_bridge::startup` (messages and environment variables).
@@ -422,75 +386,33 @@ async fn run(o: Options) -> Result<(), Failure> {
 }
 
 async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
-    // `_ctx` stays bound (the DDS participant lives as long as the flight).
-    let Dds {
-        _ctx,
-        node,
-        odom_sub,
-        status_sub,
-        clock_sub,
-        sp_pub,
-        arm_pub,
-        mode_pub,
-        status_pub,
-    } = dds;
     let log = Log {
-        handle: node.logging_handle(),
+        handle: dds.node.logging_handle(),
         name: fcc_bridge::ros_api::logger_name(&o.namespace, &o.node_name),
     };
-    let n_wp = o.mission.waypoints.len();
-    log.info(None, &format!(
-        "node {}/{} (DDS domain {}, {}), mission {} ({} waypoints, {} m/s), setpoints at {} Hz, {} time, {}",
-        o.namespace.trim_end_matches('/'),
-        o.node_name,
-        o.dds.domain_id,
-        if o.dds.localhost_only { "loopback only" } else { "all interfaces" },
-        o.mission_file,
-        n_wp,
-        o.mission.speed_mps,
-        o.rate_hz,
-        if o.use_sim_time { "sim (/clock)" } else { "system" },
-        if o.hover_s > 0.0 {
-            format!("then {} s in HOLD before landing", o.hover_s)
-        } else {
-            "landing after the last waypoint".into()
-        }
-    ));
-    if o.mission.yaw_deg.is_some() {
-        log.info(None, "note: yaw_deg is not sent (TwistStamped carries no heading; the bridge keeps the current heading)");
-    }
-    if o.hover_s > 0.0 && !o.mission.land_at_end {
-        log.warn(
-            None,
-            "hover_s is ignored: the mission does not land at the end (land_at_end: false)",
-        );
+    log_start(&o, &log);
+    let mut run = MissionRun::new(RunConfig {
+        mission: o.mission.clone(),
+        timeout_s: o.timeout_s,
+        arm_timeout_s: o.arm_timeout_s,
+        hover_s: o.hover_s,
+    });
+    for (level, line) in run.notes() {
+        log.line(level, None, &line);
     }
 
-    let odom_stream = odom_sub.async_stream();
-    let status_stream = status_sub.async_stream();
+    let odom_stream = dds.odom_sub.async_stream();
+    let status_stream = dds.status_sub.async_stream();
     tokio::pin!(odom_stream);
     tokio::pin!(status_stream);
-    let mut clock_stream = clock_sub.as_ref().map(|s| Box::pin(s.async_stream()));
+    let mut clock_stream = dds.clock_sub.as_ref().map(|s| Box::pin(s.async_stream()));
 
     let mut clock = RosClock::new(o.use_sim_time);
     let mut odom: Option<Odometry> = None;
     let mut status: Option<Status> = None;
-    let mut follower: Option<WaypointFollower> = None;
-    let mut last_phase: Option<(&'static str, Option<usize>)> = None;
-    let mut arm_sent_at: Option<Instant> = None;
-    let mut arm_attempts = 0u32;
-    let mut armed_at_ns: Option<i64> = None;
-    let mut end = EndSequence::new(o.hover_s);
-    let mut last_report = Instant::now() - Duration::from_secs(10);
-    let mut setpoints = 0u64;
-    let mut pilot = PilotPause::default();
-    let mut track = Track::default();
-    let mut last_reject = String::new();
     let started = Instant::now();
     let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / o.rate_hz));
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-    let mut waiting_note = false;
-    let mut t_first: Option<f64> = None;
 
     loop {
         tokio::select! {
@@ -504,282 +426,91 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             } => { if let Ok((m, _)) = r { clock.on_clock(&m); } continue; }
             _ = tick.tick() => {}
         }
-        let elapsed = started.elapsed().as_secs_f64();
-        if elapsed > o.timeout_s {
-            return Err((
-                1,
-                format!(
-                    "timeout: mission not finished after {:.0} s (phase {:?})",
-                    o.timeout_s, last_phase
-                ),
-            ));
-        }
-        let (Some(od), Some(st), Some(now_ns)) = (odom.as_ref(), status.as_ref(), clock.now_ns())
-        else {
-            if !waiting_note && elapsed > 5.0 {
-                log.info(
-                    clock.now_ns(),
-                    &format!(
-                        "waiting for the bridge: state/odom {}, status {}, clock {}",
-                        if odom.is_some() { "ok" } else { "none yet" },
-                        if status.is_some() { "ok" } else { "none yet" },
-                        if clock.now_ns().is_some() {
-                            "ok"
-                        } else {
-                            "no /clock yet"
-                        }
-                    ),
-                );
-                waiting_note = true;
+        let now_ns = clock.now_ns();
+        let input = match (odom.as_ref(), status.as_ref(), now_ns) {
+            (Some(od), Some(st), Some(now_ns)) => {
+                let (pos_ned_m, vel_ned_mps) = odom_to_ned(od);
+                Input::Ready(Sample {
+                    now_ns,
+                    pos_ned_m,
+                    vel_ned_mps,
+                    mcu: mcu_status(st),
+                })
             }
-            continue;
+            _ => Input::Waiting {
+                odom: odom.is_some(),
+                status: status.is_some(),
+                clock: now_ns.is_some(),
+            },
         };
-        let t_s = now_ns as f64 * 1e-9;
-        // For messages: seconds since the first state (ROS time may be the epoch).
-        let t0 = *t_first.get_or_insert(t_s);
-        let tr = t_s - t0;
-        let (pos, vel) = odom_to_ned(od);
-        if st.last_reject != last_reject {
-            last_reject = st.last_reject.clone();
-            if !last_reject.is_empty() && last_reject != "accepted" {
-                log.warn(Some(now_ns), &format!("MCU/bridge reject: {last_reject}"));
-            }
+        let step = run.tick(started.elapsed().as_secs_f64(), input);
+        if send(&dds, &log, now_ns, &step) {
+            run.setpoint_published();
         }
-
-        // ---- before arming: the follower asks for Arm; home is captured when armed.
-        if armed_at_ns.is_none() {
-            if st.armed {
-                armed_at_ns = Some(now_ns);
-                let mut f = WaypointFollower::new(o.mission.clone());
-                let _ = f.update(t_s, pos, vel);
-                follower = Some(f);
-                log.info(
-                    Some(now_ns),
-                    &format!(
-                        "armed at t={tr:.2} s, home NED [{:.2}, {:.2}, {:.2}] m",
-                        pos[0], pos[1], pos[2]
-                    ),
-                );
-            } else {
-                let mut probe = WaypointFollower::new(o.mission.clone());
-                let g = probe.update(t_s, pos, vel);
-                if g.request == Some(Request::Arm)
-                    && arm_sent_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
-                {
-                    if arm_attempts as f64 > o.arm_timeout_s {
-                        return Err((
-                            1,
-                            format!(
-                                "could not arm within {:.0} s (last reject: '{}')",
-                                o.arm_timeout_s, st.last_reject
-                            ),
-                        ));
-                    }
-                    let _ = arm_pub.publish(Bool { data: true });
-                    arm_sent_at = Some(Instant::now());
-                    arm_attempts += 1;
-                }
-                report(
-                    &status_pub,
-                    &mut last_report,
-                    "arming",
-                    None,
-                    n_wp,
-                    None,
-                    st,
-                    t_s,
-                    false,
-                );
-                continue;
-            }
-        }
-        let f = follower.as_mut().expect("follower after arming");
-
-        // ---- flying
-        if !st.armed {
-            let flight_s = (now_ns - armed_at_ns.unwrap_or(now_ns)) as f64 * 1e-9;
-            if end.land_requested() && st.landed {
-                let _ = status_pub.publish(StringMsg {
-                    data: format!("{{\"phase\":\"finished\",\"waypoint\":{n_wp},\"of\":{n_wp},\"dist_to_go_m\":0.0,\"armed\":false,\"landed\":true}}"),
-                });
-                log.info(Some(now_ns), &format!(
-                    "mission complete: {n_wp}/{n_wp} waypoints, {flight_s:.1} s armed, {setpoints} setpoints, cross-track (estimate, as seen on state/odom) RMS {:.3} m max {:.3} m; landed and disarmed",
-                    track.rms(),
-                    track.max
-                ));
+        match step.outcome {
+            None => {}
+            Some(Outcome::Complete) => {
                 // Stay on the graph a moment so reliable readers get the last messages
                 // (a sample lost on a busy loopback is re-sent only while the writer lives).
                 tokio::time::sleep(LINGER).await;
                 return Ok(());
             }
-            return Err((1, format!(
-                "disarmed in flight after {flight_s:.1} s (phase {:?}, end {:?}, mode {}, failsafe {}, landed {})",
-                last_phase, end.phase(), st.mode_name, st.failsafe_name, st.landed
-            )));
+            Some(Outcome::Failed(msg)) => return Err((1, msg)),
         }
-        // ---- pilot override (S.BUS switch on the MCU): the pilot flies, the MCU refuses our
-        // setpoints and commands, so send none. When the pilot hands back (the MCU holds), the
-        // mission resumes from where the vehicle is: `cmd/mode` "velocity", re-sent each second
-        // until the MCU reports it (best effort, as the other commands).
-        if st.mode == Status::MODE_PILOT {
-            if !pilot.paused {
-                log.warn(
-                    Some(now_ns),
-                    &format!("t={tr:.2} s pilot override: mission paused, no setpoints"),
-                );
-                pilot.paused = true;
-            }
-            report(
-                &status_pub,
-                &mut last_report,
-                "pilot",
-                None,
-                n_wp,
-                None,
-                st,
-                t_s,
-                true,
-            );
-            continue;
-        }
-        if pilot.paused {
-            let (mode, _) = mcu_mode(st);
-            if mode == McuMode::Velocity {
-                log.info(
-                    Some(now_ns),
-                    &format!("t={tr:.2} s pilot released control: mission resumed"),
-                );
-                pilot.paused = false;
-            } else if pilot.last_resume_s.is_none_or(|t| t_s - t >= 1.0) {
-                if pilot.last_resume_s.is_none() {
-                    log.info(
-                        Some(now_ns),
-                        &format!("t={tr:.2} s pilot released control (MCU {}): resuming with cmd/mode velocity", st.mode_name),
-                    );
-                }
-                let _ = mode_pub.publish(StringMsg {
-                    data: "velocity".into(),
-                });
-                pilot.last_resume_s = Some(t_s);
-            }
-            if !pilot.paused {
-                pilot.last_resume_s = None;
-            }
-            // Setpoints flow meanwhile (the MCU holds and keeps them; none is stale on resume).
-        }
-        let g = f.update(t_s, pos, vel);
-        let (name, idx) = phase_name(g.phase);
-        if last_phase != Some((name, idx)) {
-            log.info(
-                Some(now_ns),
-                &format!(
-                    "t={tr:.2} s {name}{}",
-                    idx.map(|i| format!(" {i}")).unwrap_or_default()
-                ),
-            );
-            last_phase = Some((name, idx));
-        }
-        if let (Phase::Leg(_), Some(leg)) = (g.phase, g.leg) {
-            track.add(leg.from_ned_m, leg.to_ned_m, pos);
-        }
-        let dist = g.leg.map(|l| {
-            let d = [
-                l.to_ned_m[0] - pos[0],
-                l.to_ned_m[1] - pos[1],
-                l.to_ned_m[2] - pos[2],
-            ];
-            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-        });
-        // ---- the end: land, or hover in HOLD first (no setpoints), then land; commands are
-        // re-sent until the MCU reports the mode (they travel best-effort).
-        let (mode, failsafe) = mcu_mode(st);
-        let step = end.update(t_s, g.request == Some(Request::Land), mode, failsafe);
-        if let Some(e) = &step.event {
-            let line = format!("t={tr:.2} s {e}");
-            if e.is_warning() {
-                log.warn(Some(now_ns), &line);
-            } else {
-                log.info(Some(now_ns), &line);
-            }
-        }
-        if let Some(c) = step.command {
-            let _ = mode_pub.publish(StringMsg {
-                data: c.as_str().into(),
-            });
-        }
-        if !step.send_setpoints {
-            report(
-                &status_pub,
-                &mut last_report,
-                if end.phase() == EndPhase::Hover {
-                    "hover"
-                } else {
-                    "landing"
-                },
-                None,
-                n_wp,
-                None,
-                st,
-                t_s,
-                true,
-            );
-            continue;
-        }
-        let v_enu = frames::ned_to_enu([
-            g.vel_ned_mps[0] as f64,
-            g.vel_ned_mps[1] as f64,
-            g.vel_ned_mps[2] as f64,
-        ]);
-        let msg = TwistStamped {
-            header: Header::new(stamp(now_ns), "map"),
-            twist: Twist {
-                linear: Vector3::new(v_enu),
-                angular: Vector3::default(),
-            },
-        };
-        if sp_pub.publish(msg).is_ok() {
-            setpoints += 1;
-        }
-        report(
-            &status_pub,
-            &mut last_report,
-            name,
-            idx,
-            n_wp,
-            dist,
-            st,
-            t_s,
-            false,
-        );
     }
 }
 
-/// `mission/status` at 2 Hz: `{"phase":"leg","waypoint":1,"of":4,"dist_to_go_m":12.3,...}`.
-#[allow(clippy::too_many_arguments)]
-fn report(
-    p: &ros2_client::Publisher<StringMsg>,
-    last: &mut Instant,
-    phase: &str,
-    idx: Option<usize>,
-    n: usize,
-    dist: Option<f32>,
-    st: &Status,
-    t_s: f64,
-    force: bool,
-) {
-    let _ = force;
-    if last.elapsed() < Duration::from_millis(500) {
-        return;
+/// The first log line: the node, its DDS set-up, the mission and how it ends.
+fn log_start(o: &Options, log: &Log) {
+    log.info(None, &format!(
+        "node {}/{} (DDS domain {}, {}), mission {} ({} waypoints, {} m/s), setpoints at {} Hz, {} time, {}",
+        o.namespace.trim_end_matches('/'),
+        o.node_name,
+        o.dds.domain_id,
+        if o.dds.localhost_only { "loopback only" } else { "all interfaces" },
+        o.mission_file,
+        o.mission.waypoints.len(),
+        o.mission.speed_mps,
+        o.rate_hz,
+        if o.use_sim_time { "sim (/clock)" } else { "system" },
+        if o.hover_s > 0.0 {
+            format!("then {} s in HOLD before landing", o.hover_s)
+        } else {
+            "landing after the last waypoint".into()
+        }
+    ));
+}
+
+/// Does what one cycle of [`MissionRun`] asks: log lines (stamped `now_ns`), `cmd/arm`,
+/// `cmd/mode`, the velocity setpoint, `mission/status`. True when a setpoint went out.
+fn send(dds: &Dds, log: &Log, now_ns: Option<i64>, step: &Step) -> bool {
+    for (level, line) in &step.logs {
+        log.line(*level, now_ns, line);
     }
-    *last = Instant::now();
-    let wp = idx.map(|i| i.to_string()).unwrap_or_else(|| "null".into());
-    let d = dist
-        .map(|d| format!("{d:.2}"))
-        .unwrap_or_else(|| "null".into());
-    let _ = p.publish(StringMsg {
-        data: format!(
-            "{{\"t_s\":{t_s:.2},\"phase\":\"{phase}\",\"waypoint\":{wp},\"of\":{n},\"dist_to_go_m\":{d},\"armed\":{},\"mode\":\"{}\"}}",
-            st.armed, st.mode_name
-        ),
-    });
+    if step.arm {
+        let _ = dds.arm_pub.publish(Bool { data: true });
+    }
+    for c in &step.mode_commands {
+        let _ = dds.mode_pub.publish(StringMsg { data: (*c).into() });
+    }
+    let sent = match (step.setpoint_ned_mps, now_ns) {
+        (Some(v), Some(ns)) => dds.sp_pub.publish(setpoint(v, ns)).is_ok(),
+        _ => false,
+    };
+    if let Some(s) = &step.status {
+        let _ = dds.status_pub.publish(StringMsg { data: s.clone() });
+    }
+    sent
+}
+
+/// The velocity setpoint message: NED → ENU, frame `map`, stamped `now_ns` (ROS time).
+fn setpoint(vel_ned_mps: [f32; 3], now_ns: i64) -> TwistStamped {
+    let v = vel_ned_mps.map(f64::from);
+    TwistStamped {
+        header: Header::new(stamp(now_ns), "map"),
+        twist: Twist {
+            linear: Vector3::new(frames::ned_to_enu(v)),
+            angular: Vector3::default(),
+        },
+    }
 }

@@ -1,0 +1,383 @@
+//! `fcc-launch`'s config and its supervision rules (the launcher binary does the process I/O:
+//! spawning, piping, signals, waiting).
+//!
+//! * [`Config`]: the YAML (`vars`, `stop_timeout_s`, `processes`, `report`), parsed with
+//!   [`Config::from_yaml_str`] and checked with [`Config::check`];
+//! * [`expand`]: `${NAME}` variables;
+//! * [`next_after_exit`]: what to do when a process exits (main processes, groups, early exits).
+//!
+//! Pure logic: no I/O (the environment is passed in to [`expand`]).
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// A launch config (see the [module docs](self)).
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    #[serde(default)]
+    pub vars: BTreeMap<String, String>,
+    #[serde(default = "default_stop")]
+    pub stop_timeout_s: f64,
+    pub processes: Vec<Proc>,
+    #[serde(default)]
+    pub report: Option<Reports>,
+}
+
+/// `report:` is one entry or a list of them.
+#[derive(Deserialize, Debug)]
+#[serde(untagged)]
+pub enum Reports {
+    One(Report),
+    Many(Vec<Report>),
+}
+
+impl Reports {
+    pub fn list(&self) -> Vec<&Report> {
+        match self {
+            Reports::One(r) => vec![r],
+            Reports::Many(v) => v.iter().collect(),
+        }
+    }
+}
+
+fn default_stop() -> f64 {
+    10.0
+}
+
+/// One process to start.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Proc {
+    pub name: String,
+    pub cmd: Vec<String>,
+    #[serde(default)]
+    pub env: BTreeMap<String, String>,
+    /// Wait until this path exists before starting the next process.
+    #[serde(default)]
+    pub wait_for: Option<String>,
+    #[serde(default = "default_wait")]
+    pub wait_timeout_s: f64,
+    /// The launcher exits when this process exits, with its code (with several main
+    /// processes: when all have exited, with the worst code).
+    #[serde(default)]
+    pub main: bool,
+    /// Processes of a group (e.g. one vehicle) are stopped when all the group's main processes
+    /// have exited.
+    #[serde(default)]
+    pub group: Option<String>,
+    /// Wait this long after starting it before starting the next one.
+    #[serde(default)]
+    pub delay_s: f64,
+}
+
+fn default_wait() -> f64 {
+    15.0
+}
+
+/// A cross-track report to print (and append to a file) after a successful run.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Report {
+    pub csv: String,
+    pub mission: String,
+    #[serde(default)]
+    pub append_to: Option<String>,
+    #[serde(default)]
+    pub title: Option<String>,
+}
+
+/// The longest time a config may name, s (a day).
+pub const MAX_CONFIG_S: f64 = 86_400.0;
+
+impl Config {
+    /// Parses the YAML text (unknown fields are errors).
+    pub fn from_yaml_str(text: &str) -> Result<Config, serde_yaml::Error> {
+        serde_yaml::from_str(text)
+    }
+
+    /// The times are seconds in [0, [`MAX_CONFIG_S`]] and at least one process is main; the
+    /// error names the field.
+    pub fn check(&self) -> Result<(), String> {
+        let secs = |field: String, v: f64| {
+            if v.is_finite() && (0.0..=MAX_CONFIG_S).contains(&v) {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{field}: must be a number of seconds in [0, 86400], got {v}"
+                ))
+            }
+        };
+        secs("stop_timeout_s".into(), self.stop_timeout_s)?;
+        for (i, p) in self.processes.iter().enumerate() {
+            secs(format!("processes[{i}].delay_s"), p.delay_s)?;
+            secs(format!("processes[{i}].wait_timeout_s"), p.wait_timeout_s)?;
+        }
+        if !self.processes.iter().any(|p| p.main) {
+            return Err("at least one process must have main: true".into());
+        }
+        Ok(())
+    }
+}
+
+/// Expand `${NAME}` from `vars`, then `env` (the environment); values may use other variables.
+pub fn expand(
+    s: &str,
+    vars: &BTreeMap<String, String>,
+    env: &dyn Fn(&str) -> Option<String>,
+) -> Result<String, String> {
+    let mut cur = s.to_string();
+    for _ in 0..8 {
+        let next = expand_once(&cur, vars, env)?;
+        if next == cur {
+            return Ok(next);
+        }
+        cur = next;
+    }
+    Err(format!("variables nest too deeply in '{s}'"))
+}
+
+fn expand_once(
+    s: &str,
+    vars: &BTreeMap<String, String>,
+    env: &dyn Fn(&str) -> Option<String>,
+) -> Result<String, String> {
+    let mut out = String::new();
+    let mut rest = s;
+    while let Some(i) = rest.find("${") {
+        out.push_str(&rest[..i]);
+        let j = rest[i..]
+            .find('}')
+            .ok_or(format!("unclosed ${{ in '{s}'"))?
+            + i;
+        let name = &rest[i + 2..j];
+        let v = vars
+            .get(name)
+            .cloned()
+            .or_else(|| env(name))
+            .ok_or(format!("unknown variable ${{{name}}} in '{s}'"))?;
+        out.push_str(&v);
+        rest = &rest[j + 1..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+/// A started process as the supervision rules see it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Slot {
+    pub main: bool,
+    pub group: Option<String>,
+    /// Exit code once exited.
+    pub code: Option<i32>,
+    /// The launcher is stopping it (its group is done).
+    pub stopping: bool,
+}
+
+/// What to do after process `i` of `slots` exited (its `code` is already set).
+#[derive(Debug, PartialEq)]
+pub enum Next {
+    /// Keep supervising.
+    Continue,
+    /// Stop these still-running processes (a group whose main processes all exited).
+    Stop(Vec<usize>),
+    /// Every main process has exited: stop everything and exit with this code (the worst).
+    Done(i32),
+    /// A non-main process exited on its own while it was still needed: stop everything, exit 1.
+    Early,
+}
+
+pub fn next_after_exit(slots: &[Slot], i: usize) -> Next {
+    let s = &slots[i];
+    if s.stopping {
+        return Next::Continue;
+    }
+    let mains_running = |g: Option<&String>| {
+        slots
+            .iter()
+            .any(|x| x.main && x.code.is_none() && (g.is_none() || x.group.as_ref() == g))
+    };
+    if !s.main {
+        // Without a group (or in a group without a main process), a process is needed while
+        // any main process runs.
+        let g = s
+            .group
+            .as_ref()
+            .filter(|g| slots.iter().any(|x| x.main && x.group.as_ref() == Some(*g)));
+        return if mains_running(g) {
+            Next::Early
+        } else {
+            Next::Continue
+        };
+    }
+    if !mains_running(None) {
+        let worst = slots
+            .iter()
+            .filter(|x| x.main)
+            .filter_map(|x| x.code)
+            .max()
+            .unwrap_or(1);
+        return Next::Done(worst);
+    }
+    match &s.group {
+        Some(g) if !mains_running(Some(g)) => Next::Stop(
+            (0..slots.len())
+                .rev()
+                .filter(|&k| {
+                    let x = &slots[k];
+                    x.group.as_ref() == Some(g) && x.code.is_none() && !x.stopping
+                })
+                .collect(),
+        ),
+        _ => Next::Continue,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn slot(main: bool, group: Option<&str>) -> Slot {
+        Slot {
+            main,
+            group: group.map(str::to_string),
+            code: None,
+            stopping: false,
+        }
+    }
+
+    #[test]
+    fn one_main_as_before() {
+        // sitl, bridge, mission (main): the mission's exit ends the run with its code.
+        let mut s = vec![slot(false, None), slot(false, None), slot(true, None)];
+        s[2].code = Some(3);
+        assert_eq!(next_after_exit(&s, 2), Next::Done(3));
+        // Another process first: early exit.
+        let mut s = vec![slot(false, None), slot(false, None), slot(true, None)];
+        s[0].code = Some(0);
+        assert_eq!(next_after_exit(&s, 0), Next::Early);
+    }
+
+    #[test]
+    fn several_mains_with_groups() {
+        // Two vehicles: [sitl, bridge, mission] × 2.
+        let g = |n| Some(if n == 1 { "uav1" } else { "uav2" });
+        let mut s = vec![
+            slot(false, g(1)),
+            slot(false, g(1)),
+            slot(true, g(1)),
+            slot(false, g(2)),
+            slot(false, g(2)),
+            slot(true, g(2)),
+        ];
+        // uav1's mission ends: its bridge and sitl are stopped (reverse order), uav2 flies on.
+        s[2].code = Some(0);
+        assert_eq!(next_after_exit(&s, 2), Next::Stop(vec![1, 0]));
+        s[0].stopping = true;
+        s[1].stopping = true;
+        s[0].code = Some(0);
+        assert_eq!(next_after_exit(&s, 0), Next::Continue);
+        // uav2's bridge dying while its mission runs is an early exit.
+        let mut e = s.clone();
+        e[4].code = Some(1);
+        assert_eq!(next_after_exit(&e, 4), Next::Early);
+        // uav2's mission fails: all mains done, the worst code wins.
+        s[5].code = Some(1);
+        assert_eq!(next_after_exit(&s, 5), Next::Done(1));
+        s[5].code = Some(0);
+        assert_eq!(next_after_exit(&s, 5), Next::Done(0));
+    }
+
+    #[test]
+    fn several_mains_without_groups_wait_for_all() {
+        let mut s = vec![slot(false, None), slot(true, None), slot(true, None)];
+        s[1].code = Some(2);
+        assert_eq!(next_after_exit(&s, 1), Next::Continue);
+        s[2].code = Some(0);
+        assert_eq!(next_after_exit(&s, 2), Next::Done(2));
+        // A shared process that exits while a main runs: early.
+        let mut s = vec![slot(false, None), slot(true, None), slot(true, None)];
+        s[1].code = Some(0);
+        s[0].code = Some(0);
+        assert_eq!(next_after_exit(&s, 0), Next::Early);
+        // Same for a process in a group that has no main process.
+        let mut s = vec![slot(false, Some("tools")), slot(true, Some("uav1"))];
+        s[0].code = Some(0);
+        assert_eq!(next_after_exit(&s, 0), Next::Early);
+    }
+
+    #[test]
+    fn variables_expand_from_vars_then_env_and_nest() {
+        let vars: BTreeMap<String, String> = [
+            ("out", "${RUN}/out"),
+            ("RUN", "/tmp/r"),
+            ("a", "${b}"),
+            ("b", "${a}"),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+        let env = |n: &str| (n == "HOME").then(|| "/home/x".to_string());
+        assert_eq!(
+            expand("${out}/a.csv", &vars, &env).unwrap(),
+            "/tmp/r/out/a.csv"
+        );
+        assert_eq!(
+            expand("${HOME}:${RUN}", &vars, &env).unwrap(),
+            "/home/x:/tmp/r"
+        );
+        assert_eq!(expand("plain $ {x}", &vars, &env).unwrap(), "plain $ {x}");
+        assert_eq!(
+            expand("${sped}", &vars, &env).unwrap_err(),
+            "unknown variable ${sped} in '${sped}'"
+        );
+        assert!(expand("${out", &vars, &env)
+            .unwrap_err()
+            .starts_with("unclosed ${"));
+        assert!(expand("${a}", &vars, &env)
+            .unwrap_err()
+            .contains("nest too deeply"));
+    }
+
+    #[test]
+    fn config_check_names_the_field() {
+        let c = |yaml: &str| Config::from_yaml_str(yaml).unwrap().check();
+        assert_eq!(c("processes: [{name: a, cmd: [x], main: true}]\n"), Ok(()));
+        assert_eq!(
+            c("stop_timeout_s: -1\nprocesses: [{name: a, cmd: [x], main: true}]\n"),
+            Err("stop_timeout_s: must be a number of seconds in [0, 86400], got -1".into())
+        );
+        assert!(
+            c("processes: [{name: a, cmd: [x], main: true, delay_s: .nan}]\n")
+                .unwrap_err()
+                .starts_with("processes[0].delay_s: ")
+        );
+        assert!(
+            c("processes: [{name: a, cmd: [x], main: true, wait_timeout_s: 1e6}]\n")
+                .unwrap_err()
+                .starts_with("processes[0].wait_timeout_s: ")
+        );
+        assert_eq!(
+            c("processes: [{name: a, cmd: [x]}]\n"),
+            Err("at least one process must have main: true".into())
+        );
+    }
+
+    #[test]
+    fn report_one_or_many() {
+        let one = Config::from_yaml_str(
+            "processes: [{name: a, cmd: [x], main: true}]\nreport: {csv: a.csv, mission: m.yaml}\n",
+        )
+        .unwrap();
+        assert_eq!(one.report.unwrap().list().len(), 1);
+        let many = Config::from_yaml_str(
+            "processes: [{name: a, cmd: [x], main: true, group: g}]\nreport:\n  - {csv: a.csv, mission: m.yaml}\n  - {csv: b.csv, mission: m.yaml}\n",
+        )
+        .unwrap();
+        assert_eq!(many.report.unwrap().list().len(), 2);
+        assert!(Config::from_yaml_str(
+            "processes: [{name: a, cmd: [x], main: true}]\nreport: {csv: a.csv, bogus: 1}\n"
+        )
+        .is_err());
+    }
+}
