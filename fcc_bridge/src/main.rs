@@ -7,10 +7,10 @@
 
 use clap::Parser;
 use fcc_bridge::bridge::{self, BridgeError, Options};
-use fcc_bridge::params::{self, parse_bool};
 use fcc_bridge::record::{RecordOptions, Tap};
-use fcc_bridge::startup::Stop;
 use fcc_bridge::state::ClockSource;
+use fcc_ros::params::{self, parse_bool};
+use fcc_ros::startup::Stop;
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -91,7 +91,7 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
         let env = |k: &str| std::env::var(k).ok();
         o.domain_id = params::domain_id(env("ROS_DOMAIN_ID").as_deref())?;
         let p = &ros.params;
-        let rec = params::record_options(cli.record.as_deref(), p)?;
+        let rec = fcc_bridge::record::record_options(cli.record.as_deref(), p)?;
         o.localhost_only = params::localhost_only(
             p.get("localhost_only").map(String::as_str),
             env("ROS_LOCALHOST_ONLY").as_deref(),
@@ -177,7 +177,7 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
         ];
         for k in p.keys() {
             if !known.contains(&k.as_str())
-                && !params::RECORD_PARAMS.contains(&k.as_str())
+                && !fcc_bridge::record::RECORD_PARAMS.contains(&k.as_str())
                 && fcc_bridge::mcu_params::by_name(k).is_none()
             {
                 return Err(format!("unknown parameter '{k}'"));

@@ -4,9 +4,9 @@
 
 use crate::bounded;
 use crate::convert::{self, Config, SetpointLimits};
-use crate::ros_types::*;
 use crate::timesync::TimeSync;
 use fcc_msgs as link;
+use fcc_msgs::ros::*;
 use std::collections::BTreeMap;
 
 /// How message stamps are made.
@@ -140,7 +140,7 @@ pub struct LinkState {
     /// Height above ground of the latest altitude fusion (for the sensor-health rules).
     pub ground_height_m: Option<f32>,
     /// Sensor-health transitions (WARN / INFO on `/rosout`).
-    pub sensors: crate::diag::SensorWatch,
+    pub sensors: crate::health::SensorWatch,
     /// The current decoder's (seq_gaps, frames_lost, seq_resets) before the frame being decoded.
     seq_before: [u32; 3],
     /// Gaps and lost frames the current decoder counted on `Hello` frames (the MCU's new
@@ -344,7 +344,7 @@ impl LinkState {
                         out.push(Out::Battery(convert::battery(&m, st, cfg)))
                     }
                     link::Message::NavState(m) => {
-                        self.yaw_ned = Some(crate::frames::yaw_ned(crate::frames::quat_f64(
+                        self.yaw_ned = Some(fcc_ros::frames::yaw_ned(fcc_ros::frames::quat_f64(
                             m.q_body_to_ned,
                         )));
                         let (odom, imu, tf) = convert::nav_state(&m, st, cfg);
@@ -481,7 +481,7 @@ impl LinkState {
     }
 
     pub fn on_command(&mut self, c: Option<link::Command>, what: &str) -> Option<link::Message> {
-        let now = crate::now_ns();
+        let now = fcc_ros::now_ns();
         let what = || bounded::log_value(what, bounded::LOG_CHARS);
         match c {
             Some(c) if self.handshake != Handshake::Waiting => {
@@ -788,7 +788,7 @@ mod uplink_tests {
     /// Through the state machine: commands are never held, even in a setpoint flood.
     #[test]
     fn commands_pass_a_setpoint_flood() {
-        use crate::ros_types::{Header, Twist, TwistStamped, Vector3};
+        use fcc_msgs::ros::{Header, Twist, TwistStamped, Vector3};
         let mut s = LinkState::new(
             Config::default(),
             SetpointLimits::default(),
@@ -797,7 +797,7 @@ mod uplink_tests {
         s.handshake = Handshake::Ok {
             firmware: [0, 1, 0],
         };
-        let t0 = crate::now_ns();
+        let t0 = fcc_ros::now_ns();
         let tw = |i: i64| TwistStamped {
             header: Header {
                 stamp: Time::from_nanos(t0),

@@ -1,8 +1,8 @@
 //! Reading our bags back: every message with its topic, log time and CDR payload, from a
 //! finished bag (summary) or a truncated one (SIGKILL: streamed up to the last whole chunk).
 
-use crate::frames;
-use crate::ros_types::Odometry;
+use fcc_msgs::ros::Odometry;
+use fcc_ros::frames;
 
 /// One message of a bag.
 #[derive(Clone, Debug)]
@@ -231,7 +231,7 @@ pub fn euler(q: [f64; 4]) -> [f64; 3] {
 mod tests {
     use super::*;
     use crate::record::{QosInfo, RecordOptions, Tap};
-    use crate::ros_types::Imu;
+    use fcc_msgs::ros::Imu;
     use std::time::Duration;
 
     /// Progress: the file in bytes, then per message against the summary's count; a bag cut

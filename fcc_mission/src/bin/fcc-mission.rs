@@ -14,17 +14,17 @@
 //! (served by a thread of their own; a second signal, or a stop not begun within 1.5 s, exits
 //! at once); 1 on a failure (timeout, disarmed in flight, DDS setup; also when the DDS start-up
 //! stalled on each of 3 attempts: it restarts itself after a stall, see
-//! `fcc_bridge::startup`); 2 on a bad mission file or bad arguments.
+//! `fcc_ros::startup`); 2 on a bad mission file or bad arguments.
 
 use clap::Parser;
-use fcc_bridge::frames;
-use fcc_bridge::params::{self, parse_bool};
-use fcc_bridge::ros_node::{self, DdsEnv, RosClock};
-use fcc_bridge::ros_types::{
+use fcc_mission::{EndPhase, EndSequence, McuMode, Mission, Phase, Request, WaypointFollower};
+use fcc_msgs::ros::{
     Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
 };
-use fcc_bridge::startup;
-use fcc_mission::{EndPhase, EndSequence, McuMode, Mission, Phase, Request, WaypointFollower};
+use fcc_ros::frames;
+use fcc_ros::params::{self, parse_bool};
+use fcc_ros::ros_node::{self, DdsEnv, RosClock};
+use fcc_ros::startup;
 use futures::StreamExt;
 use ros2_client::log::LogLevel;
 use ros2_client::{NodeLoggingHandle, RosoutRaw};
@@ -247,7 +247,7 @@ impl Log {
         println!("fcc-mission: {msg}");
         self.handle.rosout_raw(
             ros2_client::builtin_interfaces::Time::from_nanos(
-                now_ns.unwrap_or_else(fcc_bridge::now_ns),
+                now_ns.unwrap_or_else(fcc_ros::now_ns),
             ),
             level,
             &self.name,
@@ -284,7 +284,7 @@ fn mcu_mode(st: &Status) -> (McuMode, bool) {
     (mode, st.failsafe != Status::FAILSAFE_NONE)
 }
 
-/// fcc-mission, for `fcc_bridge::startup` (messages and environment variables).
+/// fcc-mission, for `fcc_ros::startup` (messages and environment variables).
 const APP: startup::App = startup::App {
     name: "fcc-mission",
     env_prefix: "FCC_MISSION",
@@ -436,7 +436,7 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
     } = dds;
     let log = Log {
         handle: node.logging_handle(),
-        name: fcc_bridge::ros_api::logger_name(&o.namespace, &o.node_name),
+        name: fcc_ros::logger_name(&o.namespace, &o.node_name),
     };
     let n_wp = o.mission.waypoints.len();
     log.info(None, &format!(

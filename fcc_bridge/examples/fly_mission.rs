@@ -8,8 +8,8 @@
 //! Exits 0 when the vehicle has landed and disarmed after the mission.
 
 use fcc_bridge::report::bag::odom_ned;
-use fcc_bridge::ros_types::*;
 use fcc_mission::{Request, WaypointFollower};
+use fcc_msgs::ros::*;
 use futures::{FutureExt, StreamExt};
 use ros2_client::qos::{History, WhenFull};
 use ros2_client::{Context, Name, NodeName, NodeOptions, QosProfile};

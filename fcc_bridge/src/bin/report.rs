@@ -3,7 +3,7 @@
 
 use clap::Parser;
 use fcc_bridge::report::bag;
-use fcc_report::{
+use fcc_bridge::report::{
     figures,
     plot::{chart, panels, Line},
 };
@@ -390,8 +390,10 @@ fn main() -> anyhow::Result<()> {
     // wind intercept, along the flight.
     if let Some(x) = &f.sysid {
         let (k1, k2) = (x.k1_mps2_per_rad, x.k2_per_s);
-        let samples =
-            fcc_report::sysid::samples(&s, fcc_report::sysid::AccelSource::OdomDifferenced);
+        let samples = fcc_bridge::report::sysid::samples(
+            &s,
+            fcc_bridge::report::sysid::AccelSource::OdomDifferenced,
+        );
         let mut meas = Vec::new();
         let mut model = Vec::new();
         let mut wi = 0;

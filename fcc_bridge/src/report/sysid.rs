@@ -58,7 +58,7 @@
 //! [`fcc_nav::sysid::ar1_inflation`] of the residuals' lag-1 correlation ([`ci95`]). A fit is only suggested as parameters when it
 //! passes [`judge`]; otherwise the report prints `no suggestion: <reasons>`.
 
-use crate::figures::Series;
+use super::series::Series;
 use fcc_nav::sysid::{ar1_inflation, PlaneFit, WindIvFit, WindPlaneFit, WindowMeans};
 use serde::Serialize;
 
