@@ -613,6 +613,51 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         mcu_values: Default::default(),
         link: ltx.clone(),
     });
+    let nopts = node_options(opts, &shared);
+    step.set("creating the ROS node");
+    let mut node = ctx
+        .new_node(
+            NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?,
+            nopts,
+        )
+        .map_err(ros_err)?;
+    spawn_spinner(&mut node)?;
+    shared.live.store(true, Ordering::SeqCst);
+    spawn_rosout(&node, opts)?;
+    step.set("creating the publishers");
+    let pubs = Publishers::new(&mut node, opts)?;
+    step.set("creating the subscriptions");
+    let (rx, crx) = subscribe_all(&ctx, &mut node, opts)?;
+    step.set("creating the services");
+    create_services(&mut node, opts, &ltx)?;
+    drop(ltx);
+    tracing::info!(
+        "node {}/{} on DDS domain {} ({}), device {} at {} baud",
+        opts.namespace.trim_end_matches('/'),
+        opts.node_name,
+        opts.domain_id,
+        if opts.localhost_only {
+            "loopback only"
+        } else {
+            "all interfaces"
+        },
+        opts.device,
+        opts.baud
+    );
+    Ok(Dds {
+        _ctx: ctx,
+        node,
+        pubs,
+        rx,
+        crx,
+        lrx,
+        shared,
+    })
+}
+
+/// The node's options: /rosout, the parameter services, every parameter declared with its
+/// start-up value (bridge, frames, MCU), and the validator and set action of `shared`.
+fn node_options(opts: &Options, shared: &Arc<ParamShared>) -> NodeOptions {
     use ParameterValue as P;
     let l = &opts.limits;
     let c = &opts.cfg;
@@ -676,15 +721,12 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             }
             Ok(())
         }));
-    step.set("creating the ROS node");
-    let mut node = ctx
-        .new_node(
-            NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?,
-            nopts,
-        )
-        .map_err(ros_err)?;
-    // The spinner serves discovery, /clock and the parameter services. It runs on its own
-    // thread because the parameter validator blocks while the MCU acknowledges a set.
+    nopts
+}
+
+/// The spinner serves discovery, /clock and the parameter services. It runs on its own thread
+/// because the parameter validator blocks while the MCU acknowledges a set.
+fn spawn_spinner(node: &mut Node) -> Result<(), BridgeError> {
     let spinner = node.spinner().map_err(ros_err)?;
     std::thread::Builder::new()
         .name("ros-spinner".into())
@@ -700,8 +742,11 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             }
         })
         .map_err(ros_err)?;
-    shared.live.store(true, Ordering::SeqCst);
-    // /rosout: the bridge's tracing events (INFO and above), with their level.
+    Ok(())
+}
+
+/// /rosout: the bridge's tracing events (INFO and above), with their level.
+fn spawn_rosout(node: &Node, opts: &Options) -> Result<(), BridgeError> {
     if let Some(logs) = ros_api::rosout_channel() {
         use ros2_client::RosoutRaw;
         let h = node.logging_handle();
@@ -723,40 +768,45 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             })
             .map_err(ros_err)?;
     }
-    step.set("creating the publishers");
-    let pubs = Publishers::new(&mut node, opts)?;
-    step.set("creating the subscriptions");
-    // Setpoints (and /clock) and commands on separate queues: a command never waits behind a
-    // queue of setpoints from a flooding peer.
+    Ok(())
+}
+
+/// The read topics. Setpoints (and /clock) and commands on separate queues: a command never
+/// waits behind a queue of setpoints from a flooding peer. Returns (setpoints, commands).
+fn subscribe_all(
+    ctx: &Context,
+    node: &mut Node,
+    opts: &Options,
+) -> Result<(mpsc::Receiver<InboundMsg>, mpsc::Receiver<InboundMsg>), BridgeError> {
     let (tx, rx) = mpsc::channel::<InboundMsg>(64);
     let (ctx_tx, crx) = mpsc::channel::<InboundMsg>(64);
     subscribe::<TwistStamped>(
-        &ctx,
-        &mut node,
+        ctx,
+        node,
         opts,
         &topics::SETPOINT_VELOCITY,
         tx.clone(),
         Inbound::Setpoint,
     )?;
     subscribe::<Bool>(
-        &ctx,
-        &mut node,
+        ctx,
+        node,
         opts,
         &topics::CMD_ARM,
         ctx_tx.clone(),
         Inbound::Arm,
     )?;
     subscribe::<StringMsg>(
-        &ctx,
-        &mut node,
+        ctx,
+        node,
         opts,
         &topics::CMD_MODE,
         ctx_tx.clone(),
         Inbound::Mode,
     )?;
     subscribe::<StringMsg>(
-        &ctx,
-        &mut node,
+        ctx,
+        node,
         opts,
         &topics::CMD_KILL,
         ctx_tx.clone(),
@@ -765,13 +815,21 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     // With clock_source:=sync, /clock is read whatever use_sim_time says now: it can be set at
     // run time, and the link task applies /clock only while it is true.
     if opts.clock == ClockSource::Sync {
-        subscribe::<Clock>(&ctx, &mut node, opts, &topics::CLOCK, tx, Inbound::Clock)?;
+        subscribe::<Clock>(ctx, node, opts, &topics::CLOCK, tx, Inbound::Clock)?;
     }
-    step.set("creating the services");
+    Ok((rx, crx))
+}
+
+/// The `arm` (SetBool), `land` and `hold` (Trigger) services, answered after the MCU's ack.
+fn create_services(
+    node: &mut Node,
+    opts: &Options,
+    ltx: &mpsc::Sender<LinkRequest>,
+) -> Result<(), BridgeError> {
     use link::CommandKind as K;
     use ros_api::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
     command_service::<SetBoolRequest, SetBoolResponse>(
-        &mut node,
+        node,
         &opts.name("arm"),
         "SetBool",
         ltx.clone(),
@@ -784,7 +842,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             _ => |_| K::Hold,
         };
         command_service::<TriggerRequest, TriggerResponse>(
-            &mut node,
+            node,
             &opts.name(srv),
             "Trigger",
             ltx.clone(),
@@ -792,30 +850,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             |success, message| TriggerResponse { success, message },
         )?;
     }
-    drop(ltx);
-    drop(ctx_tx);
-    tracing::info!(
-        "node {}/{} on DDS domain {} ({}), device {} at {} baud",
-        opts.namespace.trim_end_matches('/'),
-        opts.node_name,
-        opts.domain_id,
-        if opts.localhost_only {
-            "loopback only"
-        } else {
-            "all interfaces"
-        },
-        opts.device,
-        opts.baud
-    );
-    Ok(Dds {
-        _ctx: ctx,
-        node,
-        pubs,
-        rx,
-        crx,
-        lrx,
-        shared,
-    })
+    Ok(())
 }
 
 /// Run the bridge until a fatal error (the serial device is retried forever).
