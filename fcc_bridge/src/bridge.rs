@@ -1007,6 +1007,81 @@ fn publish_diag(
     let _ = pubs.diagnostics.publish(d);
 }
 
+/// The periodic work of a session (every 50 ms tick): Hello requests until the MCU answers
+/// (and a warning after 3 s without one), then time-sync pings; `/diagnostics` every second.
+struct SessionTimers {
+    started: tokio::time::Instant,
+    last_hello: tokio::time::Instant,
+    warned_no_hello: bool,
+    pings_sent: u32,
+    last_ping: tokio::time::Instant,
+    last_diag: tokio::time::Instant,
+}
+
+impl SessionTimers {
+    fn new() -> Self {
+        let now = tokio::time::Instant::now();
+        SessionTimers {
+            started: now,
+            last_hello: now,
+            warned_no_hello: false,
+            pings_sent: 0,
+            last_ping: now - Duration::from_secs(10),
+            last_diag: now,
+        }
+    }
+
+    /// A Hello request or a time-sync ping into `to_send` when one is due.
+    fn link_upkeep(
+        &mut self,
+        now: tokio::time::Instant,
+        opts: &Options,
+        st: &mut LinkState,
+        to_send: &mut Vec<u8>,
+    ) {
+        if st.handshake == Handshake::Waiting {
+            if now - self.last_hello >= opts.hello_period {
+                to_send.extend(st.encode(
+                    &link::Message::HelloRequest(link::HelloRequest::ours()),
+                    now_ns(),
+                ));
+                self.last_hello = now;
+            }
+            if !self.warned_no_hello && now - self.started > Duration::from_secs(3) {
+                tracing::warn!(
+                    "no Hello from the MCU on {} yet (wrong device or baud?)",
+                    opts.device
+                );
+                self.warned_no_hello = true;
+            }
+        } else {
+            // Fast burst of 10 pings at 100 ms, then every ping_period.
+            let period = if self.pings_sent < 10 {
+                Duration::from_millis(100)
+            } else {
+                opts.ping_period
+            };
+            if now - self.last_ping >= period {
+                let ping = link::TimeSyncPing {
+                    linux_time_ns: now_ns() as u64,
+                };
+                to_send.extend(st.encode(&link::Message::TimeSyncPing(ping), now_ns()));
+                self.pings_sent += 1;
+                self.last_ping = now;
+            }
+        }
+    }
+
+    /// Whether `/diagnostics` is due (once a second); if so, counted as sent.
+    fn diag_due(&mut self, now: tokio::time::Instant) -> bool {
+        let due = now - self.last_diag >= Duration::from_secs(1);
+        if due {
+            self.last_diag = now;
+        }
+        due
+    }
+}
+
 /// One connection: returns why it ended (IO), or a fatal handshake error.
 async fn session(
     port: tokio_serial::SerialStream,
@@ -1030,12 +1105,7 @@ async fn session(
     if let Err(e) = wr.write_all(&hello).await {
         return Ok(format!("write: {e}"));
     }
-    let mut last_hello = tokio::time::Instant::now();
-    let mut pings_sent = 0u32;
-    let mut last_ping = tokio::time::Instant::now() - Duration::from_secs(10);
-    let mut last_diag = tokio::time::Instant::now();
-    let mut warned_no_hello = false;
-    let started = tokio::time::Instant::now();
+    let mut timers = SessionTimers::new();
     let mut tick = tokio::time::interval(Duration::from_millis(50));
     let mut buf = vec![0u8; 4096];
     loop {
@@ -1091,30 +1161,11 @@ async fn session(
             }
             _ = tick.tick() => {
                 let now = tokio::time::Instant::now();
-                if st.handshake == Handshake::Waiting {
-                    if now - last_hello >= opts.hello_period {
-                        to_send.extend(st.encode(&link::Message::HelloRequest(link::HelloRequest::ours()), now_ns()));
-                        last_hello = now;
-                    }
-                    if !warned_no_hello && now - started > Duration::from_secs(3) {
-                        tracing::warn!("no Hello from the MCU on {} yet (wrong device or baud?)", opts.device);
-                        warned_no_hello = true;
-                    }
-                } else {
-                    // Fast burst of 10 pings at 100 ms, then every ping_period.
-                    let period = if pings_sent < 10 { Duration::from_millis(100) } else { opts.ping_period };
-                    if now - last_ping >= period {
-                        let ping = link::TimeSyncPing { linux_time_ns: now_ns() as u64 };
-                        to_send.extend(st.encode(&link::Message::TimeSyncPing(ping), now_ns()));
-                        pings_sent += 1;
-                        last_ping = now;
-                    }
-                }
+                timers.link_upkeep(now, opts, st, &mut to_send);
                 ros.expire();
                 ros.sim_time(st);
-                if now - last_diag >= Duration::from_secs(1) {
+                if timers.diag_due(now) {
                     publish_diag(pubs, st, rates, &opts.device, true, tap);
-                    last_diag = now;
                 }
             }
         }

@@ -102,25 +102,15 @@ impl RateMeter {
     }
 }
 
-fn kv(key: &str, value: impl ToString) -> KeyValue {
-    KeyValue {
-        key: key.into(),
-        value: value.to_string(),
-    }
-}
-
-/// Build the diagnostics array.
-pub fn diagnostics(
+/// `fcc_bridge: link`: the serial link's health, counters and rates (ours and the MCU's).
+fn link_status(
     st: &LinkState,
     rates: &RateMeter,
     device: &str,
     connected: bool,
-    stamp: Time,
-) -> DiagnosticArray {
+) -> DiagnosticStatus {
     let t = st.link_totals();
     let c = &st.counters;
-    let hw = device.to_string();
-
     let (level, message) = if !connected {
         (
             DiagnosticStatus::ERROR,
@@ -188,8 +178,20 @@ pub fn diagnostics(
         link_values.push(kv("mcu_tx_dropped", m.tx_dropped));
     }
 
+    DiagnosticStatus {
+        level,
+        name: "fcc_bridge: link".into(),
+        message,
+        hardware_id: device.to_string(),
+        values: link_values,
+    }
+}
+
+/// `fcc_bridge: time sync`: the clock in use and the sync's offset and round trip.
+fn sync_status(st: &LinkState, device: &str) -> DiagnosticStatus {
+    let c = &st.counters;
     let ts = st.timesync.best();
-    let sync = DiagnosticStatus {
+    DiagnosticStatus {
         level: if ts.is_some() || st.clock == crate::state::ClockSource::Mcu {
             DiagnosticStatus::OK
         } else {
@@ -203,7 +205,7 @@ pub fn diagnostics(
             (_, Some(_)) => "synced".into(),
             (_, None) => "not synced: stamping by arrival".into(),
         },
-        hardware_id: hw.clone(),
+        hardware_id: device.to_string(),
         values: vec![
             kv(
                 "offset_ns",
@@ -217,15 +219,20 @@ pub fn diagnostics(
             kv("pongs_rejected", st.timesync.rejected),
             kv("stamped_by_arrival", c.stamped_by_arrival),
         ],
-    };
-    let sp = DiagnosticStatus {
+    }
+}
+
+/// `fcc_bridge: setpoints`: setpoints and commands forwarded, shaped and refused.
+fn setpoint_status(st: &LinkState, device: &str) -> DiagnosticStatus {
+    let c = &st.counters;
+    DiagnosticStatus {
         level: DiagnosticStatus::OK,
         name: "fcc_bridge: setpoints".into(),
         message: format!(
             "{} forwarded, {} refused",
             c.setpoints_forwarded, c.setpoint_rejects
         ),
-        hardware_id: hw.clone(),
+        hardware_id: device.to_string(),
         values: vec![
             kv("setpoints_forwarded", c.setpoints_forwarded),
             // The uplink shaper (state::Uplink): sent to the MCU, replaced by a newer one
@@ -247,39 +254,55 @@ pub fn diagnostics(
                 st.mcu_status.map_or(0, |m| m.command_rejects),
             ),
         ],
-    };
-    let mut status = vec![
-        DiagnosticStatus {
-            level,
-            name: "fcc_bridge: link".into(),
-            message,
-            hardware_id: hw.clone(),
-            values: link_values,
+    }
+}
+
+/// `fcc: vehicle`: the MCU's mode, arming and failsafe.
+fn vehicle_status(m: &link::Status, device: &str) -> DiagnosticStatus {
+    let (_, mode) = crate::convert::mode_code(m.mode);
+    let (fs, fsn) = crate::convert::failsafe_code(m.failsafe);
+    DiagnosticStatus {
+        level: if fs == 0 {
+            DiagnosticStatus::OK
+        } else {
+            DiagnosticStatus::WARN
         },
-        sync,
-        sp,
+        name: "fcc: vehicle".into(),
+        message: format!("{mode}, {}", if m.armed { "armed" } else { "disarmed" }),
+        hardware_id: device.to_string(),
+        values: vec![
+            kv("mode", mode),
+            kv("armed", m.armed),
+            kv("landed", m.landed),
+            kv("failsafe", fsn),
+            kv("loop_time_max_us", m.loop_time_max_us),
+            kv("loop_time_avg_us", m.loop_time_avg_us),
+        ],
+    }
+}
+
+fn kv(key: &str, value: impl ToString) -> KeyValue {
+    KeyValue {
+        key: key.into(),
+        value: value.to_string(),
+    }
+}
+
+/// Build the diagnostics array.
+pub fn diagnostics(
+    st: &LinkState,
+    rates: &RateMeter,
+    device: &str,
+    connected: bool,
+    stamp: Time,
+) -> DiagnosticArray {
+    let mut status = vec![
+        link_status(st, rates, device, connected),
+        sync_status(st, device),
+        setpoint_status(st, device),
     ];
     if let Some(m) = &st.mcu_status {
-        let (_, mode) = crate::convert::mode_code(m.mode);
-        let (fs, fsn) = crate::convert::failsafe_code(m.failsafe);
-        status.push(DiagnosticStatus {
-            level: if fs == 0 {
-                DiagnosticStatus::OK
-            } else {
-                DiagnosticStatus::WARN
-            },
-            name: "fcc: vehicle".into(),
-            message: format!("{mode}, {}", if m.armed { "armed" } else { "disarmed" }),
-            hardware_id: hw.clone(),
-            values: vec![
-                kv("mode", mode),
-                kv("armed", m.armed),
-                kv("landed", m.landed),
-                kv("failsafe", fsn),
-                kv("loop_time_max_us", m.loop_time_max_us),
-                kv("loop_time_avg_us", m.loop_time_avg_us),
-            ],
-        });
+        status.push(vehicle_status(m, device));
         status.push(sensors_status(m, st.ground_height_m, &st.cfg, device));
     }
     DiagnosticArray {

@@ -6,13 +6,13 @@
 //! See the README section "ROS 2 bridge" for topics, frames and parameters.
 //!
 //! Below this crate: `fcc_msgs` (the link codec and, feature `ros`, the ROS 2 message structs)
-//! and `fcc_ros` (`fcc_bridge/ros`: frames, `--ros-args`, the DDS participant, start-up
-//! protection — shared with `fcc-mission`).
+//! and `fcc_ros` (`fcc_bridge/ros`: frames, `--ros-args`, the DDS participant, the topic table
+//! `fcc_ros::topics` that the publishers, subscriptions and recorder read, start-up protection
+//! — shared with `fcc-mission`).
 //!
-//! Layers (bottom-up; a module uses only modules above it in this list):
+//! Layers (bottom-up; a module uses only modules above it in this list, tests aside):
 //! 1. Pure pieces: [`bounded`] (bounded input and rate-limited logs), [`mcu_params`] (the MCU
-//!    parameters as ROS parameters), [`topics`] (the topic table: name, type, QoS, direction),
-//!    [`timesync`] (MCU clock → ROS time).
+//!    parameters as ROS parameters), [`timesync`] (MCU clock → ROS time).
 //! 2. Conversions: [`convert`] (pure link ↔ ROS message conversions), [`health`] (sensor-health
 //!    rules and their `/rosout` transitions).
 //! 3. State: [`state`] (the sans-IO bridge state machine and counters), [`diag`]

@@ -324,66 +324,65 @@ impl LinkState {
                     );
                 }
             }
-            _ => {
-                let st = Time::from_nanos(self.stamp_ns(t_us, now_ns));
-                let cfg = &self.cfg;
-                match f.message {
-                    link::Message::ImuRaw(m) => {
-                        out.push(Out::ImuRaw(convert::imu_raw(&m, st, cfg)))
-                    }
-                    link::Message::MagRaw(m) => out.push(Out::Mag(convert::mag(&m, st, cfg))),
-                    link::Message::BaroRaw(m) => out.push(Out::Baro(convert::baro(&m, st, cfg))),
-                    link::Message::GpsRaw(m) => {
-                        out.push(Out::GpsFix(convert::gps_fix(&m, st, cfg)))
-                    }
-                    link::Message::RangeRaw(m) => {
-                        let (r, laser) = convert::range(&m, st, cfg);
-                        out.push(if laser { Out::Laser(r) } else { Out::Sonar(r) });
-                    }
-                    link::Message::Battery(m) => {
-                        out.push(Out::Battery(convert::battery(&m, st, cfg)))
-                    }
-                    link::Message::NavState(m) => {
-                        self.yaw_ned = Some(fcc_ros::frames::yaw_ned(fcc_ros::frames::quat_f64(
-                            m.q_body_to_ned,
-                        )));
-                        let (odom, imu, tf) = convert::nav_state(&m, st, cfg);
-                        out.push(Out::Odom(odom));
-                        out.push(Out::StateImu(imu));
-                        out.push(Out::Tf(tf));
-                        let (obs, meas) = convert::accels(&m, st, cfg);
-                        out.push(Out::AccelObserver(obs));
-                        out.push(Out::AccelMeasured(meas));
-                        if self.clock == ClockSource::Mcu {
-                            out.push(Out::Clock(Clock { clock: st }));
-                        }
-                    }
-                    link::Message::AltitudeFusion(m) => {
-                        self.ground_height_m = Some(m.ground_height_m);
-                        let (a, g) = convert::altitude(&m, st, cfg);
-                        out.push(Out::Altitude(a));
-                        out.push(Out::Ground(g));
-                    }
-                    link::Message::Status(m) => {
-                        self.mcu_status = Some(m);
-                        for (warn, text) in
-                            self.sensors
-                                .update(&m, self.ground_height_m, &self.cfg, t_us)
-                        {
-                            if warn {
-                                tracing::warn!("{text}");
-                            } else {
-                                tracing::info!("{text}");
-                            }
-                        }
-                        let s = self.fill_status(convert::status(&m, st, cfg));
-                        out.push(Out::Status(s));
-                    }
-                    _ => self.counters.dropped += 1,
-                }
-            }
+            m => self.on_telemetry(m, t_us, now_ns, out),
         }
         Ok(())
+    }
+
+    /// A telemetry frame (MCU time `t_us`) → the ROS messages it gives; the navigation state,
+    /// altitude and status also update the state the bridge keeps (yaw, ground height, the
+    /// MCU's status and sensor-health transitions).
+    fn on_telemetry(&mut self, message: link::Message, t_us: u64, now_ns: i64, out: &mut Vec<Out>) {
+        let st = Time::from_nanos(self.stamp_ns(t_us, now_ns));
+        let cfg = &self.cfg;
+        match message {
+            link::Message::ImuRaw(m) => out.push(Out::ImuRaw(convert::imu_raw(&m, st, cfg))),
+            link::Message::MagRaw(m) => out.push(Out::Mag(convert::mag(&m, st, cfg))),
+            link::Message::BaroRaw(m) => out.push(Out::Baro(convert::baro(&m, st, cfg))),
+            link::Message::GpsRaw(m) => out.push(Out::GpsFix(convert::gps_fix(&m, st, cfg))),
+            link::Message::RangeRaw(m) => {
+                let (r, laser) = convert::range(&m, st, cfg);
+                out.push(if laser { Out::Laser(r) } else { Out::Sonar(r) });
+            }
+            link::Message::Battery(m) => out.push(Out::Battery(convert::battery(&m, st, cfg))),
+            link::Message::NavState(m) => {
+                self.yaw_ned = Some(fcc_ros::frames::yaw_ned(fcc_ros::frames::quat_f64(
+                    m.q_body_to_ned,
+                )));
+                let (odom, imu, tf) = convert::nav_state(&m, st, cfg);
+                out.push(Out::Odom(odom));
+                out.push(Out::StateImu(imu));
+                out.push(Out::Tf(tf));
+                let (obs, meas) = convert::accels(&m, st, cfg);
+                out.push(Out::AccelObserver(obs));
+                out.push(Out::AccelMeasured(meas));
+                if self.clock == ClockSource::Mcu {
+                    out.push(Out::Clock(Clock { clock: st }));
+                }
+            }
+            link::Message::AltitudeFusion(m) => {
+                self.ground_height_m = Some(m.ground_height_m);
+                let (a, g) = convert::altitude(&m, st, cfg);
+                out.push(Out::Altitude(a));
+                out.push(Out::Ground(g));
+            }
+            link::Message::Status(m) => {
+                self.mcu_status = Some(m);
+                for (warn, text) in self
+                    .sensors
+                    .update(&m, self.ground_height_m, &self.cfg, t_us)
+                {
+                    if warn {
+                        tracing::warn!("{text}");
+                    } else {
+                        tracing::info!("{text}");
+                    }
+                }
+                let s = self.fill_status(convert::status(&m, st, cfg));
+                out.push(Out::Status(s));
+            }
+            _ => self.counters.dropped += 1,
+        }
     }
 
     /// Add the bridge's counters to a status message.
