@@ -47,7 +47,8 @@ for name, allowed in [("fcc_mission", {"fcc_msgs", "fcc_ros"}), ("fcc_ros", {"fc
         report(False, f"{name} exists")
         continue
     extra = sorted(set(ws_deps(name)) - allowed)
-    report(not extra, f"{name} depends on {sorted(allowed) or 'no workspace crate'} only",
+    what = f"{', '.join(sorted(allowed))} only" if allowed else "no workspace crate"
+    report(not extra, f"{name} depends on {what}",
            f"also on {extra}" if extra else "")
 
 # 2. fcc_firmware's default build has no simulator dependency.
