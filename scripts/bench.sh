@@ -55,7 +55,7 @@ fi
 # Row 4: the bridge against the independent DDS peer (~75 s).
 echo "== building fcc-bridge, fcc-fake-mcu, fcc-record-bench (release)" >&2
 cargo build --release --locked -p fcc_bridge --bin fcc-bridge --bin fcc-fake-mcu >&2
-cargo build --release --locked -p fcc_report --bin fcc-record-bench >&2
+cargo build --release --locked -p fcc_bridge --bin fcc-record-bench >&2
 py=${FCC_DDS_PYTHON:-.venv-dds/bin/python}
 if "$py" -c 'import cyclonedds' 2>/dev/null; then
     echo "== tests/dds/bench_latency.sh (rows 4, 4b, 4c)" >&2
@@ -113,7 +113,7 @@ cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
         echo "- **$id**: $text"
     done
     echo "- **3b**: parsed from \`scripts/test-mcu.sh\` (the MCU-target work: the core cross-built for thumbv7em-none-eabihf replays a recorded flight in QEMU with -icount, 1 instruction = 1 tick) when that script exists; instructions, not cycles (flash wait states add roughly 1.2–2 cycles per instruction)."
-    echo "- **5**: \`fcc-record-bench\` (fcc_report/src/bin/record_bench.rs): the same messages through our recorder and through the \`mcap\` crate's writer with the same write options, best of 3."
+    echo "- **5**: \`fcc-record-bench\` (fcc_bridge/src/bin/record_bench.rs): the same messages through our recorder and through the \`mcap\` crate's writer with the same write options, best of 3."
     grep -q '^ROW|4|' "$raw" || echo "- **4**: not measured in this run (needs the DDS peer's Python: \`scripts/test.sh\` makes .venv-dds)." 
     echo
     echo "## Flight-safety campaign (truth)"

@@ -35,7 +35,7 @@ fi
 cargo build --release --locked -p fcc_firmware --bin fcc-sitl
 cargo build --release --locked -p fcc_bridge --bin fcc-bridge
 cargo build --release --locked -p fcc_mission --features ros --bin fcc-mission --bin fcc-launch
-cargo build --release --locked -p fcc_report --bin fcc-report
+cargo build --release --locked -p fcc_bridge --bin fcc-report
 summary="$out/summary.txt"
 : > "$summary"
 for s in hover square elevator yaw_disturbance ground_test roll_30 roll_45 landing_dark; do

@@ -46,6 +46,9 @@ run() { if [ -n "$netns" ]; then "$netns" "$@"; else "$@"; fi; }
 # The MCU core must build without std (no heap, no OS).
 run cargo build --offline --locked -p fcc_firmware --no-default-features
 run cargo build --offline --locked -p fcc_msgs --no-default-features
+# The dependency rules (issue 15): who may depend on the bridge application, fcc_mission on
+# fcc_msgs + fcc_ros only, the MCU crate's default build without the simulator, no import circles.
+scripts/check-deps.sh
 # Every program the end-to-end tests start (fcc-sitl, fcc-bridge, fcc-fake-mcu, fcc-mission,
 # fcc-launch, fcc-wire-fault, fcc-report, the recorder's mission driver), built before the tests.
 run cargo build --offline --locked --release --workspace --bins --examples

@@ -4,14 +4,15 @@ use crate::bounded;
 use crate::convert::{self, Config, SetpointLimits};
 use crate::diag::{self, RateMeter};
 use crate::mcu_params::{self, MCU_PARAMS};
-use crate::now_ns;
-use crate::params;
-use crate::record::{QosInfo, Tap};
+use crate::record::Tap;
 use crate::ros_api::{self, LinkRequest, ParamShared};
-use crate::ros_types::*;
-use crate::startup::{self, Step};
 use crate::state::{ClockSource, Fatal, Handshake, LinkState, Out};
 use fcc_msgs as link;
+use fcc_msgs::ros::*;
+use fcc_ros::now_ns;
+use fcc_ros::params;
+use fcc_ros::startup::{self, Step};
+use fcc_ros::topics::{self, Topic};
 use futures::StreamExt;
 use ros2_client::parameters::ParameterValue;
 use ros2_client::qos::{Durability, History, WhenFull};
@@ -20,7 +21,6 @@ use ros2_client::{
     ServiceTypeName,
 };
 use std::collections::BTreeMap;
-use std::net::Ipv4Addr;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::Duration;
@@ -130,54 +130,38 @@ pub struct Publishers {
     clock: Option<Publisher<Clock>>,
 }
 
-/// Reliable, volatile, keep-last: matches reliable and best-effort readers. A full send
-/// window fails at once (counted) instead of stalling the serial loop.
-fn telemetry_qos(depth: usize) -> QosProfile {
-    QosProfile::publisher_default()
-        .reliability_reliable(WhenFull::Fail)
-        .durability(Durability::Volatile)
-        .history(History::KeepLast { depth })
-}
-
+/// A publisher for a topic of the table, under the node's namespace and remaps.
 fn publisher<T: RosMsg>(
     node: &mut Node,
-    name: &str,
-    qos: &QosProfile,
+    o: &Options,
+    topic: &Topic<T>,
 ) -> Result<Publisher<T>, BridgeError> {
-    crate::ros_node::publisher(node, name, qos).map_err(BridgeError::Ros)
+    fcc_ros::ros_node::publisher(node, &o.name(topic.name), &topic.qos.publisher_profile())
+        .map_err(BridgeError::Ros)
 }
 
 impl Publishers {
     fn new(node: &mut Node, o: &Options) -> Result<Self, BridgeError> {
-        let clock = o.clock;
-        let q = telemetry_qos(10);
         Ok(Publishers {
-            imu_raw: publisher(node, &o.name("imu/data_raw"), &q)?,
-            mag: publisher(node, &o.name("mag"), &q)?,
-            baro: publisher(node, &o.name("baro"), &q)?,
-            gps_fix: publisher(node, &o.name("gps/fix"), &q)?,
-            laser: publisher(node, &o.name("range/laser"), &q)?,
-            sonar: publisher(node, &o.name("range/sonar"), &q)?,
-            battery: publisher(node, &o.name("battery"), &q)?,
-            odom: publisher(node, &o.name("state/odom"), &q)?,
-            state_imu: publisher(node, &o.name("state/imu"), &q)?,
-            tf: publisher(node, &o.name("/tf"), &telemetry_qos(100))?,
-            tf_static: publisher(
-                node,
-                &o.name("/tf_static"),
-                &QosProfile::publisher_default()
-                    .reliability_reliable(WhenFull::Fail)
-                    .durability(Durability::TransientLocal)
-                    .history(History::KeepLast { depth: 1 }),
-            )?,
-            altitude: publisher(node, &o.name("altitude"), &q)?,
-            ground: publisher(node, &o.name("altitude/ground"), &q)?,
-            status: publisher(node, &o.name("status"), &q)?,
-            accel_observer: publisher(node, &o.name("accel/observer"), &q)?,
-            accel_measured: publisher(node, &o.name("accel/measured"), &q)?,
-            diagnostics: publisher(node, &o.name("/diagnostics"), &q)?,
-            clock: if clock == ClockSource::Mcu {
-                Some(publisher(node, &o.name("/clock"), &telemetry_qos(1))?)
+            imu_raw: publisher(node, o, &topics::IMU_RAW)?,
+            mag: publisher(node, o, &topics::MAG)?,
+            baro: publisher(node, o, &topics::BARO)?,
+            gps_fix: publisher(node, o, &topics::GPS_FIX)?,
+            laser: publisher(node, o, &topics::LASER)?,
+            sonar: publisher(node, o, &topics::SONAR)?,
+            battery: publisher(node, o, &topics::BATTERY)?,
+            odom: publisher(node, o, &topics::ODOM)?,
+            state_imu: publisher(node, o, &topics::STATE_IMU)?,
+            tf: publisher(node, o, &topics::TF)?,
+            tf_static: publisher(node, o, &topics::TF_STATIC)?,
+            altitude: publisher(node, o, &topics::ALTITUDE)?,
+            ground: publisher(node, o, &topics::GROUND)?,
+            status: publisher(node, o, &topics::STATUS)?,
+            accel_observer: publisher(node, o, &topics::ACCEL_OBSERVER)?,
+            accel_measured: publisher(node, o, &topics::ACCEL_MEASURED)?,
+            diagnostics: publisher(node, o, &topics::DIAGNOSTICS)?,
+            clock: if o.clock == ClockSource::Mcu {
+                Some(publisher(node, o, &topics::CLOCK)?)
             } else {
                 None
             },
@@ -186,34 +170,33 @@ impl Publishers {
 
     /// Publish (and count/record at ROS time `t_ns`); returns false if the write failed.
     fn publish(&self, o: Out, tap: &Tap, t_ns: i64) -> bool {
-        let q = QosInfo::TELEMETRY;
         macro_rules! pb {
-            ($pb:expr, $name:expr, $qos:expr, $m:expr) => {{
-                tap.published($name, $qos, &$m, t_ns);
+            ($pb:expr, $topic:expr, $m:expr) => {{
+                tap.published_on(&$topic, &$m, t_ns);
                 $pb.publish($m).is_ok()
             }};
         }
         match o {
-            Out::ImuRaw(m) => pb!(self.imu_raw, "imu/data_raw", q, m),
-            Out::Mag(m) => pb!(self.mag, "mag", q, m),
-            Out::Baro(m) => pb!(self.baro, "baro", q, m),
-            Out::GpsFix(m) => pb!(self.gps_fix, "gps/fix", q, m),
-            Out::Laser(m) => pb!(self.laser, "range/laser", q, m),
-            Out::Sonar(m) => pb!(self.sonar, "range/sonar", q, m),
-            Out::Battery(m) => pb!(self.battery, "battery", q, m),
-            Out::Odom(m) => pb!(self.odom, "state/odom", q, m),
-            Out::StateImu(m) => pb!(self.state_imu, "state/imu", q, m),
-            Out::Tf(m) => pb!(self.tf, "/tf", QosInfo { depth: 100, ..q }, m),
-            Out::Altitude(m) => pb!(self.altitude, "altitude", q, m),
-            Out::Ground(m) => pb!(self.ground, "altitude/ground", q, m),
+            Out::ImuRaw(m) => pb!(self.imu_raw, topics::IMU_RAW, m),
+            Out::Mag(m) => pb!(self.mag, topics::MAG, m),
+            Out::Baro(m) => pb!(self.baro, topics::BARO, m),
+            Out::GpsFix(m) => pb!(self.gps_fix, topics::GPS_FIX, m),
+            Out::Laser(m) => pb!(self.laser, topics::LASER, m),
+            Out::Sonar(m) => pb!(self.sonar, topics::SONAR, m),
+            Out::Battery(m) => pb!(self.battery, topics::BATTERY, m),
+            Out::Odom(m) => pb!(self.odom, topics::ODOM, m),
+            Out::StateImu(m) => pb!(self.state_imu, topics::STATE_IMU, m),
+            Out::Tf(m) => pb!(self.tf, topics::TF, m),
+            Out::Altitude(m) => pb!(self.altitude, topics::ALTITUDE, m),
+            Out::Ground(m) => pb!(self.ground, topics::GROUND, m),
             Out::Status(m) => {
                 tap.armed(m.armed);
-                pb!(self.status, "status", q, m)
+                pb!(self.status, topics::STATUS, m)
             }
-            Out::AccelObserver(m) => pb!(self.accel_observer, "accel/observer", q, m),
-            Out::AccelMeasured(m) => pb!(self.accel_measured, "accel/measured", q, m),
+            Out::AccelObserver(m) => pb!(self.accel_observer, topics::ACCEL_OBSERVER, m),
+            Out::AccelMeasured(m) => pb!(self.accel_measured, topics::ACCEL_MEASURED, m),
             Out::Clock(m) => match &self.clock {
-                Some(c) => pb!(c, "/clock", QosInfo { depth: 1, ..q }, m),
+                Some(c) => pb!(c, topics::CLOCK, m),
                 None => true,
             },
         }
@@ -265,14 +248,18 @@ type InboundMsg = (Inbound, Option<bounded::Oversize>);
 /// `QosProfile` has no resource limits, and rustdds only ever raises a topic's limit).
 const INBOUND_KEEP: i32 = 4;
 
+/// Subscribe to a read topic of the table (under the node's namespace and remaps); each message
+/// goes to `tx` wrapped by `wrap`.
 fn subscribe<T: RosMsg + Sync>(
     ctx: &Context,
-    node_name: &NodeName,
     node: &mut Node,
-    name: &str,
+    o: &Options,
+    topic: &Topic<T>,
     tx: mpsc::Sender<InboundMsg>,
     wrap: fn(T) -> Inbound,
 ) -> Result<(), BridgeError> {
+    let name = &o.name(topic.name);
+    let node_name = &NodeName::new(&o.namespace, &o.node_name).map_err(ros_err)?;
     use rustdds::policy::ResourceLimits;
     // Best-effort reader: matches both reliable (`ros2 topic pub`) and best-effort writers.
     let qos = QosProfile::subscription_default().history(History::KeepLast {
@@ -325,14 +312,13 @@ fn subscribe<T: RosMsg + Sync>(
     Ok(())
 }
 
-/// Build the DDS participant: loopback only unless disabled.
+/// The DDS participant (`fcc_ros::ros_node::context`): loopback only unless disabled.
 fn context(opts: &Options) -> Result<Context, BridgeError> {
-    let mut b = rustdds::DomainParticipantBuilder::new(opts.domain_id);
-    if opts.localhost_only {
-        b = b.with_only_networks([Ipv4Addr::LOCALHOST]);
-    }
-    let dp = b.build().map_err(ros_err)?;
-    Context::from_domain_participant(dp).map_err(ros_err)
+    fcc_ros::ros_node::context(fcc_ros::ros_node::DdsEnv {
+        domain_id: opts.domain_id,
+        localhost_only: opts.localhost_only,
+    })
+    .map_err(BridgeError::Ros)
 }
 
 /// The ROS-side requests waiting for the MCU (services, parameter sets) and what the link
@@ -627,6 +613,51 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         mcu_values: Default::default(),
         link: ltx.clone(),
     });
+    let nopts = node_options(opts, &shared);
+    step.set("creating the ROS node");
+    let mut node = ctx
+        .new_node(
+            NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?,
+            nopts,
+        )
+        .map_err(ros_err)?;
+    spawn_spinner(&mut node)?;
+    shared.live.store(true, Ordering::SeqCst);
+    spawn_rosout(&node, opts)?;
+    step.set("creating the publishers");
+    let pubs = Publishers::new(&mut node, opts)?;
+    step.set("creating the subscriptions");
+    let (rx, crx) = subscribe_all(&ctx, &mut node, opts)?;
+    step.set("creating the services");
+    create_services(&mut node, opts, &ltx)?;
+    drop(ltx);
+    tracing::info!(
+        "node {}/{} on DDS domain {} ({}), device {} at {} baud",
+        opts.namespace.trim_end_matches('/'),
+        opts.node_name,
+        opts.domain_id,
+        if opts.localhost_only {
+            "loopback only"
+        } else {
+            "all interfaces"
+        },
+        opts.device,
+        opts.baud
+    );
+    Ok(Dds {
+        _ctx: ctx,
+        node,
+        pubs,
+        rx,
+        crx,
+        lrx,
+        shared,
+    })
+}
+
+/// The node's options: /rosout, the parameter services, every parameter declared with its
+/// start-up value (bridge, frames, MCU), and the validator and set action of `shared`.
+fn node_options(opts: &Options, shared: &Arc<ParamShared>) -> NodeOptions {
     use ParameterValue as P;
     let l = &opts.limits;
     let c = &opts.cfg;
@@ -690,15 +721,12 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             }
             Ok(())
         }));
-    step.set("creating the ROS node");
-    let mut node = ctx
-        .new_node(
-            NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?,
-            nopts,
-        )
-        .map_err(ros_err)?;
-    // The spinner serves discovery, /clock and the parameter services. It runs on its own
-    // thread because the parameter validator blocks while the MCU acknowledges a set.
+    nopts
+}
+
+/// The spinner serves discovery, /clock and the parameter services. It runs on its own thread
+/// because the parameter validator blocks while the MCU acknowledges a set.
+fn spawn_spinner(node: &mut Node) -> Result<(), BridgeError> {
     let spinner = node.spinner().map_err(ros_err)?;
     std::thread::Builder::new()
         .name("ros-spinner".into())
@@ -714,12 +742,15 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             }
         })
         .map_err(ros_err)?;
-    shared.live.store(true, Ordering::SeqCst);
-    // /rosout: the bridge's tracing events (INFO and above), with their level.
+    Ok(())
+}
+
+/// /rosout: the bridge's tracing events (INFO and above), with their level.
+fn spawn_rosout(node: &Node, opts: &Options) -> Result<(), BridgeError> {
     if let Some(logs) = ros_api::rosout_channel() {
         use ros2_client::RosoutRaw;
         let h = node.logging_handle();
-        let logger = ros_api::logger_name(&opts.namespace, &opts.node_name);
+        let logger = fcc_ros::logger_name(&opts.namespace, &opts.node_name);
         std::thread::Builder::new()
             .name("rosout".into())
             .spawn(move || {
@@ -737,63 +768,68 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             })
             .map_err(ros_err)?;
     }
-    step.set("creating the publishers");
-    let pubs = Publishers::new(&mut node, opts)?;
-    step.set("creating the subscriptions");
-    // Setpoints (and /clock) and commands on separate queues: a command never waits behind a
-    // queue of setpoints from a flooding peer.
+    Ok(())
+}
+
+/// The read topics. Setpoints (and /clock) and commands on separate queues: a command never
+/// waits behind a queue of setpoints from a flooding peer. Returns (setpoints, commands).
+fn subscribe_all(
+    ctx: &Context,
+    node: &mut Node,
+    opts: &Options,
+) -> Result<(mpsc::Receiver<InboundMsg>, mpsc::Receiver<InboundMsg>), BridgeError> {
     let (tx, rx) = mpsc::channel::<InboundMsg>(64);
     let (ctx_tx, crx) = mpsc::channel::<InboundMsg>(64);
-    let node_name = NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?;
     subscribe::<TwistStamped>(
-        &ctx,
-        &node_name,
-        &mut node,
-        &opts.name("setpoint/velocity"),
+        ctx,
+        node,
+        opts,
+        &topics::SETPOINT_VELOCITY,
         tx.clone(),
         Inbound::Setpoint,
     )?;
     subscribe::<Bool>(
-        &ctx,
-        &node_name,
-        &mut node,
-        &opts.name("cmd/arm"),
+        ctx,
+        node,
+        opts,
+        &topics::CMD_ARM,
         ctx_tx.clone(),
         Inbound::Arm,
     )?;
     subscribe::<StringMsg>(
-        &ctx,
-        &node_name,
-        &mut node,
-        &opts.name("cmd/mode"),
+        ctx,
+        node,
+        opts,
+        &topics::CMD_MODE,
         ctx_tx.clone(),
         Inbound::Mode,
     )?;
     subscribe::<StringMsg>(
-        &ctx,
-        &node_name,
-        &mut node,
-        &opts.name("cmd/kill"),
+        ctx,
+        node,
+        opts,
+        &topics::CMD_KILL,
         ctx_tx.clone(),
         Inbound::Kill,
     )?;
     // With clock_source:=sync, /clock is read whatever use_sim_time says now: it can be set at
     // run time, and the link task applies /clock only while it is true.
     if opts.clock == ClockSource::Sync {
-        subscribe::<Clock>(
-            &ctx,
-            &node_name,
-            &mut node,
-            &opts.name("/clock"),
-            tx,
-            Inbound::Clock,
-        )?;
+        subscribe::<Clock>(ctx, node, opts, &topics::CLOCK, tx, Inbound::Clock)?;
     }
-    step.set("creating the services");
+    Ok((rx, crx))
+}
+
+/// The `arm` (SetBool), `land` and `hold` (Trigger) services, answered after the MCU's ack.
+fn create_services(
+    node: &mut Node,
+    opts: &Options,
+    ltx: &mpsc::Sender<LinkRequest>,
+) -> Result<(), BridgeError> {
     use link::CommandKind as K;
     use ros_api::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
     command_service::<SetBoolRequest, SetBoolResponse>(
-        &mut node,
+        node,
         &opts.name("arm"),
         "SetBool",
         ltx.clone(),
@@ -806,7 +842,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             _ => |_| K::Hold,
         };
         command_service::<TriggerRequest, TriggerResponse>(
-            &mut node,
+            node,
             &opts.name(srv),
             "Trigger",
             ltx.clone(),
@@ -814,30 +850,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             |success, message| TriggerResponse { success, message },
         )?;
     }
-    drop(ltx);
-    drop(ctx_tx);
-    tracing::info!(
-        "node {}/{} on DDS domain {} ({}), device {} at {} baud",
-        opts.namespace.trim_end_matches('/'),
-        opts.node_name,
-        opts.domain_id,
-        if opts.localhost_only {
-            "loopback only"
-        } else {
-            "all interfaces"
-        },
-        opts.device,
-        opts.baud
-    );
-    Ok(Dds {
-        _ctx: ctx,
-        node,
-        pubs,
-        rx,
-        crx,
-        lrx,
-        shared,
-    })
+    Ok(())
 }
 
 /// Run the bridge until a fatal error (the serial device is retried forever).
@@ -874,16 +887,7 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         st.uplink.interval_ns() as f64 / 1e6
     );
     let tf_static = convert::static_transforms(Time::from_nanos(now_ns()), &st.cfg);
-    tap.published(
-        "/tf_static",
-        QosInfo {
-            transient_local: true,
-            depth: 1,
-            ..QosInfo::TELEMETRY
-        },
-        &tf_static,
-        rec_time(&st),
-    );
+    tap.published_on(&topics::TF_STATIC, &tf_static, rec_time(&st));
     let _ = pubs.tf_static.publish(tf_static);
     let mut rates = RateMeter::default();
     let mut first = true;
@@ -951,12 +955,11 @@ fn drain_inbound(rx: &mut InboundRx, st: &mut LinkState, tap: &Tap) {
 
 fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Option<link::Message> {
     let t = rec_time(st);
-    let q = QosInfo::BEST_EFFORT;
     match &m {
-        Inbound::Setpoint(x) => tap.received("setpoint/velocity", q, x, t),
-        Inbound::Arm(x) => tap.received("cmd/arm", q, x, t),
-        Inbound::Mode(x) => tap.received("cmd/mode", q, x, t),
-        Inbound::Kill(x) => tap.received("cmd/kill", q, x, t),
+        Inbound::Setpoint(x) => tap.received_on(&topics::SETPOINT_VELOCITY, x, t),
+        Inbound::Arm(x) => tap.received_on(&topics::CMD_ARM, x, t),
+        Inbound::Mode(x) => tap.received_on(&topics::CMD_MODE, x, t),
+        Inbound::Kill(x) => tap.received_on(&topics::CMD_KILL, x, t),
         Inbound::Clock(_) => {}
     }
     // A string that arrived too long (cut on arrival, recorded cut): refused, counted.
@@ -1000,8 +1003,83 @@ fn publish_diag(
     rates.update(st, now);
     let t = rec_time(st);
     let d = diag::diagnostics(st, rates, device, connected, Time::from_nanos(t));
-    tap.published("/diagnostics", QosInfo::TELEMETRY, &d, t);
+    tap.published_on(&topics::DIAGNOSTICS, &d, t);
     let _ = pubs.diagnostics.publish(d);
+}
+
+/// The periodic work of a session (every 50 ms tick): Hello requests until the MCU answers
+/// (and a warning after 3 s without one), then time-sync pings; `/diagnostics` every second.
+struct SessionTimers {
+    started: tokio::time::Instant,
+    last_hello: tokio::time::Instant,
+    warned_no_hello: bool,
+    pings_sent: u32,
+    last_ping: tokio::time::Instant,
+    last_diag: tokio::time::Instant,
+}
+
+impl SessionTimers {
+    fn new() -> Self {
+        let now = tokio::time::Instant::now();
+        SessionTimers {
+            started: now,
+            last_hello: now,
+            warned_no_hello: false,
+            pings_sent: 0,
+            last_ping: now - Duration::from_secs(10),
+            last_diag: now,
+        }
+    }
+
+    /// A Hello request or a time-sync ping into `to_send` when one is due.
+    fn link_upkeep(
+        &mut self,
+        now: tokio::time::Instant,
+        opts: &Options,
+        st: &mut LinkState,
+        to_send: &mut Vec<u8>,
+    ) {
+        if st.handshake == Handshake::Waiting {
+            if now - self.last_hello >= opts.hello_period {
+                to_send.extend(st.encode(
+                    &link::Message::HelloRequest(link::HelloRequest::ours()),
+                    now_ns(),
+                ));
+                self.last_hello = now;
+            }
+            if !self.warned_no_hello && now - self.started > Duration::from_secs(3) {
+                tracing::warn!(
+                    "no Hello from the MCU on {} yet (wrong device or baud?)",
+                    opts.device
+                );
+                self.warned_no_hello = true;
+            }
+        } else {
+            // Fast burst of 10 pings at 100 ms, then every ping_period.
+            let period = if self.pings_sent < 10 {
+                Duration::from_millis(100)
+            } else {
+                opts.ping_period
+            };
+            if now - self.last_ping >= period {
+                let ping = link::TimeSyncPing {
+                    linux_time_ns: now_ns() as u64,
+                };
+                to_send.extend(st.encode(&link::Message::TimeSyncPing(ping), now_ns()));
+                self.pings_sent += 1;
+                self.last_ping = now;
+            }
+        }
+    }
+
+    /// Whether `/diagnostics` is due (once a second); if so, counted as sent.
+    fn diag_due(&mut self, now: tokio::time::Instant) -> bool {
+        let due = now - self.last_diag >= Duration::from_secs(1);
+        if due {
+            self.last_diag = now;
+        }
+        due
+    }
 }
 
 /// One connection: returns why it ended (IO), or a fatal handshake error.
@@ -1027,12 +1105,7 @@ async fn session(
     if let Err(e) = wr.write_all(&hello).await {
         return Ok(format!("write: {e}"));
     }
-    let mut last_hello = tokio::time::Instant::now();
-    let mut pings_sent = 0u32;
-    let mut last_ping = tokio::time::Instant::now() - Duration::from_secs(10);
-    let mut last_diag = tokio::time::Instant::now();
-    let mut warned_no_hello = false;
-    let started = tokio::time::Instant::now();
+    let mut timers = SessionTimers::new();
     let mut tick = tokio::time::interval(Duration::from_millis(50));
     let mut buf = vec![0u8; 4096];
     loop {
@@ -1088,30 +1161,11 @@ async fn session(
             }
             _ = tick.tick() => {
                 let now = tokio::time::Instant::now();
-                if st.handshake == Handshake::Waiting {
-                    if now - last_hello >= opts.hello_period {
-                        to_send.extend(st.encode(&link::Message::HelloRequest(link::HelloRequest::ours()), now_ns()));
-                        last_hello = now;
-                    }
-                    if !warned_no_hello && now - started > Duration::from_secs(3) {
-                        tracing::warn!("no Hello from the MCU on {} yet (wrong device or baud?)", opts.device);
-                        warned_no_hello = true;
-                    }
-                } else {
-                    // Fast burst of 10 pings at 100 ms, then every ping_period.
-                    let period = if pings_sent < 10 { Duration::from_millis(100) } else { opts.ping_period };
-                    if now - last_ping >= period {
-                        let ping = link::TimeSyncPing { linux_time_ns: now_ns() as u64 };
-                        to_send.extend(st.encode(&link::Message::TimeSyncPing(ping), now_ns()));
-                        pings_sent += 1;
-                        last_ping = now;
-                    }
-                }
+                timers.link_upkeep(now, opts, st, &mut to_send);
                 ros.expire();
                 ros.sim_time(st);
-                if now - last_diag >= Duration::from_secs(1) {
+                if timers.diag_due(now) {
                     publish_diag(pubs, st, rates, &opts.device, true, tap);
-                    last_diag = now;
                 }
             }
         }
@@ -1127,5 +1181,21 @@ async fn session(
                 return Ok(format!("write: {e}"));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The table's `ping_period_ms` default is the one in use (the rest of the table's defaults
+    /// are checked in `ros_api`, which does not depend on this module).
+    #[test]
+    fn ping_period_default_is_the_tables() {
+        let def = crate::ros_api::bridge_param("ping_period_ms")
+            .unwrap()
+            .default;
+        assert_eq!(
+            def,
+            super::Options::default().ping_period.as_millis() as f64
+        );
     }
 }

@@ -1,11 +1,11 @@
 //! Pure conversions: decoded link messages → ROS messages, and ROS setpoints/commands → link
 //! messages (with validation). No IO, no clock: stamps and the latest state are arguments.
-//! Frame maths comes from [`crate::frames`].
+//! Frame maths comes from [`fcc_ros::frames`].
 
 use crate::bounded;
-use crate::frames::{self, f64x3, frd_to_flu, ned_to_enu};
-use crate::ros_types::*;
 use fcc_msgs as link;
+use fcc_msgs::ros::*;
+use fcc_ros::frames::{self, f64x3, frd_to_flu, ned_to_enu};
 
 /// Laser sentinel for "no return" (passed through by the MCU).
 pub const LASER_NO_RETURN_M: f32 = 99_999.0;

@@ -175,49 +175,12 @@ pub fn run(pty: Pty, o: &FakeOptions) -> std::io::Result<u64> {
 
 /// Like [`run`], with the counts of IMU frames and late ticks.
 pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
-    let rates = o.rates;
-    let tick_hz = u64::from(rates.imu_raw_hz.max(200));
+    let tick_hz = u64::from(o.rates.imu_raw_hz.max(200));
     let tick_us = (1_000_000 / tick_hz).max(1);
     let mut stats = FakeStats::default();
-    let s = o.script;
     let start = Instant::now();
-    // CLOCK_MONOTONIC at `start` (Instant is CLOCK_MONOTONIC on Linux), for the log's mono_us.
-    let mono_start_us = {
-        let mut t = nix::libc::timespec {
-            tv_sec: 0,
-            tv_nsec: 0,
-        };
-        // SAFETY: one valid timespec.
-        unsafe { nix::libc::clock_gettime(nix::libc::CLOCK_MONOTONIC, &mut t) };
-        t.tv_sec as u64 * 1_000_000 + t.tv_nsec as u64 / 1000
-    };
-    let now_us = || start.elapsed().as_micros() as u64;
-    let mut enc = link::Encoder::new();
-    let mut dec = link::FrameDecoder::new();
-    let mut log = match &o.log {
-        Some(p) => Some(File::create(p)?),
-        None => None,
-    };
-    let hello = link::Message::Hello(link::Hello {
-        protocol_version: o.protocol_version,
-        schema_hash: o.schema_hash,
-        firmware_version: [0, 1, 0],
-    });
-    let mut sent = 0u64;
-    let mut out: Vec<u8> = Vec::new();
-    let push = |m: &link::Message, t_us: u64, enc: &mut link::Encoder, out: &mut Vec<u8>| {
-        let mut b = [0u8; link::MAX_FRAME_LEN];
-        let n = enc.encode(m, t_us, &mut b).expect("encode");
-        out.extend_from_slice(&b[..n]);
-    };
-    push(&hello, now_us(), &mut enc, &mut out);
-    let mut tick: u64 = 0;
-    let mut armed = false;
-    let mut mode = link::FlightMode::Disarmed;
-    // A reader thread timestamps input as it arrives (poll + read), like a UART RX interrupt,
-    // so a TimeSyncPing's receive time does not include the wait for the next telemetry tick
-    // (which would bias the bridge's time sync by up to half a tick).
-    let (tx_ch, rx_ch) = std::sync::mpsc::channel::<std::io::Result<(Vec<u8>, u64)>>();
+    let mut mcu = FakeMcu::new(o, start)?;
+    mcu.push(&mcu.hello.clone(), mcu.now_us());
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     /// Stops the reader thread however `run_stats` returns.
     struct StopOnDrop(std::sync::Arc<std::sync::atomic::AtomicBool>);
@@ -227,47 +190,8 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
         }
     }
     let _stop_guard = StopOnDrop(stop.clone());
-    let reader = {
-        let mut f = pty.master.try_clone()?;
-        let stop = stop.clone();
-        std::thread::spawn(move || {
-            let mut buf = [0u8; 1024];
-            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
-                let mut pfd = nix::libc::pollfd {
-                    fd: f.as_raw_fd(),
-                    events: nix::libc::POLLIN,
-                    revents: 0,
-                };
-                // SAFETY: one valid pollfd, 50 ms timeout.
-                let r = unsafe { nix::libc::poll(&mut pfd, 1, 50) };
-                if r <= 0 {
-                    continue;
-                }
-                loop {
-                    match f.read(&mut buf) {
-                        Ok(0) => break,
-                        Ok(n) => {
-                            let t = start.elapsed().as_micros() as u64;
-                            if tx_ch.send(Ok((buf[..n].to_vec(), t))).is_err() {
-                                return;
-                            }
-                        }
-                        Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
-                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                        Err(e) => {
-                            let _ = tx_ch.send(Err(e));
-                            return;
-                        }
-                    }
-                }
-            }
-        })
-    };
-    let mut laser_toggle = false;
-    let mut params: Vec<(u16, f32)> = crate::mcu_params::MCU_PARAMS
-        .iter()
-        .map(|p| (p.id, p.default))
-        .collect();
+    let (reader, rx_ch) = spawn_reader(&pty.master, start, stop.clone())?;
+    let mut tick: u64 = 0;
     loop {
         if let Some(d) = o.duration {
             if start.elapsed() >= d {
@@ -276,182 +200,307 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
         }
         // Receive: everything the reader thread has read since the last tick.
         while let Ok(item) = rx_ch.try_recv() {
-            {
-                let (bytes, t_rx) = item?;
-                let frames: Vec<_> = dec.push_slice(&bytes).filter_map(Result::ok).collect();
-                for f in frames {
-                    // Receive time: when the reader thread got the bytes (a UART RX
-                    // interrupt's timestamp), not when this loop got round to them.
-                    let t = t_rx;
-                    match f.message {
-                        link::Message::HelloRequest(_) => push(&hello, t, &mut enc, &mut out),
-                        link::Message::TimeSyncPing(p) => push(
-                            &link::Message::TimeSyncPong(link::TimeSyncPong {
-                                linux_time_ns: p.linux_time_ns,
-                                mcu_rx_time_us: t,
-                                mcu_tx_time_us: now_us(),
-                            }),
-                            t,
-                            &mut enc,
-                            &mut out,
-                        ),
-                        link::Message::VelocitySetpoint(sp) => {
-                            if let Some(l) = log.as_mut() {
-                                writeln!(
-                                        l,
-                                        "{{\"t_us\":{t},\"mono_us\":{},\"msg\":\"VelocitySetpoint\",\"vel_ned_mps\":[{},{},{}],\"has_yaw\":{},\"yaw_rad\":{},\"ttl_ms\":{}}}",
-                                        mono_start_us + t, sp.vel_ned_mps[0], sp.vel_ned_mps[1], sp.vel_ned_mps[2], sp.has_yaw, sp.yaw_rad, sp.ttl_ms
-                                    )?;
-                                l.flush()?;
-                            }
+            let (bytes, t_rx) = item?;
+            let frames: Vec<_> = mcu.dec.push_slice(&bytes).filter_map(Result::ok).collect();
+            for f in frames {
+                // Receive time: when the reader thread got the bytes (a UART RX interrupt's
+                // timestamp), not when this loop got round to them.
+                mcu.on_message(f.message, t_rx)?;
+            }
+        }
+        // Telemetry on a tick of 1/tick_hz (200 Hz unless the IMU goes faster).
+        let t = mcu.now_us();
+        if t > tick * tick_us + tick_us {
+            stats.late_ticks += 1;
+        }
+        mcu.telemetry(tick, tick_hz, t, &mut stats);
+        if o.garbage && tick % tick_hz == tick_hz / 2 {
+            mcu.out.extend_from_slice(&[0x13, 0x37, 0xff, 0x42, 0x00]);
+        }
+        mcu.sent += mcu.out.iter().filter(|b| **b == 0).count() as u64;
+        write_all_retry(&mut pty.master, &mcu.out)?;
+        mcu.out.clear();
+        tick += 1;
+        let next = start + Duration::from_micros(tick * tick_us);
+        if let Some(d) = next.checked_duration_since(Instant::now()) {
+            std::thread::sleep(d);
+        }
+    }
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let _ = reader.join();
+    stats.frames = mcu.sent;
+    Ok(stats)
+}
+
+/// What the reader thread hands over: bytes and the fake's µs when they were read.
+type RxItem = std::io::Result<(Vec<u8>, u64)>;
+
+/// A reader thread that timestamps input as it arrives (poll + read), like a UART RX interrupt,
+/// so a TimeSyncPing's receive time does not include the wait for the next telemetry tick
+/// (which would bias the bridge's time sync by up to half a tick). It ends when `stop` is set.
+fn spawn_reader(
+    master: &File,
+    start: Instant,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> std::io::Result<(
+    std::thread::JoinHandle<()>,
+    std::sync::mpsc::Receiver<RxItem>,
+)> {
+    let (tx_ch, rx_ch) = std::sync::mpsc::channel::<RxItem>();
+    let mut f = master.try_clone()?;
+    let reader = std::thread::spawn(move || {
+        let mut buf = [0u8; 1024];
+        while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+            let mut pfd = nix::libc::pollfd {
+                fd: f.as_raw_fd(),
+                events: nix::libc::POLLIN,
+                revents: 0,
+            };
+            // SAFETY: one valid pollfd, 50 ms timeout.
+            let r = unsafe { nix::libc::poll(&mut pfd, 1, 50) };
+            if r <= 0 {
+                continue;
+            }
+            loop {
+                match f.read(&mut buf) {
+                    Ok(0) => break,
+                    Ok(n) => {
+                        let t = start.elapsed().as_micros() as u64;
+                        if tx_ch.send(Ok((buf[..n].to_vec(), t))).is_err() {
+                            return;
                         }
-                        link::Message::Command(c) => {
-                            match c.command {
-                                link::CommandKind::Arm => {
-                                    armed = true;
-                                    mode = link::FlightMode::Hold;
-                                }
-                                link::CommandKind::Disarm | link::CommandKind::Kill => {
-                                    armed = false;
-                                    mode = link::FlightMode::Disarmed;
-                                }
-                                link::CommandKind::Hold => mode = link::FlightMode::Hold,
-                                link::CommandKind::Land => mode = link::FlightMode::Land,
-                                link::CommandKind::Velocity => mode = link::FlightMode::Velocity,
-                            }
-                            push(
-                                &link::Message::CommandAck(link::CommandAck {
-                                    command: c.command,
-                                    result: link::CommandResult::Accepted,
-                                }),
-                                t,
-                                &mut enc,
-                                &mut out,
-                            );
-                            if let Some(l) = log.as_mut() {
-                                writeln!(
-                                    l,
-                                    "{{\"t_us\":{t},\"mono_us\":{},\"msg\":\"Command\",\"command\":\"{:?}\"}}",
-                                    mono_start_us + t,
-                                    c.command
-                                )?;
-                                l.flush()?;
-                            }
-                        }
-                        link::Message::ParamSet(ps) => {
-                            let def = crate::mcu_params::by_id(ps.id);
-                            let slot = params.iter_mut().find(|(i, _)| *i == ps.id);
-                            let (result, value) = match (def, slot) {
-                                (Some(d), Some(slot)) => {
-                                    let r = if !ps.value.is_finite() {
-                                        link::ParamResult::NotFinite
-                                    } else if d.check(ps.value as f64).is_err() {
-                                        link::ParamResult::OutOfRange
-                                    } else {
-                                        slot.1 = ps.value;
-                                        link::ParamResult::Accepted
-                                    };
-                                    (r, slot.1)
-                                }
-                                _ => (link::ParamResult::UnknownId, f32::NAN),
-                            };
-                            push(
-                                &link::Message::ParamAck(link::ParamAck {
-                                    id: ps.id,
-                                    value,
-                                    result,
-                                }),
-                                t,
-                                &mut enc,
-                                &mut out,
-                            );
-                            if let Some(l) = log.as_mut() {
-                                writeln!(
-                                        l,
-                                        "{{\"t_us\":{t},\"msg\":\"ParamSet\",\"id\":{},\"name\":\"{}\",\"value\":{},\"result\":\"{:?}\",\"now\":{}}}",
-                                        ps.id,
-                                        def.map_or("?", |d| d.name),
-                                        if ps.value.is_finite() { ps.value.to_string() } else { "null".into() },
-                                        result,
-                                        if value.is_finite() { value.to_string() } else { "null".into() },
-                                    )?;
-                                l.flush()?;
-                            }
-                        }
-                        _ => {}
+                    }
+                    Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                    Err(e) => {
+                        let _ = tx_ch.send(Err(e));
+                        return;
                     }
                 }
             }
         }
-        // Telemetry on a tick of 1/tick_hz (200 Hz unless the IMU goes faster); a stream of
-        // rate hz is due on the ticks where floor(tick·hz / tick_hz) steps (tick 0 included),
-        // which for hz dividing tick_hz is `tick % (tick_hz / hz) == 0`.
-        let t = now_us();
-        if t > tick * tick_us + tick_us {
-            stats.late_ticks += 1;
+    });
+    Ok((reader, rx_ch))
+}
+
+/// CLOCK_MONOTONIC now in µs (Instant is CLOCK_MONOTONIC on Linux), for the log's mono_us.
+fn monotonic_us() -> u64 {
+    let mut t = nix::libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: one valid timespec.
+    unsafe { nix::libc::clock_gettime(nix::libc::CLOCK_MONOTONIC, &mut t) };
+    t.tv_sec as u64 * 1_000_000 + t.tv_nsec as u64 / 1000
+}
+
+/// The fake MCU's state between ticks: its link codec, what it has queued to send, its log,
+/// its mode and parameters.
+struct FakeMcu<'a> {
+    o: &'a FakeOptions,
+    start: Instant,
+    /// CLOCK_MONOTONIC at `start`.
+    mono_start_us: u64,
+    enc: link::Encoder,
+    dec: link::FrameDecoder,
+    /// Bytes to write at the end of this tick.
+    out: Vec<u8>,
+    /// Frames written so far.
+    sent: u64,
+    log: Option<File>,
+    hello: link::Message,
+    armed: bool,
+    mode: link::FlightMode,
+    params: Vec<(u16, f32)>,
+    laser_toggle: bool,
+}
+
+impl<'a> FakeMcu<'a> {
+    fn new(o: &'a FakeOptions, start: Instant) -> std::io::Result<Self> {
+        Ok(FakeMcu {
+            o,
+            start,
+            mono_start_us: monotonic_us(),
+            enc: link::Encoder::new(),
+            dec: link::FrameDecoder::new(),
+            out: Vec::new(),
+            sent: 0,
+            log: match &o.log {
+                Some(p) => Some(File::create(p)?),
+                None => None,
+            },
+            hello: link::Message::Hello(link::Hello {
+                protocol_version: o.protocol_version,
+                schema_hash: o.schema_hash,
+                firmware_version: [0, 1, 0],
+            }),
+            armed: false,
+            mode: link::FlightMode::Disarmed,
+            params: crate::mcu_params::MCU_PARAMS
+                .iter()
+                .map(|p| (p.id, p.default))
+                .collect(),
+            laser_toggle: false,
+        })
+    }
+
+    fn now_us(&self) -> u64 {
+        self.start.elapsed().as_micros() as u64
+    }
+
+    /// Queue one frame.
+    fn push(&mut self, m: &link::Message, t_us: u64) {
+        let mut b = [0u8; link::MAX_FRAME_LEN];
+        let n = self.enc.encode(m, t_us, &mut b).expect("encode");
+        self.out.extend_from_slice(&b[..n]);
+    }
+
+    /// One JSON line into the log, if there is one.
+    fn log_line(&mut self, line: std::fmt::Arguments) -> std::io::Result<()> {
+        if let Some(l) = self.log.as_mut() {
+            writeln!(l, "{line}")?;
+            l.flush()?;
         }
+        Ok(())
+    }
+
+    /// A message from the bridge, received at `t` µs.
+    fn on_message(&mut self, m: link::Message, t: u64) -> std::io::Result<()> {
+        match m {
+            link::Message::HelloRequest(_) => self.push(&self.hello.clone(), t),
+            link::Message::TimeSyncPing(p) => {
+                let pong = link::Message::TimeSyncPong(link::TimeSyncPong {
+                    linux_time_ns: p.linux_time_ns,
+                    mcu_rx_time_us: t,
+                    mcu_tx_time_us: self.now_us(),
+                });
+                self.push(&pong, t)
+            }
+            link::Message::VelocitySetpoint(sp) => {
+                let mono = self.mono_start_us + t;
+                self.log_line(format_args!(
+                    "{{\"t_us\":{t},\"mono_us\":{},\"msg\":\"VelocitySetpoint\",\"vel_ned_mps\":[{},{},{}],\"has_yaw\":{},\"yaw_rad\":{},\"ttl_ms\":{}}}",
+                    mono, sp.vel_ned_mps[0], sp.vel_ned_mps[1], sp.vel_ned_mps[2], sp.has_yaw, sp.yaw_rad, sp.ttl_ms
+                ))?;
+            }
+            link::Message::Command(c) => self.on_command(c, t)?,
+            link::Message::ParamSet(ps) => self.on_param_set(ps, t)?,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// A command: the mode follows it, the ack accepts it, the log records it.
+    fn on_command(&mut self, c: link::Command, t: u64) -> std::io::Result<()> {
+        match c.command {
+            link::CommandKind::Arm => {
+                self.armed = true;
+                self.mode = link::FlightMode::Hold;
+            }
+            link::CommandKind::Disarm | link::CommandKind::Kill => {
+                self.armed = false;
+                self.mode = link::FlightMode::Disarmed;
+            }
+            link::CommandKind::Hold => self.mode = link::FlightMode::Hold,
+            link::CommandKind::Land => self.mode = link::FlightMode::Land,
+            link::CommandKind::Velocity => self.mode = link::FlightMode::Velocity,
+        }
+        self.push(
+            &link::Message::CommandAck(link::CommandAck {
+                command: c.command,
+                result: link::CommandResult::Accepted,
+            }),
+            t,
+        );
+        let mono = self.mono_start_us + t;
+        self.log_line(format_args!(
+            "{{\"t_us\":{t},\"mono_us\":{},\"msg\":\"Command\",\"command\":\"{:?}\"}}",
+            mono, c.command
+        ))
+    }
+
+    /// A parameter set: checked against the bridge's table of MCU parameters, acked with the
+    /// value now in use, logged.
+    fn on_param_set(&mut self, ps: link::ParamSet, t: u64) -> std::io::Result<()> {
+        let def = crate::mcu_params::by_id(ps.id);
+        let slot = self.params.iter_mut().find(|(i, _)| *i == ps.id);
+        let (result, value) = match (def, slot) {
+            (Some(d), Some(slot)) => {
+                let r = if !ps.value.is_finite() {
+                    link::ParamResult::NotFinite
+                } else if d.check(ps.value as f64).is_err() {
+                    link::ParamResult::OutOfRange
+                } else {
+                    slot.1 = ps.value;
+                    link::ParamResult::Accepted
+                };
+                (r, slot.1)
+            }
+            _ => (link::ParamResult::UnknownId, f32::NAN),
+        };
+        self.push(
+            &link::Message::ParamAck(link::ParamAck {
+                id: ps.id,
+                value,
+                result,
+            }),
+            t,
+        );
+        self.log_line(format_args!(
+            "{{\"t_us\":{t},\"msg\":\"ParamSet\",\"id\":{},\"name\":\"{}\",\"value\":{},\"result\":\"{:?}\",\"now\":{}}}",
+            ps.id,
+            def.map_or("?", |d| d.name),
+            if ps.value.is_finite() { ps.value.to_string() } else { "null".into() },
+            result,
+            if value.is_finite() { value.to_string() } else { "null".into() },
+        ))
+    }
+
+    /// The telemetry due on tick `tick` of `tick_hz`, stamped `t`: a stream of rate hz is due
+    /// on the ticks where floor(tick·hz / tick_hz) steps (tick 0 included), which for hz
+    /// dividing tick_hz is `tick % (tick_hz / hz) == 0`.
+    fn telemetry(&mut self, tick: u64, tick_hz: u64, t: u64, stats: &mut FakeStats) {
         let every = |hz: u16| {
             let hz = u64::from(hz);
             hz > 0 && (tick == 0 || (tick * hz) / tick_hz != ((tick - 1) * hz) / tick_hz)
         };
-        let m = |v| v;
+        let (rates, s) = (self.o.rates, self.o.script);
         if every(rates.imu_raw_hz) {
             let mut gyro = s.gyro_frd_radps;
-            if o.imu_counter {
+            if self.o.imu_counter {
                 gyro[0] = stats.imu_frames as f32;
             }
-            push(
+            self.push(
                 &link::Message::ImuRaw(link::ImuRaw {
                     gyro_frd_radps: gyro,
                     accel_frd_mps2: s.accel_frd_mps2,
                 }),
                 t,
-                &mut enc,
-                &mut out,
             );
             stats.imu_frames += 1;
         }
         if every(rates.nav_state_hz) {
-            let nav = link::NavState {
-                q_body_to_ned: quat_from_euler(s.roll_rad, s.pitch_rad, s.yaw_rad),
-                rate_frd_radps: s.gyro_frd_radps,
-                pos_ned_m: s.pos_ned_m,
-                vel_ned_mps: s.vel_ned_mps,
-                accel_ned_mps2: [0.0; 3],
-                // A fixed observer estimate (north 0.5, east −0.25 m/s²): peers check the ENU map.
-                accel_obs_ne_mps2: [0.5, -0.25],
-                home_lat_deg: s.lat_deg,
-                home_lon_deg: s.lon_deg,
-                home_alt_m: s.gps_alt_m,
-                gps_ok: true,
-                home_set: true,
-                calibrated: true,
-            };
-            push(&link::Message::NavState(m(nav)), t, &mut enc, &mut out);
+            self.push(&link::Message::NavState(script_nav_state(&s)), t);
         }
         if every(rates.mag_raw_hz) {
-            push(
+            self.push(
                 &link::Message::MagRaw(link::MagRaw {
                     mag_frd_ut: s.mag_frd_ut,
                 }),
                 t,
-                &mut enc,
-                &mut out,
             );
         }
         if every(rates.baro_raw_hz) {
-            push(
+            self.push(
                 &link::Message::BaroRaw(link::BaroRaw {
                     pressure_pa: s.pressure_pa,
                     temperature_c: 21.0,
                 }),
                 t,
-                &mut enc,
-                &mut out,
             );
         }
         if every(rates.altitude_hz) {
-            push(
+            self.push(
                 &link::Message::AltitudeFusion(link::AltitudeFusion {
                     baro_alt_m: -s.pos_ned_m[2] + 0.1,
                     alt_m: -s.pos_ned_m[2],
@@ -463,12 +512,10 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                     source: link::AltitudeSource::Laser,
                 }),
                 t,
-                &mut enc,
-                &mut out,
             );
         }
         if every(rates.gps_raw_hz) {
-            push(
+            self.push(
                 &link::Message::GpsRaw(link::GpsRaw {
                     lat_deg: s.lat_deg,
                     lon_deg: s.lon_deg,
@@ -479,86 +526,93 @@ pub fn run_stats(mut pty: Pty, o: &FakeOptions) -> std::io::Result<FakeStats> {
                     fix_ok: true,
                 }),
                 t,
-                &mut enc,
-                &mut out,
             );
         }
         if every(rates.laser_raw_hz) {
-            laser_toggle = !laser_toggle;
-            let laser = if laser_toggle { s.laser_m } else { 99_999.0 };
-            push(
-                &link::Message::RangeRaw(link::RangeRaw {
-                    sensor: link::RangeSensor::Laser,
-                    range_m: laser,
-                }),
-                t,
-                &mut enc,
-                &mut out,
-            );
-            push(
-                &link::Message::RangeRaw(link::RangeRaw {
-                    sensor: link::RangeSensor::Sonar,
-                    range_m: s.sonar_m,
-                }),
-                t,
-                &mut enc,
-                &mut out,
-            );
+            self.ranges(t);
         }
         if every(rates.status_hz) {
-            push(
-                &link::Message::Status(link::Status {
-                    mode,
-                    armed,
-                    landed: !armed,
-                    loop_time_max_us: 180,
-                    loop_time_avg_us: 95,
-                    link_rx: *dec.counters(),
-                    tx_frames: sent as u32,
-                    // A healthy vehicle: fix, undisturbed compass, both rangefinders reading.
-                    sensors: link::SensorHealth {
-                        gps_ok: true,
-                        mag_disturbed: false,
-                        mag_rejects: 0,
-                        laser_ok: true,
-                        sonar_ok: true,
-                        mag_disturbed_ds: 0,
-                        nav_faults: 0,
-                    },
-                    ..Default::default()
-                }),
-                t,
-                &mut enc,
-                &mut out,
-            );
+            let status = self.status();
+            self.push(&status, t);
         }
         if every(rates.battery_hz) {
-            push(
+            self.push(
                 &link::Message::Battery(link::Battery {
                     voltage_v: s.voltage_v,
                     current_a: s.current_a,
                 }),
                 t,
-                &mut enc,
-                &mut out,
             );
         }
-        if o.garbage && tick % tick_hz == tick_hz / 2 {
-            out.extend_from_slice(&[0x13, 0x37, 0xff, 0x42, 0x00]);
-        }
-        sent += out.iter().filter(|b| **b == 0).count() as u64;
-        write_all_retry(&mut pty.master, &out)?;
-        out.clear();
-        tick += 1;
-        let next = start + Duration::from_micros(tick * tick_us);
-        if let Some(d) = next.checked_duration_since(Instant::now()) {
-            std::thread::sleep(d);
-        }
     }
-    stop.store(true, std::sync::atomic::Ordering::Relaxed);
-    let _ = reader.join();
-    stats.frames = sent;
-    Ok(stats)
+
+    /// Laser (every other reading out of range) and sonar readings.
+    fn ranges(&mut self, t: u64) {
+        let s = self.o.script;
+        self.laser_toggle = !self.laser_toggle;
+        let laser = if self.laser_toggle {
+            s.laser_m
+        } else {
+            99_999.0
+        };
+        self.push(
+            &link::Message::RangeRaw(link::RangeRaw {
+                sensor: link::RangeSensor::Laser,
+                range_m: laser,
+            }),
+            t,
+        );
+        self.push(
+            &link::Message::RangeRaw(link::RangeRaw {
+                sensor: link::RangeSensor::Sonar,
+                range_m: s.sonar_m,
+            }),
+            t,
+        );
+    }
+
+    /// The status frame: mode, arming, link counters, a healthy vehicle.
+    fn status(&self) -> link::Message {
+        link::Message::Status(link::Status {
+            mode: self.mode,
+            armed: self.armed,
+            landed: !self.armed,
+            loop_time_max_us: 180,
+            loop_time_avg_us: 95,
+            link_rx: *self.dec.counters(),
+            tx_frames: self.sent as u32,
+            // A healthy vehicle: fix, undisturbed compass, both rangefinders reading.
+            sensors: link::SensorHealth {
+                gps_ok: true,
+                mag_disturbed: false,
+                mag_rejects: 0,
+                laser_ok: true,
+                sonar_ok: true,
+                mag_disturbed_ds: 0,
+                nav_faults: 0,
+            },
+            ..Default::default()
+        })
+    }
+}
+
+/// The script's navigation state.
+fn script_nav_state(s: &Script) -> link::NavState {
+    link::NavState {
+        q_body_to_ned: quat_from_euler(s.roll_rad, s.pitch_rad, s.yaw_rad),
+        rate_frd_radps: s.gyro_frd_radps,
+        pos_ned_m: s.pos_ned_m,
+        vel_ned_mps: s.vel_ned_mps,
+        accel_ned_mps2: [0.0; 3],
+        // A fixed observer estimate (north 0.5, east −0.25 m/s²): peers check the ENU map.
+        accel_obs_ne_mps2: [0.5, -0.25],
+        home_lat_deg: s.lat_deg,
+        home_lon_deg: s.lon_deg,
+        home_alt_m: s.gps_alt_m,
+        gps_ok: true,
+        home_set: true,
+        calibrated: true,
+    }
 }
 
 /// Write to the non-blocking master, waiting while the pty buffer is full.

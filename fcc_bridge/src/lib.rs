@@ -2,36 +2,43 @@
 //!
 //! Reads `fcc_msgs` frames from a serial device or pseudo-terminal, publishes them as standard
 //! ROS 2 messages (ENU/FLU, REP-103/105), and forwards velocity setpoints and commands to the
-//! MCU. See the README section "ROS 2 bridge" for topics, frames and parameters.
+//! MCU; records every message into MCAP; reads the recordings back for reports and replay.
+//! See the README section "ROS 2 bridge" for topics, frames and parameters.
 //!
-//! Layers: [`ros_types`] (message structs, Jazzy), [`frames`] (every NED/FRD ↔ ENU/FLU
-//! conversion), [`convert`] (pure link ↔ ROS conversions), [`timesync`], [`state`] (the
-//! sans-IO bridge state machine and counters), [`diag`] (`/diagnostics`), [`bridge`] (serial
-//! IO and DDS), [`record`] (the MCAP flight recorder), [`fake_mcu`] (a scripted MCU on a pty,
-//! for tests).
+//! Below this crate: `fcc_msgs` (the link codec and, feature `ros`, the ROS 2 message structs)
+//! and `fcc_ros` (`fcc_bridge/ros`: frames, `--ros-args`, the DDS participant, the topic table
+//! `fcc_ros::topics` that the publishers, subscriptions and recorder read, start-up protection
+//! — shared with `fcc-mission`).
+//!
+//! Layers (bottom-up; a module uses only modules above it in this list, tests aside):
+//! 1. Pure pieces: [`bounded`] (bounded input and rate-limited logs), [`mcu_params`] (the MCU
+//!    parameters as ROS parameters), [`timesync`] (MCU clock → ROS time).
+//! 2. Conversions: [`convert`] (pure link ↔ ROS message conversions), [`health`] (sensor-health
+//!    rules and their `/rosout` transitions).
+//! 3. State: [`state`] (the sans-IO bridge state machine and counters), [`diag`]
+//!    (`/diagnostics` from the state).
+//! 4. Recording: [`record`] (the MCAP flight recorder and its options), [`recover`] (rebuilding
+//!    a bag the recorder could not finish).
+//! 5. IO: [`ros_api`] (ROS parameters, services, `/rosout`), [`bridge`] (serial IO and DDS, the
+//!    session loop).
+//! 6. Reading bags back: [`report`] (`bag`, `series`, `figures`, `plot`, `sysid` — for
+//!    `fcc-report` and `fcc-replay`).
+//! 7. Test tools: [`fake_mcu`] (a scripted MCU on a pty).
+//!
+//! Binaries: `fcc-bridge` (`main.rs`), `fcc-fake-mcu`, `fcc-bag-recover`, `fcc-report`,
+//! `fcc-replay`, `fcc-record-bench` (`src/bin/`). `scripts/check-deps.sh` checks that no module
+//! import circles back.
 
 pub mod bounded;
 pub mod bridge;
 pub mod convert;
 pub mod diag;
 pub mod fake_mcu;
-pub mod frames;
+pub mod health;
 pub mod mcu_params;
-pub mod params;
 pub mod record;
 pub mod recover;
 pub mod report;
 pub mod ros_api;
-pub mod ros_node;
-pub mod ros_types;
-pub mod startup;
 pub mod state;
 pub mod timesync;
-
-/// Linux realtime clock in ns since the epoch (ROS time without `use_sim_time`).
-pub fn now_ns() -> i64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_nanos() as i64)
-        .unwrap_or(0)
-}

@@ -7,10 +7,11 @@
 
 use clap::Parser;
 use fcc_bridge::bridge::{self, BridgeError, Options};
-use fcc_bridge::params::{self, parse_bool};
 use fcc_bridge::record::{RecordOptions, Tap};
-use fcc_bridge::startup::Stop;
 use fcc_bridge::state::ClockSource;
+use fcc_ros::params::{self, parse_bool};
+use fcc_ros::startup::Stop;
+use std::collections::BTreeMap;
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -49,25 +50,7 @@ struct Cli {
 fn options() -> Result<(Options, Option<RecordOptions>), String> {
     let argv: Vec<String> = std::env::args().collect();
     let (prog, mut ros) = params::split_ros_args(&argv)?;
-    let cli = Cli::try_parse_from(prog).unwrap_or_else(|e| {
-        if !e.use_stderr() {
-            let _ = e.print();
-            std::process::exit(0);
-        }
-        // One line and exit 2, as for every other bad input (clap's own text spans several).
-        let text = e.to_string();
-        eprintln!(
-            "fcc-bridge: {} (see --help)",
-            text.split("\n\nUsage")
-                .next()
-                .unwrap_or("")
-                .split_whitespace()
-                .collect::<Vec<_>>()
-                .join(" ")
-                .trim_start_matches("error: ")
-        );
-        std::process::exit(2);
-    });
+    let cli = parse_cli(prog);
     let mut o = Options {
         device: cli.device,
         baud: cli.baud,
@@ -91,34 +74,13 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
         let env = |k: &str| std::env::var(k).ok();
         o.domain_id = params::domain_id(env("ROS_DOMAIN_ID").as_deref())?;
         let p = &ros.params;
-        let rec = params::record_options(cli.record.as_deref(), p)?;
+        let rec = fcc_bridge::record::record_options(cli.record.as_deref(), p)?;
         o.localhost_only = params::localhost_only(
             p.get("localhost_only").map(String::as_str),
             env("ROS_LOCALHOST_ONLY").as_deref(),
             env("ROS_AUTOMATIC_DISCOVERY_RANGE").as_deref(),
         )?;
-        let num = |k: &str| -> Result<Option<f64>, String> {
-            p.get(k)
-                .map(|v| {
-                    v.parse::<f64>()
-                        .map_err(|_| format!("parameter {k}: '{v}' is not a number"))
-                })
-                .transpose()
-        };
-        // The numeric bridge parameters, each checked against its safe range (the table the
-        // run-time validator uses too).
-        for bp in fcc_bridge::ros_api::BRIDGE_PARAMS {
-            let Some(v) = p.get(bp.name) else { continue };
-            let x = bp.parse(v).map_err(|e| format!("parameter {e}"))?;
-            match bp.name {
-                "ttl_ms" => o.limits.ttl_ms = x as u16,
-                "max_speed_mps" => o.limits.max_speed_mps = x,
-                "max_stamp_age_ms" => o.limits.max_age_ns = (x * 1e6) as i64,
-                "max_stamp_future_ms" => o.limits.max_future_ns = (x * 1e6) as i64,
-                "ping_period_ms" => o.ping_period = Duration::from_millis(x as u64),
-                other => return Err(format!("parameter {other}: not handled at start-up")),
-            }
-        }
+        bridge_params(&mut o, p)?;
         if let Some(v) = p.get("clock_source") {
             o.clock = match v.as_str() {
                 "sync" => ClockSource::Sync,
@@ -136,56 +98,122 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
             .as_ref()
             .map(|r| r.path.display().to_string())
             .unwrap_or_default();
-        for mp in fcc_bridge::mcu_params::MCU_PARAMS {
-            if let Some(x) = num(mp.name)? {
-                mp.check(x).map_err(|e| format!("parameter {e}"))?;
-                o.mcu_params.insert(mp.name.to_string(), x);
-            }
-        }
-        let c = &mut o.cfg;
-        for (k, slot) in [
-            ("map_frame", &mut c.map_frame),
-            ("base_frame", &mut c.base_frame),
-            ("imu_frame", &mut c.imu_frame),
-            ("mag_frame", &mut c.mag_frame),
-            ("baro_frame", &mut c.baro_frame),
-            ("gps_frame", &mut c.gps_frame),
-            ("laser_frame", &mut c.laser_frame),
-            ("sonar_frame", &mut c.sonar_frame),
-        ] {
-            if let Some(v) = p.get(k) {
-                *slot = v.clone();
-            }
-        }
-        let known = [
-            "localhost_only",
-            "ttl_ms",
-            "max_speed_mps",
-            "max_stamp_age_ms",
-            "max_stamp_future_ms",
-            "ping_period_ms",
-            "clock_source",
-            "use_sim_time",
-            "map_frame",
-            "base_frame",
-            "imu_frame",
-            "mag_frame",
-            "baro_frame",
-            "gps_frame",
-            "laser_frame",
-            "sonar_frame",
-        ];
-        for k in p.keys() {
-            if !known.contains(&k.as_str())
-                && !params::RECORD_PARAMS.contains(&k.as_str())
-                && fcc_bridge::mcu_params::by_name(k).is_none()
-            {
-                return Err(format!("unknown parameter '{k}'"));
-            }
-        }
+        mcu_params(&mut o, p)?;
+        frame_params(&mut o.cfg, p);
+        check_known(p)?;
         Ok((o, rec))
     })()
     .map_err(|e| ros_ref.locate(e))
+}
+
+/// The command line before `--ros-args`; on a bad one, one line and exit 2 (`--help` and
+/// `--version`: printed, exit 0).
+fn parse_cli(prog: Vec<String>) -> Cli {
+    Cli::try_parse_from(prog).unwrap_or_else(|e| {
+        if !e.use_stderr() {
+            let _ = e.print();
+            std::process::exit(0);
+        }
+        // One line and exit 2, as for every other bad input (clap's own text spans several).
+        let text = e.to_string();
+        eprintln!(
+            "fcc-bridge: {} (see --help)",
+            text.split("\n\nUsage")
+                .next()
+                .unwrap_or("")
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ")
+                .trim_start_matches("error: ")
+        );
+        std::process::exit(2);
+    })
+}
+
+/// The numeric bridge parameters, each checked against its safe range (the table the run-time
+/// validator uses too).
+fn bridge_params(o: &mut Options, p: &BTreeMap<String, String>) -> Result<(), String> {
+    for bp in fcc_bridge::ros_api::BRIDGE_PARAMS {
+        let Some(v) = p.get(bp.name) else { continue };
+        let x = bp.parse(v).map_err(|e| format!("parameter {e}"))?;
+        match bp.name {
+            "ttl_ms" => o.limits.ttl_ms = x as u16,
+            "max_speed_mps" => o.limits.max_speed_mps = x,
+            "max_stamp_age_ms" => o.limits.max_age_ns = (x * 1e6) as i64,
+            "max_stamp_future_ms" => o.limits.max_future_ns = (x * 1e6) as i64,
+            "ping_period_ms" => o.ping_period = Duration::from_millis(x as u64),
+            other => return Err(format!("parameter {other}: not handled at start-up")),
+        }
+    }
+    Ok(())
+}
+
+/// The MCU parameters given at start-up, each checked against its range.
+fn mcu_params(o: &mut Options, p: &BTreeMap<String, String>) -> Result<(), String> {
+    let num = |k: &str| -> Result<Option<f64>, String> {
+        p.get(k)
+            .map(|v| {
+                v.parse::<f64>()
+                    .map_err(|_| format!("parameter {k}: '{v}' is not a number"))
+            })
+            .transpose()
+    };
+    for mp in fcc_bridge::mcu_params::MCU_PARAMS {
+        if let Some(x) = num(mp.name)? {
+            mp.check(x).map_err(|e| format!("parameter {e}"))?;
+            o.mcu_params.insert(mp.name.to_string(), x);
+        }
+    }
+    Ok(())
+}
+
+/// The frame ids (`map_frame`, `base_frame`, the sensors' frames).
+fn frame_params(c: &mut fcc_bridge::convert::Config, p: &BTreeMap<String, String>) {
+    for (k, slot) in [
+        ("map_frame", &mut c.map_frame),
+        ("base_frame", &mut c.base_frame),
+        ("imu_frame", &mut c.imu_frame),
+        ("mag_frame", &mut c.mag_frame),
+        ("baro_frame", &mut c.baro_frame),
+        ("gps_frame", &mut c.gps_frame),
+        ("laser_frame", &mut c.laser_frame),
+        ("sonar_frame", &mut c.sonar_frame),
+    ] {
+        if let Some(v) = p.get(k) {
+            *slot = v.clone();
+        }
+    }
+}
+
+/// Every `-p`/`--params-file` parameter must be one the bridge knows.
+fn check_known(p: &BTreeMap<String, String>) -> Result<(), String> {
+    let known = [
+        "localhost_only",
+        "ttl_ms",
+        "max_speed_mps",
+        "max_stamp_age_ms",
+        "max_stamp_future_ms",
+        "ping_period_ms",
+        "clock_source",
+        "use_sim_time",
+        "map_frame",
+        "base_frame",
+        "imu_frame",
+        "mag_frame",
+        "baro_frame",
+        "gps_frame",
+        "laser_frame",
+        "sonar_frame",
+    ];
+    for k in p.keys() {
+        if !known.contains(&k.as_str())
+            && !fcc_bridge::record::RECORD_PARAMS.contains(&k.as_str())
+            && fcc_bridge::mcu_params::by_name(k).is_none()
+        {
+            return Err(format!("unknown parameter '{k}'"));
+        }
+    }
+    Ok(())
 }
 
 fn main() -> ExitCode {

@@ -117,58 +117,6 @@ pub fn recover_bytes<W: Write + std::io::Seek>(buf: &[u8], out: W) -> anyhow::Re
         ))
         .create(out)?;
     let mut topics: BTreeMap<u16, String> = BTreeMap::new();
-    let mut copy = |r: Record<'_>, rep: &mut Recovered| -> anyhow::Result<bool> {
-        match r {
-            Record::Schema { header, data } => {
-                w.add_schema_with_id(header.id, &header.name, &header.encoding, &data)?;
-                rep.schemas += 1;
-            }
-            Record::Channel(c) => {
-                w.add_channel_with_id(
-                    c.id,
-                    c.schema_id,
-                    &c.topic,
-                    &c.message_encoding,
-                    &c.metadata,
-                )?;
-                topics.insert(c.id, c.topic.clone());
-                rep.channels += 1;
-            }
-            Record::Message { header, data } => {
-                let Some(topic) = topics.get(&header.channel_id) else {
-                    anyhow::bail!(
-                        "message {} on unknown channel {}",
-                        header.sequence,
-                        header.channel_id
-                    );
-                };
-                w.write_to_known_channel(&header, &data)?;
-                rep.messages += 1;
-                *rep.by_topic.entry(topic.clone()).or_default() += 1;
-                let t = header.log_time;
-                rep.first_log_ns = Some(rep.first_log_ns.map_or(t, |f| f.min(t)));
-                rep.last_log_ns = Some(rep.last_log_ns.map_or(t, |l| l.max(t)));
-            }
-            Record::Metadata(m) => {
-                w.write_metadata(&m)?;
-                rep.metadata += 1;
-            }
-            Record::Attachment { header, data, .. } => {
-                w.attach(&mcap::Attachment {
-                    log_time: header.log_time,
-                    create_time: header.create_time,
-                    name: header.name,
-                    media_type: header.media_type,
-                    data,
-                })?;
-                rep.attachments += 1;
-            }
-            Record::DataEnd(_) => return Ok(true),
-            // Indexes and summary records are rebuilt by the writer.
-            _ => {}
-        }
-        Ok(false)
-    };
     'records: for r in records {
         let r = match r {
             Ok(r) => r,
@@ -189,7 +137,7 @@ pub fn recover_bytes<W: Write + std::io::Seek>(buf: &[u8], out: W) -> anyhow::Re
                 match inner {
                     Ok(inner) => {
                         for r in inner {
-                            copy(r, &mut rep)?;
+                            copy_record(&mut w, &mut topics, r, &mut rep)?;
                         }
                     }
                     Err(e) => {
@@ -199,7 +147,7 @@ pub fn recover_bytes<W: Write + std::io::Seek>(buf: &[u8], out: W) -> anyhow::Re
                 }
             }
             r => {
-                if copy(r, &mut rep)? {
+                if copy_record(&mut w, &mut topics, r, &mut rep)? {
                     rep.input_complete = true;
                     break;
                 }
@@ -215,6 +163,67 @@ pub fn recover_bytes<W: Write + std::io::Seek>(buf: &[u8], out: W) -> anyhow::Re
         buf.len() as u64 - framed_end(buf)
     };
     Ok(rep)
+}
+
+/// Copy one record of the input into the writer (schemas, channels, messages, metadata,
+/// attachments; indexes and summary records are rebuilt by the writer), counting it in `rep`.
+/// True at the end of the data section.
+fn copy_record<W: Write + std::io::Seek>(
+    w: &mut mcap::Writer<W>,
+    topics: &mut BTreeMap<u16, String>,
+    r: Record<'_>,
+    rep: &mut Recovered,
+) -> anyhow::Result<bool> {
+    match r {
+        Record::Schema { header, data } => {
+            w.add_schema_with_id(header.id, &header.name, &header.encoding, &data)?;
+            rep.schemas += 1;
+        }
+        Record::Channel(c) => {
+            w.add_channel_with_id(
+                c.id,
+                c.schema_id,
+                &c.topic,
+                &c.message_encoding,
+                &c.metadata,
+            )?;
+            topics.insert(c.id, c.topic.clone());
+            rep.channels += 1;
+        }
+        Record::Message { header, data } => {
+            let Some(topic) = topics.get(&header.channel_id) else {
+                anyhow::bail!(
+                    "message {} on unknown channel {}",
+                    header.sequence,
+                    header.channel_id
+                );
+            };
+            w.write_to_known_channel(&header, &data)?;
+            rep.messages += 1;
+            *rep.by_topic.entry(topic.clone()).or_default() += 1;
+            let t = header.log_time;
+            rep.first_log_ns = Some(rep.first_log_ns.map_or(t, |f| f.min(t)));
+            rep.last_log_ns = Some(rep.last_log_ns.map_or(t, |l| l.max(t)));
+        }
+        Record::Metadata(m) => {
+            w.write_metadata(&m)?;
+            rep.metadata += 1;
+        }
+        Record::Attachment { header, data, .. } => {
+            w.attach(&mcap::Attachment {
+                log_time: header.log_time,
+                create_time: header.create_time,
+                name: header.name,
+                media_type: header.media_type,
+                data,
+            })?;
+            rep.attachments += 1;
+        }
+        Record::DataEnd(_) => return Ok(true),
+        // Indexes and summary records are rebuilt by the writer.
+        _ => {}
+    }
+    Ok(false)
 }
 
 /// The compression name of the first chunk in the file, if there is one whose header is whole.

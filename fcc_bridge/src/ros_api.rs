@@ -358,16 +358,6 @@ impl<S: tracing::Subscriber> tracing_subscriber::Layer<S> for RosoutLayer {
     }
 }
 
-/// The ROS logger name of a node: `ns.name` without the leading slash (as rcl does).
-pub fn logger_name(namespace: &str, node: &str) -> String {
-    let ns = namespace.trim_matches('/').replace('/', ".");
-    if ns.is_empty() {
-        node.to_string()
-    } else {
-        format!("{ns}.{node}")
-    }
-}
-
 /// Shared handle type of the parameter state.
 pub type Shared = Arc<ParamShared>;
 
@@ -410,7 +400,6 @@ mod tests {
             "MCU refused"
         );
         h.join().unwrap();
-        assert_eq!(logger_name("/uav1", "fcc_bridge"), "uav1.fcc_bridge");
     }
 
     #[test]
@@ -447,10 +436,6 @@ mod tests {
         assert_eq!(def("max_speed_mps"), l.max_speed_mps);
         assert_eq!(def("max_stamp_age_ms"), l.max_age_ns as f64 / 1e6);
         assert_eq!(def("max_stamp_future_ms"), l.max_future_ns as f64 / 1e6);
-        assert_eq!(
-            def("ping_period_ms"),
-            crate::bridge::Options::default().ping_period.as_millis() as f64
-        );
         let dynamic: Vec<&str> = BRIDGE_PARAMS
             .iter()
             .filter(|p| p.dynamic)

@@ -4,9 +4,9 @@
 
 use crate::bounded;
 use crate::convert::{self, Config, SetpointLimits};
-use crate::ros_types::*;
 use crate::timesync::TimeSync;
 use fcc_msgs as link;
+use fcc_msgs::ros::*;
 use std::collections::BTreeMap;
 
 /// How message stamps are made.
@@ -140,7 +140,7 @@ pub struct LinkState {
     /// Height above ground of the latest altitude fusion (for the sensor-health rules).
     pub ground_height_m: Option<f32>,
     /// Sensor-health transitions (WARN / INFO on `/rosout`).
-    pub sensors: crate::diag::SensorWatch,
+    pub sensors: crate::health::SensorWatch,
     /// The current decoder's (seq_gaps, frames_lost, seq_resets) before the frame being decoded.
     seq_before: [u32; 3],
     /// Gaps and lost frames the current decoder counted on `Hello` frames (the MCU's new
@@ -324,66 +324,65 @@ impl LinkState {
                     );
                 }
             }
-            _ => {
-                let st = Time::from_nanos(self.stamp_ns(t_us, now_ns));
-                let cfg = &self.cfg;
-                match f.message {
-                    link::Message::ImuRaw(m) => {
-                        out.push(Out::ImuRaw(convert::imu_raw(&m, st, cfg)))
-                    }
-                    link::Message::MagRaw(m) => out.push(Out::Mag(convert::mag(&m, st, cfg))),
-                    link::Message::BaroRaw(m) => out.push(Out::Baro(convert::baro(&m, st, cfg))),
-                    link::Message::GpsRaw(m) => {
-                        out.push(Out::GpsFix(convert::gps_fix(&m, st, cfg)))
-                    }
-                    link::Message::RangeRaw(m) => {
-                        let (r, laser) = convert::range(&m, st, cfg);
-                        out.push(if laser { Out::Laser(r) } else { Out::Sonar(r) });
-                    }
-                    link::Message::Battery(m) => {
-                        out.push(Out::Battery(convert::battery(&m, st, cfg)))
-                    }
-                    link::Message::NavState(m) => {
-                        self.yaw_ned = Some(crate::frames::yaw_ned(crate::frames::quat_f64(
-                            m.q_body_to_ned,
-                        )));
-                        let (odom, imu, tf) = convert::nav_state(&m, st, cfg);
-                        out.push(Out::Odom(odom));
-                        out.push(Out::StateImu(imu));
-                        out.push(Out::Tf(tf));
-                        let (obs, meas) = convert::accels(&m, st, cfg);
-                        out.push(Out::AccelObserver(obs));
-                        out.push(Out::AccelMeasured(meas));
-                        if self.clock == ClockSource::Mcu {
-                            out.push(Out::Clock(Clock { clock: st }));
-                        }
-                    }
-                    link::Message::AltitudeFusion(m) => {
-                        self.ground_height_m = Some(m.ground_height_m);
-                        let (a, g) = convert::altitude(&m, st, cfg);
-                        out.push(Out::Altitude(a));
-                        out.push(Out::Ground(g));
-                    }
-                    link::Message::Status(m) => {
-                        self.mcu_status = Some(m);
-                        for (warn, text) in
-                            self.sensors
-                                .update(&m, self.ground_height_m, &self.cfg, t_us)
-                        {
-                            if warn {
-                                tracing::warn!("{text}");
-                            } else {
-                                tracing::info!("{text}");
-                            }
-                        }
-                        let s = self.fill_status(convert::status(&m, st, cfg));
-                        out.push(Out::Status(s));
-                    }
-                    _ => self.counters.dropped += 1,
-                }
-            }
+            m => self.on_telemetry(m, t_us, now_ns, out),
         }
         Ok(())
+    }
+
+    /// A telemetry frame (MCU time `t_us`) → the ROS messages it gives; the navigation state,
+    /// altitude and status also update the state the bridge keeps (yaw, ground height, the
+    /// MCU's status and sensor-health transitions).
+    fn on_telemetry(&mut self, message: link::Message, t_us: u64, now_ns: i64, out: &mut Vec<Out>) {
+        let st = Time::from_nanos(self.stamp_ns(t_us, now_ns));
+        let cfg = &self.cfg;
+        match message {
+            link::Message::ImuRaw(m) => out.push(Out::ImuRaw(convert::imu_raw(&m, st, cfg))),
+            link::Message::MagRaw(m) => out.push(Out::Mag(convert::mag(&m, st, cfg))),
+            link::Message::BaroRaw(m) => out.push(Out::Baro(convert::baro(&m, st, cfg))),
+            link::Message::GpsRaw(m) => out.push(Out::GpsFix(convert::gps_fix(&m, st, cfg))),
+            link::Message::RangeRaw(m) => {
+                let (r, laser) = convert::range(&m, st, cfg);
+                out.push(if laser { Out::Laser(r) } else { Out::Sonar(r) });
+            }
+            link::Message::Battery(m) => out.push(Out::Battery(convert::battery(&m, st, cfg))),
+            link::Message::NavState(m) => {
+                self.yaw_ned = Some(fcc_ros::frames::yaw_ned(fcc_ros::frames::quat_f64(
+                    m.q_body_to_ned,
+                )));
+                let (odom, imu, tf) = convert::nav_state(&m, st, cfg);
+                out.push(Out::Odom(odom));
+                out.push(Out::StateImu(imu));
+                out.push(Out::Tf(tf));
+                let (obs, meas) = convert::accels(&m, st, cfg);
+                out.push(Out::AccelObserver(obs));
+                out.push(Out::AccelMeasured(meas));
+                if self.clock == ClockSource::Mcu {
+                    out.push(Out::Clock(Clock { clock: st }));
+                }
+            }
+            link::Message::AltitudeFusion(m) => {
+                self.ground_height_m = Some(m.ground_height_m);
+                let (a, g) = convert::altitude(&m, st, cfg);
+                out.push(Out::Altitude(a));
+                out.push(Out::Ground(g));
+            }
+            link::Message::Status(m) => {
+                self.mcu_status = Some(m);
+                for (warn, text) in self
+                    .sensors
+                    .update(&m, self.ground_height_m, &self.cfg, t_us)
+                {
+                    if warn {
+                        tracing::warn!("{text}");
+                    } else {
+                        tracing::info!("{text}");
+                    }
+                }
+                let s = self.fill_status(convert::status(&m, st, cfg));
+                out.push(Out::Status(s));
+            }
+            _ => self.counters.dropped += 1,
+        }
     }
 
     /// Add the bridge's counters to a status message.
@@ -481,7 +480,7 @@ impl LinkState {
     }
 
     pub fn on_command(&mut self, c: Option<link::Command>, what: &str) -> Option<link::Message> {
-        let now = crate::now_ns();
+        let now = fcc_ros::now_ns();
         let what = || bounded::log_value(what, bounded::LOG_CHARS);
         match c {
             Some(c) if self.handshake != Handshake::Waiting => {
@@ -788,7 +787,7 @@ mod uplink_tests {
     /// Through the state machine: commands are never held, even in a setpoint flood.
     #[test]
     fn commands_pass_a_setpoint_flood() {
-        use crate::ros_types::{Header, Twist, TwistStamped, Vector3};
+        use fcc_msgs::ros::{Header, Twist, TwistStamped, Vector3};
         let mut s = LinkState::new(
             Config::default(),
             SetpointLimits::default(),
@@ -797,7 +796,7 @@ mod uplink_tests {
         s.handshake = Handshake::Ok {
             firmware: [0, 1, 0],
         };
-        let t0 = crate::now_ns();
+        let t0 = fcc_ros::now_ns();
         let tw = |i: i64| TwistStamped {
             header: Header {
                 stamp: Time::from_nanos(t0),

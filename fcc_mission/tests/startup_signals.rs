@@ -1,4 +1,4 @@
-//! fcc-mission shares fcc-bridge's start-up protection (`fcc_bridge::startup`): a DDS start-up
+//! fcc-mission shares fcc-bridge's start-up protection (`fcc_ros::startup`): a DDS start-up
 //! that stalls (rustdds' discovery deadlock, simulated by `FCC_MISSION_TEST_STALL_DDS`) ends in
 //! restarts and then one clear error line, and SIGTERM / SIGINT stop it promptly meanwhile.
 //! Run in a loopback-only namespace

@@ -16,6 +16,11 @@
 //!    [`SCHEMA_HASH`] (FNV-1a of [`SCHEMA`]) and yields a readable [`HandshakeError`];
 //!    time sync by [`TimeSyncPing`]/[`TimeSyncPong`]; telemetry rates in [`StreamRates`].
 //!
+//! Beside the link, with feature `ros` (std): `ros`, the ROS 2 (Jazzy) message structs for
+//! ros2-client — the standard ones the nodes use and the custom `msg/*.msg` of this ROS 2
+//! interface package, whose constants and field lists `build.rs` generates from the files.
+//! Modules: [`frame`], [`handshake`], [`messages`], [`rates`], `ros` (feature `ros`).
+//!
 //! ## Frame layout
 //! ```text
 //! wire:  COBS( raw ) | 0x00
@@ -54,6 +59,8 @@ pub mod frame;
 pub mod handshake;
 pub mod messages;
 pub mod rates;
+#[cfg(feature = "ros")]
+pub mod ros;
 
 #[cfg(test)]
 mod fuzz;

@@ -13,7 +13,7 @@
 #     a Cyclone publisher): every file complete and read by both readers, 0 lost across the
 #     splits, one file per arm period (check_files.py).
 #   usage: tests/mcap/run.sh [PYTHON]   (PYTHON with mcap, mcap-ros2-support, rosbags)
-# Needs: cargo build --release -p fcc_bridge -p fcc_report.
+# Needs: cargo build --release -p fcc_bridge.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"

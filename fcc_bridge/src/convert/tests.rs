@@ -325,7 +325,8 @@ fn status_pilot_mode_and_reject() {
 /// not repeat it), an INFO after 2 s healthy; rangefinders only count in the air within range.
 #[test]
 fn sensor_watch_transitions() {
-    use crate::diag::{sensors_status, unhealthy, SensorWatch};
+    use crate::diag::sensors_status;
+    use crate::health::{unhealthy, SensorWatch};
     let c = cfg();
     let mut s = link::Status {
         armed: true,
@@ -539,7 +540,7 @@ fn kill_needs_its_exact_text() {
 /// value in `msg/msg/Status.msg` (the interface package other ROS nodes build against).
 #[test]
 fn status_codes_match_the_msg_constants() {
-    use crate::ros_types::RosMsg;
+    use fcc_msgs::ros::RosMsg;
     let def = Status::DEFINITION;
     let constant = |name: &str| -> Option<u8> {
         def.lines().find_map(|l| {

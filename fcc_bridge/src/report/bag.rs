@@ -1,8 +1,8 @@
 //! Reading our bags back: every message with its topic, log time and CDR payload, from a
 //! finished bag (summary) or a truncated one (SIGKILL: streamed up to the last whole chunk).
 
-use crate::frames;
-use crate::ros_types::Odometry;
+use fcc_msgs::ros::Odometry;
+use fcc_ros::frames;
 
 /// One message of a bag.
 #[derive(Clone, Debug)]
@@ -101,44 +101,6 @@ pub fn read_bag_full(
         None => progress(Progress::Bytes, done_bytes.min(total_bytes), total_bytes),
     };
     report(0, 0);
-    let on_record = |r: Record<'_>,
-                     channels: &mut mcap::read::ChannelAccumulator<'static>,
-                     bag: &mut Bag|
-     -> Result<bool, String> {
-        match r {
-            Record::Schema { header, data } => channels
-                .add_schema(header, std::borrow::Cow::Owned(data.into_owned()))
-                .map_err(|e| e.to_string())?,
-            Record::Channel(c) => {
-                bag.channels
-                    .entry(c.topic.clone())
-                    .or_insert_with(|| c.metadata.clone());
-                channels.add_channel(c).map_err(|e| e.to_string())?
-            }
-            Record::Message { header, data } => {
-                let Some(ch) = channels.get(header.channel_id) else {
-                    return Err(mcap::McapError::UnknownChannel(
-                        header.sequence,
-                        header.channel_id,
-                    )
-                    .to_string());
-                };
-                bag.msgs.push(BagMsg {
-                    topic: ch.topic.clone(),
-                    schema: ch
-                        .schema
-                        .as_ref()
-                        .map(|s| s.name.clone())
-                        .unwrap_or_default(),
-                    log_time: header.log_time,
-                    data: data.into_owned(),
-                });
-                return Ok(true);
-            }
-            _ => {}
-        }
-        Ok(false)
-    };
     let reader = mcap::read::LinearReader::new(&buf).map_err(std::io::Error::other)?;
     'outer: for r in reader {
         let r = match r {
@@ -161,7 +123,7 @@ pub fn read_bag_full(
                 for r in chunk {
                     match r
                         .map_err(|e| e.to_string())
-                        .and_then(|r| on_record(r, &mut channels, &mut bag))
+                        .and_then(|r| add_record(r, &mut channels, &mut bag))
                     {
                         Ok(true) => {
                             n += 1;
@@ -186,7 +148,7 @@ pub fn read_bag_full(
                     Record::Schema { data, .. } => 9 + 16 + data.len() as u64,
                     _ => 9 + 32,
                 };
-                match on_record(r, &mut channels, &mut bag) {
+                match add_record(r, &mut channels, &mut bag) {
                     Ok(_) => {}
                     Err(e) => {
                         bag.err = Some(e);
@@ -205,6 +167,47 @@ pub fn read_bag_full(
         report(n, total_bytes);
     }
     Ok(bag)
+}
+
+/// One record of a bag's data section: schemas and channels into `channels` (and the channels'
+/// metadata into `bag`), a message into `bag.msgs` (then true).
+fn add_record(
+    r: mcap::records::Record<'_>,
+    channels: &mut mcap::read::ChannelAccumulator<'static>,
+    bag: &mut Bag,
+) -> Result<bool, String> {
+    use mcap::records::Record;
+    match r {
+        Record::Schema { header, data } => channels
+            .add_schema(header, std::borrow::Cow::Owned(data.into_owned()))
+            .map_err(|e| e.to_string())?,
+        Record::Channel(c) => {
+            bag.channels
+                .entry(c.topic.clone())
+                .or_insert_with(|| c.metadata.clone());
+            channels.add_channel(c).map_err(|e| e.to_string())?
+        }
+        Record::Message { header, data } => {
+            let Some(ch) = channels.get(header.channel_id) else {
+                return Err(
+                    mcap::McapError::UnknownChannel(header.sequence, header.channel_id).to_string(),
+                );
+            };
+            bag.msgs.push(BagMsg {
+                topic: ch.topic.clone(),
+                schema: ch
+                    .schema
+                    .as_ref()
+                    .map(|s| s.name.clone())
+                    .unwrap_or_default(),
+                log_time: header.log_time,
+                data: data.into_owned(),
+            });
+            return Ok(true);
+        }
+        _ => {}
+    }
+    Ok(false)
 }
 
 /// Position (NED, m), velocity (NED, m/s) and attitude (FRD→NED quaternion) of an ENU/FLU odom.
@@ -231,7 +234,7 @@ pub fn euler(q: [f64; 4]) -> [f64; 3] {
 mod tests {
     use super::*;
     use crate::record::{QosInfo, RecordOptions, Tap};
-    use crate::ros_types::Imu;
+    use fcc_msgs::ros::Imu;
     use std::time::Duration;
 
     /// Progress: the file in bytes, then per message against the summary's count; a bag cut

@@ -15,18 +15,18 @@
 //! (served by a thread of their own; a second signal, or a stop not begun within 1.5 s, exits
 //! at once); 1 on a failure (timeout, disarmed in flight, DDS setup; also when the DDS start-up
 //! stalled on each of 3 attempts: it restarts itself after a stall, see
-//! `fcc_bridge::startup`); 2 on a bad mission file or bad arguments.
+//! `fcc_ros::startup`); 2 on a bad mission file or bad arguments.
 
 use clap::Parser;
-use fcc_bridge::frames;
-use fcc_bridge::params::{self, parse_bool};
-use fcc_bridge::ros_node::{self, DdsEnv, RosClock};
-use fcc_bridge::ros_types::{
+use fcc_msgs::ros::{
     Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
 };
-use fcc_bridge::startup;
 use fcc_mission::run::{Input, Level, McuStatus, MissionRun, Outcome, RunConfig, Sample, Step};
 use fcc_mission::{McuMode, Mission};
+use fcc_ros::frames;
+use fcc_ros::params::{self, parse_bool};
+use fcc_ros::ros_node::{self, DdsEnv, RosClock};
+use fcc_ros::startup;
 use futures::StreamExt;
 use ros2_client::log::LogLevel;
 use ros2_client::{NodeLoggingHandle, RosoutRaw};
@@ -204,7 +204,7 @@ impl Log {
         println!("fcc-mission: {msg}");
         self.handle.rosout_raw(
             ros2_client::builtin_interfaces::Time::from_nanos(
-                now_ns.unwrap_or_else(fcc_bridge::now_ns),
+                now_ns.unwrap_or_else(fcc_ros::now_ns),
             ),
             level,
             &self.name,
@@ -248,7 +248,7 @@ fn mcu_status(st: &Status) -> McuStatus<'_> {
     }
 }
 
-/// fcc-mission, for `fcc_bridge::startup` (messages and environment variables).
+/// fcc-mission, for `fcc_ros::startup` (messages and environment variables).
 const APP: startup::App = startup::App {
     name: "fcc-mission",
     env_prefix: "FCC_MISSION",
@@ -388,7 +388,7 @@ async fn run(o: Options) -> Result<(), Failure> {
 async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
     let log = Log {
         handle: dds.node.logging_handle(),
-        name: fcc_bridge::ros_api::logger_name(&o.namespace, &o.node_name),
+        name: fcc_ros::logger_name(&o.namespace, &o.node_name),
     };
     log_start(&o, &log);
     let mut run = MissionRun::new(RunConfig {

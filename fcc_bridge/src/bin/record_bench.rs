@@ -4,7 +4,7 @@
 //! `ROW|recorder throughput|ours msg/s|mcap msg/s|ratio|goal ≥0.8×|met`.
 
 use fcc_bridge::record::{cdr_bytes, write_options, QosInfo, RecordOptions, Tap};
-use fcc_bridge::ros_types::{full_definition, Imu, RosMsg, Time};
+use fcc_msgs::ros::{full_definition, Imu, RosMsg, Time};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 

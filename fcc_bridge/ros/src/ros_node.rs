@@ -1,10 +1,10 @@
-//! Small helpers shared by the project's other ROS 2 nodes (e.g. `fcc-mission`): the DDS
-//! participant with the same loopback default as the bridge, the DDS environment
+//! The ROS 2 node plumbing of `fcc-bridge` and `fcc-mission`: the DDS participant (loopback
+//! only by default; the one place it is built), the DDS environment
 //! (`ROS_DOMAIN_ID`, `ROS_LOCALHOST_ONLY`, `ROS_AUTOMATIC_DISCOVERY_RANGE`), publishers and
 //! subscriptions by relative ROS name, and the ROS clock (system or `/clock`).
 
 use crate::params::{self, RosArgs};
-use crate::ros_types::{Clock, RosMsg};
+use fcc_msgs::ros::{Clock, RosMsg};
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
     Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription,
@@ -138,7 +138,37 @@ impl RosClock {
         if self.use_sim_time {
             self.last_clock_ns
         } else {
-            Some(crate::now_ns())
+            Some(now_ns())
         }
+    }
+}
+
+/// Linux realtime clock in ns since the epoch (ROS time without `use_sim_time`).
+pub fn now_ns() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos() as i64)
+        .unwrap_or(0)
+}
+
+/// The ROS logger name of a node: `ns.name` without the leading slash (as rcl does).
+pub fn logger_name(namespace: &str, node: &str) -> String {
+    let ns = namespace.trim_matches('/').replace('/', ".");
+    if ns.is_empty() {
+        node.to_string()
+    } else {
+        format!("{ns}.{node}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn logger_names_as_rcl() {
+        assert_eq!(logger_name("/uav1", "fcc_bridge"), "uav1.fcc_bridge");
+        assert_eq!(logger_name("/", "fcc_mission"), "fcc_mission");
+        assert_eq!(logger_name("/a/b/", "n"), "a.b.n");
     }
 }

@@ -58,7 +58,7 @@
 //! [`fcc_nav::sysid::ar1_inflation`] of the residuals' lag-1 correlation ([`ci95`]). A fit is only suggested as parameters when it
 //! passes [`judge`]; otherwise the report prints `no suggestion: <reasons>`.
 
-use crate::figures::Series;
+use super::series::Series;
 use fcc_nav::sysid::{ar1_inflation, PlaneFit, WindIvFit, WindPlaneFit, WindowMeans};
 use serde::Serialize;
 
@@ -413,27 +413,7 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
     }
     let ls = wf.solve();
     let iv = if use_iv { ivf.solve() } else { None };
-    let (r, estimator) = match (iv, ls) {
-        (Some(r), _) => (
-            r,
-            format!("instrumental variables (velocity setpoints now and {IV_LAG_S} s earlier)"),
-        ),
-        (None, Some(r)) => (
-            r,
-            if use_iv {
-                "least squares (the setpoints are constant within the windows: no instruments)"
-            } else {
-                "least squares (no velocity setpoints in the bag for instruments)"
-            }
-            .to_string(),
-        ),
-        (None, None) => {
-            return Err(format!(
-                "no fit: {} airborne samples, tilt and velocity constant or collinear within the windows",
-                samples.len()
-            ))
-        }
-    };
+    let (r, estimator) = choose_fit(iv, ls, use_iv, samples.len())?;
     let is_iv = r.instrument_strength.is_finite();
     if let Some((t0, last)) = start {
         windows.push(Window {
@@ -451,25 +431,7 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
         let c = ci95(&l, ar1_inflation(rho as f32));
         [l.k1_mps2_per_rad as f64, c[0], l.k2_per_s as f64, c[1]]
     });
-    // Wind per window.
-    let (mut wsum, mut n) = ([0.0f64; 2], 0.0f64);
-    let winds: Vec<([f32; 2], f64)> = windows
-        .iter()
-        .map(|w| (w.means.wind_ne_mps(k1, k2), w.means.samples as f64))
-        .filter(|(w, _)| w[0].is_finite() && w[1].is_finite())
-        .collect();
-    for (w, m) in &winds {
-        wsum[0] += w[0] as f64 * m;
-        wsum[1] += w[1] as f64 * m;
-        n += m;
-    }
-    let wmean = [wsum[0] / n, wsum[1] / n];
-    let spread = (winds
-        .iter()
-        .map(|(w, m)| m * ((w[0] as f64 - wmean[0]).powi(2) + (w[1] as f64 - wmean[1]).powi(2)))
-        .sum::<f64>()
-        / n)
-        .sqrt();
+    let (wmean, spread) = wind_stats(&windows, k1, k2);
     let mut out = SysId {
         accel_source: accel_source.to_string(),
         estimator,
@@ -514,6 +476,61 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
         Err(why) => out.no_suggestion = Some(why),
     }
     Ok(out)
+}
+
+/// The fit to report: instrumental variables when there is one, else least squares (with
+/// why), else an error naming the samples.
+fn choose_fit(
+    iv: Option<fcc_nav::sysid::WindFitResult>,
+    ls: Option<fcc_nav::sysid::WindFitResult>,
+    use_iv: bool,
+    n_samples: usize,
+) -> Result<(fcc_nav::sysid::WindFitResult, String), String> {
+    Ok(match (iv, ls) {
+        (Some(r), _) => (
+            r,
+            format!("instrumental variables (velocity setpoints now and {IV_LAG_S} s earlier)"),
+        ),
+        (None, Some(r)) => (
+            r,
+            if use_iv {
+                "least squares (the setpoints are constant within the windows: no instruments)"
+            } else {
+                "least squares (no velocity setpoints in the bag for instruments)"
+            }
+            .to_string(),
+        ),
+        (None, None) => {
+            return Err(format!(
+                "no fit: {} airborne samples, tilt and velocity constant or collinear within the windows",
+                n_samples
+            ))
+        }
+    })
+}
+
+/// The wind per window (each window weighted by its samples): mean (north, east) and the
+/// weighted RMS spread of the windows around it.
+fn wind_stats(windows: &[Window], k1: f32, k2: f32) -> ([f64; 2], f64) {
+    let (mut wsum, mut n) = ([0.0f64; 2], 0.0f64);
+    let winds: Vec<([f32; 2], f64)> = windows
+        .iter()
+        .map(|w| (w.means.wind_ne_mps(k1, k2), w.means.samples as f64))
+        .filter(|(w, _)| w[0].is_finite() && w[1].is_finite())
+        .collect();
+    for (w, m) in &winds {
+        wsum[0] += w[0] as f64 * m;
+        wsum[1] += w[1] as f64 * m;
+        n += m;
+    }
+    let wmean = [wsum[0] / n, wsum[1] / n];
+    let spread = (winds
+        .iter()
+        .map(|(w, m)| m * ((w[0] as f64 - wmean[0]).powi(2) + (w[1] as f64 - wmean[1]).powi(2)))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    (wmean, spread)
 }
 
 /// Whether the fit may be suggested as parameters: every reason it may not, joined by "; ".

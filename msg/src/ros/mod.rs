@@ -96,12 +96,12 @@ pub fn full_definition<T: RosMsg>() -> String {
 macro_rules! ros_msg {
     ($ty:ty, $pkg:literal, $name:literal, $def:expr $(, [$($nested:ty),*])?) => {
         impl ros2_client::Message for $ty {}
-        impl $crate::ros_types::RosMsg for $ty {
+        impl $crate::ros::RosMsg for $ty {
             const PACKAGE: &'static str = $pkg;
             const NAME: &'static str = $name;
             const DEFINITION: &'static str = $def;
-            $(fn nested() -> Vec<$crate::ros_types::NestedDef> {
-                vec![$($crate::ros_types::nested_def::<$nested>()),*]
+            $(fn nested() -> Vec<$crate::ros::NestedDef> {
+                vec![$($crate::ros::nested_def::<$nested>()),*]
             })?
         }
     };

@@ -3,12 +3,12 @@
 
 use clap::Parser;
 use fcc_bridge::report::bag;
-use fcc_report::{
+use fcc_bridge::report::{
     figures,
     plot::{chart, panels, Line},
 };
 use plotters::style::{RGBColor, BLUE, GREEN, MAGENTA, RED};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(
@@ -34,8 +34,59 @@ fn main() -> anyhow::Result<()> {
         ))
     });
     std::fs::create_dir_all(&out)?;
-    // The file is read (bytes), then decoded message by message against the summary's message
-    // count; a bag without a summary (cut by SIGKILL) shows the bytes decoded instead.
+    let msgs = read_with_progress(&cli.bag)?;
+    let mission = load_mission(cli.mission.as_deref())?;
+    let s = figures::decode(&msgs);
+    let f = figures::compute(&s, mission.as_ref());
+    let text = f.to_string();
+    print!("{text}");
+    std::fs::write(out.join("summary.txt"), &text)?;
+    std::fs::write(out.join("summary.json"), serde_json::to_string_pretty(&f)?)?;
+
+    let v = View {
+        s: &s,
+        f: &f,
+        out: &out,
+        t0: s.odom.first().map_or(0.0, |o| o.0),
+    };
+    let mut plots: Vec<Plot> = Vec::new();
+    for plot in [
+        path_plot,
+        hover_plot,
+        velocity_plot,
+        attitude_plot,
+        vertical_plot,
+        ground_plot,
+        observer_plot,
+        k_fit_plot,
+    ] {
+        plot(&v, &mut plots);
+    }
+    write_html(&out, &cli.bag, &text, &plots)?;
+    let ok = plots.iter().filter(|p| p.2.is_ok()).count();
+    eprintln!(
+        "fcc-report: {ok} plots, summary.txt, summary.json and report.html in {}",
+        out.display()
+    );
+    Ok(())
+}
+
+/// What the plots are drawn from: the decoded series, the figures, the output directory and
+/// the time origin (the first odometry message).
+struct View<'a> {
+    s: &'a figures::Series,
+    f: &'a figures::Figures,
+    out: &'a Path,
+    t0: f64,
+}
+
+/// A plot: its file, its title in the HTML, and whether it was drawn.
+type Plot = (&'static str, &'static str, Result<(), String>);
+
+/// Read the bag with a progress bar: the file is read (bytes), then decoded message by message
+/// against the summary's message count; a bag without a summary (cut by SIGKILL) shows the
+/// bytes decoded instead. A cut bag gives the messages before the cut, with a warning.
+fn read_with_progress(path: &Path) -> anyhow::Result<Vec<bag::BagMsg>> {
     let pb = indicatif::ProgressBar::new(1);
     let style = |unit: bag::Progress| {
         let t = match unit {
@@ -46,7 +97,7 @@ fn main() -> anyhow::Result<()> {
         indicatif::ProgressStyle::with_template(t).unwrap()
     };
     let mut shown: Option<bag::Progress> = None;
-    let (msgs, err) = bag::read_bag(&cli.bag, |unit, d, t| {
+    let (msgs, err) = bag::read_bag(path, |unit, d, t| {
         if shown != Some(unit) {
             shown = Some(unit);
             pb.set_style(style(unit));
@@ -65,24 +116,24 @@ fn main() -> anyhow::Result<()> {
             msgs.len()
         );
     }
-    let mission = match &cli.mission {
+    Ok(msgs)
+}
+
+/// The mission flown, if given (`--mission FILE`).
+fn load_mission(path: Option<&Path>) -> anyhow::Result<Option<fcc_mission::Mission>> {
+    Ok(match path {
         Some(p) => Some(
             fcc_mission::from_yaml_str(&std::fs::read_to_string(p)?)
                 .map_err(|e| anyhow::anyhow!("{}: {e:?}", p.display()))?,
         ),
         None => None,
-    };
-    let s = figures::decode(&msgs);
-    let f = figures::compute(&s, mission.as_ref());
-    let text = f.to_string();
-    print!("{text}");
-    std::fs::write(out.join("summary.txt"), &text)?;
-    std::fs::write(out.join("summary.json"), serde_json::to_string_pretty(&f)?)?;
+    })
+}
 
-    let t0 = s.odom.first().map_or(0.0, |o| o.0);
-    let c = |r, g, b| RGBColor(r, g, b);
-    let mut plots: Vec<(&str, &str, Result<(), String>)> = Vec::new();
-    let p = |name: &str| out.join(name);
+/// Fig. 17: the estimated path, with the mission's legs.
+fn path_plot(v: &View, plots: &mut Vec<Plot>) {
+    let View { s, f, .. } = *v;
+    let p = |name: &str| v.out.join(name);
     // Fig. 17: path, with the mission's legs.
     let mut lines = vec![Line {
         name: "estimated path",
@@ -119,6 +170,12 @@ fn main() -> anyhow::Result<()> {
             true,
         ),
     ));
+}
+
+/// Fig. 16: hover, or the position over the whole flight without one.
+fn hover_plot(v: &View, plots: &mut Vec<Plot>) {
+    let View { s, f, t0, .. } = *v;
+    let p = |name: &str| v.out.join(name);
     // Fig. 16: hover — deviation from the hold point over the HOLD window, with the box;
     // without a hover, the estimated position over the whole flight.
     match &f.hover {
@@ -204,6 +261,13 @@ fn main() -> anyhow::Result<()> {
             ),
         )),
     }
+}
+
+/// Fig. 18: velocity tracking.
+fn velocity_plot(v: &View, plots: &mut Vec<Plot>) {
+    let View { s, t0, .. } = *v;
+    let p = |name: &str| v.out.join(name);
+    let c = |r, g, b| RGBColor(r, g, b);
     // Fig. 18: velocity tracking.
     plots.push((
         "velocity.png",
@@ -242,6 +306,13 @@ fn main() -> anyhow::Result<()> {
             false,
         ),
     ));
+}
+
+/// Fig. 5: attitude estimate vs accelerometer angles.
+fn attitude_plot(v: &View, plots: &mut Vec<Plot>) {
+    let View { s, t0, .. } = *v;
+    let p = |name: &str| v.out.join(name);
+    let c = |r, g, b| RGBColor(r, g, b);
     // Fig. 5: attitude estimate vs accelerometer angles.
     plots.push((
         "attitude.png",
@@ -296,6 +367,13 @@ fn main() -> anyhow::Result<()> {
             false,
         ),
     ));
+}
+
+/// Fig. 9: vertical estimate vs barometer.
+fn vertical_plot(v: &View, plots: &mut Vec<Plot>) {
+    let View { s, t0, .. } = *v;
+    let p = |name: &str| v.out.join(name);
+    let c = |r, g, b| RGBColor(r, g, b);
     // Fig. 9: vertical estimate vs barometer.
     plots.push((
         "vertical.png",
@@ -322,6 +400,12 @@ fn main() -> anyhow::Result<()> {
             false,
         ),
     ));
+}
+
+/// Paper B Fig. 13: ground-altitude fusion vs laser and sonar.
+fn ground_plot(v: &View, plots: &mut Vec<Plot>) {
+    let View { s, t0, .. } = *v;
+    let p = |name: &str| v.out.join(name);
     // Paper B Fig. 13: ground altitude fusion vs laser and sonar.
     plots.push((
         "ground.png",
@@ -354,6 +438,13 @@ fn main() -> anyhow::Result<()> {
             false,
         ),
     ));
+}
+
+/// Fig. 13: acceleration observer vs measured (skipped on older bags).
+fn observer_plot(v: &View, plots: &mut Vec<Plot>) {
+    let View { s, f, t0, .. } = *v;
+    let p = |name: &str| v.out.join(name);
+    let c = |r, g, b| RGBColor(r, g, b);
     // Fig. 13: acceleration observer vs measured acceleration (skipped on older bags).
     if let Some(o) = &f.observer {
         let mut pan = Vec::new();
@@ -386,12 +477,21 @@ fn main() -> anyhow::Result<()> {
             panels(&p("observer.png"), "t s", pan),
         ));
     }
+}
+
+/// Fig. 12: the k1/k2 fit along the flight.
+fn k_fit_plot(v: &View, plots: &mut Vec<Plot>) {
+    let View { s, f, t0, .. } = *v;
+    let p = |name: &str| v.out.join(name);
+    let c = |r, g, b| RGBColor(r, g, b);
     // Fig. 12: k1/k2 fit — measured north acceleration vs the fitted model with each window's
     // wind intercept, along the flight.
     if let Some(x) = &f.sysid {
         let (k1, k2) = (x.k1_mps2_per_rad, x.k2_per_s);
-        let samples =
-            fcc_report::sysid::samples(&s, fcc_report::sysid::AccelSource::OdomDifferenced);
+        let samples = fcc_bridge::report::sysid::samples(
+            &s,
+            fcc_bridge::report::sysid::AccelSource::OdomDifferenced,
+        );
         let mut meas = Vec::new();
         let mut model = Vec::new();
         let mut wi = 0;
@@ -433,8 +533,12 @@ fn main() -> anyhow::Result<()> {
             ),
         ));
     }
-    let mut html = format!("<html><head><meta charset=\"utf-8\"><title>fcc flight report</title></head><body><h1>Flight report: {}</h1><pre>{}</pre>\n", cli.bag.display(), text);
-    for (file, title, r) in &plots {
+}
+
+/// `report.html`: the summary text and every plot (or why it failed).
+fn write_html(out: &Path, bag: &Path, text: &str, plots: &[Plot]) -> std::io::Result<()> {
+    let mut html = format!("<html><head><meta charset=\"utf-8\"><title>fcc flight report</title></head><body><h1>Flight report: {}</h1><pre>{}</pre>\n", bag.display(), text);
+    for (file, title, r) in plots {
         match r {
             Ok(()) => html.push_str(&format!(
                 "<h2>{title}</h2><img src=\"{file}\" width=\"900\">\n"
@@ -446,11 +550,5 @@ fn main() -> anyhow::Result<()> {
         }
     }
     html.push_str("</body></html>\n");
-    std::fs::write(out.join("report.html"), html)?;
-    let ok = plots.iter().filter(|p| p.2.is_ok()).count();
-    eprintln!(
-        "fcc-report: {ok} plots, summary.txt, summary.json and report.html in {}",
-        out.display()
-    );
-    Ok(())
+    std::fs::write(out.join("report.html"), html)
 }

@@ -4,13 +4,13 @@
 //! the flight core does), in a wind made of a constant, a slow swing and gusts, with noisy
 //! attitude, velocity and accelerometer. The flight is turned into the decoded bag series
 //! (`state/odom` Euler angles with the heading along each leg, `accel/measured`, the
-//! velocity setpoints, `status`) and fitted by `fcc_report::sysid::from_series`, exactly as
+//! velocity setpoints, `status`) and fitted by `fcc_bridge::report::sysid::from_series`, exactly as
 //! `fcc-report` does on a bag.
 //!
-//! `cargo test --release -p fcc_report --test sysid_wind -- --nocapture` prints the fits.
+//! `cargo test --release -p fcc_bridge --test sysid_wind -- --nocapture` prints the fits.
 
-use fcc_report::figures::Series;
-use fcc_report::sysid;
+use fcc_bridge::report::figures::Series;
+use fcc_bridge::report::sysid;
 
 /// The calm-air fit of the simulated octorotor (tests/tests/sysid.rs) — the truth here.
 const K1: f64 = 9.17;

@@ -28,81 +28,19 @@
 //!
 //! **Write errors** (disk full, …): one error is logged, the recording stops, the bridge runs on.
 
-use crate::ros_types::{full_definition, Header, LinkFrame, RosMsg, Time};
+mod options;
+
+pub use fcc_ros::topics::QosInfo;
+pub use options::{record_options, RecordOptions, RECORD_PARAMS};
+
+use fcc_msgs::ros::{full_definition, Header, LinkFrame, RosMsg, Time};
+use fcc_ros::topics::{self, Topic};
 use std::collections::{BTreeMap, HashMap};
 use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-
-/// The topic of the raw link frames.
-pub const RAW_FRAMES_TOPIC: &str = "link/raw_frames";
-
-/// Recording options (`--record PATH`, `-p record:=PATH`, `-p record_*`).
-#[derive(Clone, Debug)]
-pub struct RecordOptions {
-    pub path: PathBuf,
-    /// zstd chunk compression (`-p record_compression:=zstd|none`, default zstd).
-    pub zstd: bool,
-    /// Close the open chunk at least this often (crash-safety bound).
-    pub chunk_interval: Duration,
-    /// ... or when it holds this many bytes.
-    pub chunk_bytes: u64,
-    /// Start a new file when a message's log time reaches the file's first log time + this.
-    pub split_s: Option<f64>,
-    /// Start a new file after this many MB (10^6 B) of messages.
-    pub split_mb: Option<f64>,
-    /// Record only while armed (a new file per arm period).
-    pub on_arm: bool,
-}
-
-impl RecordOptions {
-    pub fn new(path: impl Into<PathBuf>) -> Self {
-        RecordOptions {
-            path: path.into(),
-            zstd: true,
-            chunk_interval: Duration::from_millis(500),
-            chunk_bytes: 4 << 20,
-            split_s: None,
-            split_mb: None,
-            on_arm: false,
-        }
-    }
-}
-
-/// QoS of a channel, as `offered_qos_profiles` (rmw integer enums).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct QosInfo {
-    pub reliable: bool,
-    pub transient_local: bool,
-    pub depth: u32,
-}
-
-impl QosInfo {
-    pub const TELEMETRY: QosInfo = QosInfo {
-        reliable: true,
-        transient_local: false,
-        depth: 10,
-    };
-    pub const BEST_EFFORT: QosInfo = QosInfo {
-        reliable: false,
-        transient_local: false,
-        depth: 10,
-    };
-
-    /// rosbag2's YAML (history 1 = keep last, reliability 1/2 = reliable/best effort,
-    /// durability 1/2 = transient local/volatile, liveliness 1 = automatic).
-    pub fn yaml(&self) -> String {
-        let inf = "{sec: 9223372036, nsec: 854775807}";
-        format!(
-            "- history: 1\n  depth: {}\n  reliability: {}\n  durability: {}\n  deadline: {inf}\n  lifespan: {inf}\n  liveliness: 1\n  liveliness_lease_duration: {inf}\n  avoid_ros_namespace_conventions: false\n",
-            self.depth,
-            if self.reliable { 1 } else { 2 },
-            if self.transient_local { 1 } else { 2 }
-        )
-    }
-}
 
 /// CDR (little endian) with the 4-byte encapsulation header `00 01 00 00`.
 pub fn cdr_bytes<T: serde::Serialize>(m: &T) -> Vec<u8> {
@@ -264,7 +202,7 @@ impl Tap {
 
     /// Full topic of a name the bridge publishes or subscribes to (namespace + remaps).
     fn topic_of(&self, name: &str) -> String {
-        let remapped = crate::params::remap(&self.remaps, &self.namespace, name);
+        let remapped = fcc_ros::params::remap(&self.remaps, &self.namespace, name);
         full_topic(&self.namespace, &remapped)
     }
 
@@ -337,6 +275,16 @@ impl Tap {
         t_ns: i64,
     ) {
         self.count_and_record(name, false, qos, m, t_ns);
+    }
+
+    /// A message the bridge published on a topic of the table (its name and QoS).
+    pub fn published_on<T: RosMsg + serde::Serialize>(&self, topic: &Topic<T>, m: &T, t_ns: i64) {
+        self.published(topic.name, topic.qos, m, t_ns);
+    }
+
+    /// A message the bridge received on a topic of the table.
+    pub fn received_on<T: RosMsg + serde::Serialize>(&self, topic: &Topic<T>, m: &T, t_ns: i64) {
+        self.received(topic.name, topic.qos, m, t_ns);
     }
 
     fn count_and_record<T: RosMsg + serde::Serialize>(
@@ -442,8 +390,8 @@ impl Tap {
             t_us,
             data,
         };
-        let topic = self.topic_of(RAW_FRAMES_TOPIC);
-        self.record(g, &topic, QosInfo::TELEMETRY, &m, t_ns);
+        let topic = self.topic_of(topics::LINK_RAW_FRAMES.name);
+        self.record(g, &topic, topics::LINK_RAW_FRAMES.qos, &m, t_ns);
     }
 
     /// The vehicle's armed state (for `record_on_arm`); only changes are forwarded.
@@ -864,7 +812,7 @@ impl WriterThread {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ros_types::Imu;
+    use fcc_msgs::ros::Imu;
 
     #[test]
     fn cdr_has_encapsulation_header_and_roundtrips() {

@@ -256,66 +256,6 @@ pub fn domain_id(env: Option<&str>) -> Result<u16, String> {
     }
 }
 
-/// Recorder parameters (besides `--record PATH`).
-pub const RECORD_PARAMS: [&str; 7] = [
-    "record",
-    "record_on_arm",
-    "record_split_s",
-    "record_split_mb",
-    "record_compression",
-    "record_chunk_ms",
-    "record_chunk_mb",
-];
-
-/// Recording options from `--record PATH` (wins) or `-p record:=PATH`, and `-p record_*`:
-/// `record_on_arm` (false), `record_split_s`, `record_split_mb` (off), `record_compression`
-/// (`zstd` | `none`, default zstd), `record_chunk_ms` (500), `record_chunk_mb` (4).
-pub fn record_options(
-    flag: Option<&str>,
-    p: &BTreeMap<String, String>,
-) -> Result<Option<crate::record::RecordOptions>, String> {
-    let path = flag
-        .or(p.get("record").map(String::as_str))
-        .map(str::trim)
-        .filter(|s| !s.is_empty());
-    let Some(path) = path else {
-        if let Some(k) = RECORD_PARAMS[1..].iter().find(|k| p.contains_key(**k)) {
-            return Err(format!(
-                "parameter {k} needs --record PATH (or -p record:=PATH)"
-            ));
-        }
-        return Ok(None);
-    };
-    let mut o = crate::record::RecordOptions::new(path);
-    let pos = |k: &str| -> Result<Option<f64>, String> {
-        p.get(k)
-            .map(|v| match v.parse::<f64>() {
-                Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
-                _ => Err(format!("parameter {k}: '{v}' is not a positive number")),
-            })
-            .transpose()
-    };
-    o.split_s = pos("record_split_s")?;
-    o.split_mb = pos("record_split_mb")?;
-    if let Some(ms) = pos("record_chunk_ms")? {
-        o.chunk_interval = std::time::Duration::from_millis(ms.max(1.0) as u64);
-    }
-    if let Some(mb) = pos("record_chunk_mb")? {
-        o.chunk_bytes = (mb * 1048576.0) as u64;
-    }
-    if let Some(v) = p.get("record_on_arm") {
-        o.on_arm = parse_bool(v)?;
-    }
-    if let Some(v) = p.get("record_compression") {
-        o.zstd = match v.as_str() {
-            "zstd" => true,
-            "none" | "" => false,
-            _ => return Err(format!("parameter record_compression: '{v}' (zstd | none)")),
-        };
-    }
-    Ok(Some(o))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -406,21 +346,5 @@ other_node:\n  ros__parameters:\n    ttl_ms: 9\n";
         assert_eq!(domain_id(Some("42")).unwrap(), 42);
         assert!(domain_id(Some("300")).is_err());
         assert!(domain_id(Some("x")).is_err());
-    }
-
-    #[test]
-    fn record_params() {
-        let mut p = BTreeMap::new();
-        assert!(record_options(None, &p).unwrap().is_none());
-        p.insert("record_split_s".to_string(), "60".to_string());
-        assert!(record_options(None, &p).is_err());
-        p.insert("record".to_string(), "/tmp/a.mcap".to_string());
-        let o = record_options(None, &p).unwrap().unwrap();
-        assert_eq!(o.split_s, Some(60.0));
-        assert!(o.zstd && !o.on_arm);
-        let o = record_options(Some("/tmp/b.mcap"), &p).unwrap().unwrap();
-        assert_eq!(o.path, std::path::PathBuf::from("/tmp/b.mcap"));
-        p.insert("record_compression".to_string(), "lz5".to_string());
-        assert!(record_options(None, &p).is_err());
     }
 }

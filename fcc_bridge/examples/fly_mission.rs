@@ -8,12 +8,55 @@
 //! Exits 0 when the vehicle has landed and disarmed after the mission.
 
 use fcc_bridge::report::bag::odom_ned;
-use fcc_bridge::ros_types::*;
 use fcc_mission::{Request, WaypointFollower};
+use fcc_msgs::ros::*;
+use fcc_ros::frames::ned_to_enu;
 use futures::{FutureExt, StreamExt};
 use ros2_client::qos::{History, WhenFull};
-use ros2_client::{Context, Name, NodeName, NodeOptions, QosProfile};
+use ros2_client::{
+    Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription,
+};
 use std::time::{Duration, Instant};
+
+/// The bridge's topics this driver uses (reliable, keep last 10).
+struct Endpoints {
+    odom: Subscription<Odometry>,
+    status: Subscription<Status>,
+    sp: Publisher<TwistStamped>,
+    arm: Publisher<Bool>,
+    mode: Publisher<StringMsg>,
+}
+
+fn endpoints(node: &mut Node) -> anyhow::Result<Endpoints> {
+    let rel = QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::Fail)
+        .history(History::KeepLast { depth: 10 });
+    let t_odom = node.create_topic(
+        &Name::parse("/fcc/state/odom")?,
+        Odometry::type_name(),
+        &rel,
+    )?;
+    let t_status = node.create_topic(&Name::parse("/fcc/status")?, Status::type_name(), &rel)?;
+    let t_sp = node.create_topic(
+        &Name::parse("/fcc/setpoint/velocity")?,
+        TwistStamped::type_name(),
+        &rel,
+    )?;
+    let t_arm = node.create_topic(&Name::parse("/fcc/cmd/arm")?, Bool::type_name(), &rel)?;
+    let t_mode = node.create_topic(&Name::parse("/fcc/cmd/mode")?, StringMsg::type_name(), &rel)?;
+    let odom = node.create_subscription::<Odometry>(&t_odom, Some(rel.clone()))?;
+    let status = node.create_subscription::<Status>(&t_status, Some(rel.clone()))?;
+    let sp = node.create_publisher::<TwistStamped>(&t_sp, None)?;
+    let arm = node.create_publisher::<Bool>(&t_arm, None)?;
+    let mode = node.create_publisher::<StringMsg>(&t_mode, None)?;
+    Ok(Endpoints {
+        odom,
+        status,
+        sp,
+        arm,
+        mode,
+    })
+}
 
 #[tokio::main]
 async fn main() -> anyhow::Result<()> {
@@ -37,27 +80,13 @@ async fn main() -> anyhow::Result<()> {
     let ctx = Context::new()?;
     let mut node = ctx.new_node(NodeName::new("/fcc", "fly_mission")?, NodeOptions::new())?;
     tokio::spawn(node.spinner()?.spin());
-    let rel = QosProfile::publisher_default()
-        .reliability_reliable(WhenFull::Fail)
-        .history(History::KeepLast { depth: 10 });
-    let t_odom = node.create_topic(
-        &Name::parse("/fcc/state/odom")?,
-        Odometry::type_name(),
-        &rel,
-    )?;
-    let t_status = node.create_topic(&Name::parse("/fcc/status")?, Status::type_name(), &rel)?;
-    let t_sp = node.create_topic(
-        &Name::parse("/fcc/setpoint/velocity")?,
-        TwistStamped::type_name(),
-        &rel,
-    )?;
-    let t_arm = node.create_topic(&Name::parse("/fcc/cmd/arm")?, Bool::type_name(), &rel)?;
-    let t_mode = node.create_topic(&Name::parse("/fcc/cmd/mode")?, StringMsg::type_name(), &rel)?;
-    let odom = node.create_subscription::<Odometry>(&t_odom, Some(rel.clone()))?;
-    let status = node.create_subscription::<Status>(&t_status, Some(rel.clone()))?;
-    let sp = node.create_publisher::<TwistStamped>(&t_sp, None)?;
-    let arm = node.create_publisher::<Bool>(&t_arm, None)?;
-    let mode = node.create_publisher::<StringMsg>(&t_mode, None)?;
+    let Endpoints {
+        odom,
+        status,
+        sp,
+        arm,
+        mode,
+    } = endpoints(&mut node)?;
     let odom_s = odom.async_stream();
     let status_s = status.async_stream();
     tokio::pin!(odom_s);
@@ -136,7 +165,7 @@ async fn main() -> anyhow::Result<()> {
                     let vn = g.vel_ned_mps;
                     let mut m = TwistStamped::default();
                     m.header = Header::new(o.header.stamp, "map");
-                    m.twist.linear = Vector3::new([vn[1] as f64, vn[0] as f64, -vn[2] as f64]);
+                    m.twist.linear = Vector3::new(ned_to_enu([vn[0] as f64, vn[1] as f64, vn[2] as f64]));
                     let _ = sp.publish(m);
                 }
             }

@@ -1,5 +1,8 @@
 //! The custom messages of the ROS 2 interface package `fcc_msgs` (`msg/msg/*.msg`).
-//! The `.msg` files are the source of truth; these structs follow their field order.
+//! The `.msg` files are the source of truth: these structs follow their field order (checked by
+//! the `custom_fields_match_msg_files` test against [`Altitude::FIELDS`] etc.), and their
+//! constants (`Status::MODE_HOLD`, `Altitude::SOURCE_LASER`, …) and `FIELDS` are generated
+//! from the files by `msg/build.rs`, never copied by hand.
 
 use super::{ros_msg, Header};
 use serde::{Deserialize, Serialize};
@@ -21,17 +24,9 @@ ros_msg!(
     Altitude,
     "fcc_msgs",
     "Altitude",
-    include_str!("../../../msg/msg/Altitude.msg"),
+    include_str!("../../msg/Altitude.msg"),
     [Header]
 );
-
-impl Altitude {
-    pub const SOURCE_NONE: u8 = 0;
-    pub const SOURCE_LASER: u8 = 1;
-    pub const SOURCE_SONAR: u8 = 2;
-    pub const SOURCE_BOTH: u8 = 3;
-    pub const SOURCE_PREDICTED: u8 = 4;
-}
 
 /// fcc_msgs/msg/Status (see `msg/msg/Status.msg`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -80,28 +75,9 @@ ros_msg!(
     Status,
     "fcc_msgs",
     "Status",
-    include_str!("../../../msg/msg/Status.msg"),
+    include_str!("../../msg/Status.msg"),
     [Header]
 );
-
-impl Status {
-    pub const MODE_DISARMED: u8 = 0;
-    pub const MODE_HOLD: u8 = 1;
-    pub const MODE_VELOCITY: u8 = 2;
-    pub const MODE_LAND: u8 = 3;
-    pub const MODE_PILOT: u8 = 4;
-    pub const FAILSAFE_NONE: u8 = 0;
-    pub const FAILSAFE_SETPOINT_STALE: u8 = 1;
-    pub const FAILSAFE_SETPOINT_LOST: u8 = 2;
-    pub const FAILSAFE_GEOFENCE: u8 = 3;
-    pub const FAILSAFE_GPS_LOST: u8 = 4;
-    pub const FAILSAFE_WIND_LIMIT: u8 = 5;
-    pub const FAILSAFE_ESTIMATOR_FAULT: u8 = 6;
-    pub const FAILSAFE_EMERGENCY_KILL: u8 = 7;
-    pub const NAV_FAULT_VERTICAL: u8 = 1;
-    pub const NAV_FAULT_HORIZONTAL: u8 = 2;
-    pub const NAV_FAULT_ATTITUDE: u8 = 4;
-}
 
 /// fcc_msgs/msg/LinkFrame (see `msg/msg/LinkFrame.msg`): one raw link frame, as recorded.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -115,11 +91,8 @@ ros_msg!(
     LinkFrame,
     "fcc_msgs",
     "LinkFrame",
-    include_str!("../../../msg/msg/LinkFrame.msg"),
+    include_str!("../../msg/LinkFrame.msg"),
     [Header]
 );
 
-impl LinkFrame {
-    pub const DIRECTION_MCU_TO_LINUX: u8 = 0;
-    pub const DIRECTION_LINUX_TO_MCU: u8 = 1;
-}
+include!(concat!(env!("OUT_DIR"), "/ros_msg_consts.rs"));

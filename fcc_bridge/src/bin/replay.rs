@@ -11,7 +11,7 @@
 use clap::Parser;
 use fcc_bridge::record::from_cdr;
 use fcc_bridge::report::bag::{read_bag_full, BagMsg};
-use fcc_bridge::ros_types::LinkFrame;
+use fcc_msgs::ros::LinkFrame;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};

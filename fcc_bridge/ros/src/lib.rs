@@ -1,0 +1,24 @@
+//! # fcc_ros — the ROS 2 node plumbing of the project's nodes
+//!
+//! What `fcc-bridge` and `fcc-mission` share to be ROS 2 nodes, so that neither depends on the
+//! other: the message structs themselves live in `fcc_msgs::ros` (feature `ros` of the `msg`
+//! crate).
+//!
+//! Layers (bottom-up):
+//! - [`frames`]: every NED/FRD ↔ ENU/FLU conversion (REP-103/105) — the only home of them.
+//! - [`params`]: the command line after `--ros-args` (`-r`, `-p`, `--params-file`), remaps,
+//!   and the DDS environment variables.
+//! - [`ros_node`]: the DDS participant (built here only), nodes, publishers and subscriptions by
+//!   ROS name, the QoS profiles, the ROS clock, [`now_ns`] and [`logger_name`].
+//! - [`topics`]: the topic table (name, message type, QoS, direction) that the bridge's
+//!   publishers, subscriptions and recorder read; [`topics::QosInfo`].
+//! - [`startup`]: start-up protection — the DDS set-up under a watchdog with a restart, and
+//!   SIGTERM/SIGINT on a thread of their own.
+
+pub mod frames;
+pub mod params;
+pub mod ros_node;
+pub mod startup;
+pub mod topics;
+
+pub use ros_node::{logger_name, now_ns};
