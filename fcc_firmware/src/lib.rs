@@ -1,4 +1,4 @@
-//! # fcc_firmware — the flight-control MCU program and its simulator
+//! # fcc_firmware — the flight-control MCU program
 //!
 //! Paper A's MCU software: 500 Hz navigation and control for an octorotor, written `no_std`, no
 //! heap, f32, with time passed in and hardware behind traits.
@@ -19,9 +19,11 @@
 //! Inputs: sensor samples, velocity setpoints with time-to-live and commands
 //! ([`commands`]). Outputs: ESC commands 0..1 per motor, plus [`flight::StepTelemetry`].
 //!
-//! The `sitl` feature (std) adds [`sitl`]: octorotor physics, wind, sensor models behind the same
-//! traits, scenario files and the `fcc-sitl` binary.
-#![cfg_attr(not(feature = "std"), no_std)]
+//! The simulator is a crate of its own beside this one (`fcc_firmware/sim`, package `fcc_sim`,
+//! std): octorotor physics, wind, sensor models behind the same traits, scenario files and the
+//! `fcc-sitl`/`fcc-campaign` binaries. This crate has no simulator dependency and is `no_std`
+//! (unit tests link std).
+#![cfg_attr(not(test), no_std)]
 
 pub mod commands;
 pub mod control;
@@ -35,6 +37,3 @@ pub mod params;
 pub mod pilot;
 pub mod scheduler;
 pub mod sensors;
-
-#[cfg(feature = "sitl")]
-pub mod sitl;

@@ -6,8 +6,8 @@
 mod common;
 
 use fcc_firmware::commands::{Command, FailsafeCause, Mode, KILL_CONFIRM};
-use fcc_firmware::sitl::scenario::Fault;
-use fcc_firmware::sitl::{sim::Sim, truth};
+use fcc_sim::scenario::Fault;
+use fcc_sim::{sim::Sim, truth};
 
 #[test]
 fn gps_jump_is_refused_reported_and_answered_by_landing() {

@@ -3,11 +3,11 @@
 //! test: shared machines are noisy.
 //!
 //! ```text
-//! cargo bench -p fcc_firmware --bench sitl_speed
+//! cargo bench -p fcc_sim --bench sitl_speed
 //! ```
 
-use fcc_firmware::sitl::scenario::Scenario;
-use fcc_firmware::sitl::sim::Sim;
+use fcc_sim::scenario::Scenario;
+use fcc_sim::sim::Sim;
 use std::path::Path;
 use std::time::Instant;
 

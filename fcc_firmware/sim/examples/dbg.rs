@@ -1,4 +1,4 @@
-use fcc_firmware::sitl::{scenario::Scenario, sim::Sim};
+use fcc_sim::{scenario::Scenario, sim::Sim};
 fn main() {
     let s = Scenario::load(std::path::Path::new("launch_configs/scenarios/hover.yaml")).unwrap();
     let mut sim = Sim::new(s).unwrap();

@@ -245,19 +245,19 @@ fn score(f: &Flight, log: &FlightLog, still_armed: bool) -> Outcome {
         o.failures
             .push(("disarmed", "still armed at the end of the run".into()));
     }
-    let failsafe = |c: crate::commands::FailsafeCause| {
+    let failsafe = |c: fcc_firmware::commands::FailsafeCause| {
         log.samples.iter().any(|s| s.failsafe == c) as u8 as f64
     };
     fig(
         &mut o,
         "wind_limit_landings",
-        failsafe(crate::commands::FailsafeCause::WindLimit),
+        failsafe(fcc_firmware::commands::FailsafeCause::WindLimit),
         None,
     );
     fig(
         &mut o,
         "estimator_faults",
-        failsafe(crate::commands::FailsafeCause::EstimatorFault),
+        failsafe(fcc_firmware::commands::FailsafeCause::EstimatorFault),
         Some(0.0),
     );
     fig(&mut o, "max_tilt_deg", t.max_tilt_deg, None);

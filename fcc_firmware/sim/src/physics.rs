@@ -4,7 +4,7 @@
 //! eight 10×4.5" props on 650 Kv motors, 40 A ESCs, 5S 5200 mAh battery.
 //!
 //! Frames: world NED, body FRD. The motor layout and the torque sign conventions come from
-//! [`crate::geometry`] so that the simulator and the mixer can never disagree:
+//! [`fcc_firmware::geometry`] so that the simulator and the mixer can never disagree:
 //! motor `i` at `(x_i, y_i)` with thrust `T_i` (along body −z) gives roll `−y_i·T_i`,
 //! pitch `x_i·T_i`, yaw `−s_i·c_q·T_i` (`s_i = spin_cw(i)`).
 //!
@@ -26,7 +26,7 @@
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::Deserialize;
 
-use crate::geometry::{motor_position_m, spin_cw, MOTOR_COUNT};
+use fcc_firmware::geometry::{motor_position_m, spin_cw, MOTOR_COUNT};
 
 /// Largest deceleration the landing gear applies while absorbing a touchdown (≈3 g), m/s².
 pub const GEAR_MAX_DECEL_MPS2: f64 = 30.0;
@@ -174,7 +174,7 @@ impl Octorotor {
         let mut motor_xy_m = [(0.0, 0.0); MOTOR_COUNT];
         let mut motor_spin = [0.0; MOTOR_COUNT];
         for i in 0..MOTOR_COUNT {
-            // The layout documented in `crate::geometry` (azimuth 22.5° + i·45°), evaluated in
+            // The layout documented in `fcc_firmware::geometry` (azimuth 22.5° + i·45°), evaluated in
             // f64 so that a symmetric command gives exactly zero torque; checked against the
             // shared f32 function so the two can never diverge.
             let az = (22.5 + 45.0 * i as f64).to_radians();
@@ -182,7 +182,7 @@ impl Octorotor {
             let (xg, yg) = motor_position_m(i, arm as f32);
             assert!(
                 (x - xg as f64).abs() < 1e-4 && (y - yg as f64).abs() < 1e-4,
-                "motor layout differs from crate::geometry"
+                "motor layout differs from fcc_firmware::geometry"
             );
             motor_xy_m[i] = (x, y);
             motor_spin[i] = spin_cw(i) as f64;
@@ -203,7 +203,7 @@ impl Octorotor {
         }
     }
 
-    /// Motor positions (x, y) in body FRD, metres (from `crate::geometry`).
+    /// Motor positions (x, y) in body FRD, metres (from `fcc_firmware::geometry`).
     pub fn motor_xy_m(&self) -> &[(f64, f64); MOTOR_COUNT] {
         &self.motor_xy_m
     }

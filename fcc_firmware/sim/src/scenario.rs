@@ -6,7 +6,7 @@ use super::rangefinders::{LaserParams, SonarParams};
 use super::sensor_models::{BaroParams, GpsParams, ImuParams, MagParams};
 use super::terrain::Terrain;
 use super::wind::WindParams;
-use crate::params::Params;
+use fcc_firmware::params::Params;
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! in-process stand-in for the Linux computer (the same waypoint logic `fcc_mission` uses).
 //!
 //! One call to [`Sim::tick`] advances 2 ms: four 0.5 ms physics substeps, the sensors sample the
-//! true state, the board trait hands them to [`crate::scheduler::tick`], and the motor commands
+//! true state, the board trait hands them to [`fcc_firmware::scheduler::tick`], and the motor commands
 //! go back to the physics on the next tick (one-tick actuation delay, as on the board).
 
 use super::linux::LinuxSide;
@@ -13,11 +13,11 @@ use super::scenario::{Fault, FlightPlan, Scenario};
 use super::sensor_models::{BaroModel, BaroParams, BatteryModel, GpsModel, ImuModel, MagModel};
 use super::terrain::Terrain;
 use super::wind::Wind;
-use crate::commands::Mode;
-use crate::flight::FlightCore;
-use crate::geometry::MOTOR_COUNT;
-use crate::scheduler::{self, TICK_US};
-use crate::sensors::{MotorOutputs, SensorBoard, SensorInputs};
+use fcc_firmware::commands::Mode;
+use fcc_firmware::flight::FlightCore;
+use fcc_firmware::geometry::MOTOR_COUNT;
+use fcc_firmware::scheduler::{self, TICK_US};
+use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
 use nalgebra::{UnitQuaternion, Vector3};
 
 const PHYSICS_SUBSTEPS: u32 = 4;
@@ -36,7 +36,7 @@ pub struct SimBoard {
     pub terrain: Terrain,
     pub air_temp_c: f64,
     /// Rangefinder samples handed to the core since the last log pass: (laser?, sample).
-    polled_ranges: Vec<(bool, crate::sensors::RangeSample)>,
+    polled_ranges: Vec<(bool, fcc_firmware::sensors::RangeSample)>,
     truth: Truth,
 }
 
@@ -129,7 +129,7 @@ pub struct Sim {
     pub core_wall_ns: u128,
     /// The board's UART served on a pty (`--link-pty`): the Linux side is then a real process
     /// (bridge + mission node) and the in-process stand-in is off.
-    link: Option<(crate::link::LinkEndpoint, super::pty::PtyLink)>,
+    link: Option<(fcc_firmware::link::LinkEndpoint, super::pty::PtyLink)>,
     /// The gear has been truly airborne since the last ground contact.
     airborne_since_contact: bool,
     /// A crash or tip-over ended the flight (truth).
@@ -262,11 +262,11 @@ impl Sim {
 
     /// Serve the flight core's link on a pseudo-terminal instead of the in-process Linux side.
     pub fn serve_link(&mut self, pty: super::pty::PtyLink, rates: fcc_msgs::StreamRates) {
-        self.link = Some((crate::link::LinkEndpoint::new(rates), pty));
+        self.link = Some((fcc_firmware::link::LinkEndpoint::new(rates), pty));
     }
 
     /// The served link, if any.
-    pub fn link(&self) -> Option<&(crate::link::LinkEndpoint, super::pty::PtyLink)> {
+    pub fn link(&self) -> Option<&(fcc_firmware::link::LinkEndpoint, super::pty::PtyLink)> {
         self.link.as_ref()
     }
 
@@ -568,7 +568,7 @@ fn tilt_deg(q: &UnitQuaternion<f64>) -> f64 {
 /// The operator's pre-flight calibrations: offsets measured with a residual error (see
 /// [`super::scenario::CalibrationParams`]).
 fn calibrate(
-    params: &mut crate::params::Params,
+    params: &mut fcc_firmware::params::Params,
     board: &SimBoard,
     s: &super::scenario::SensorParams,
     seed: u64,

@@ -23,10 +23,10 @@ use fcc_firmware::link::LinkEndpoint;
 use fcc_firmware::params::Params;
 use fcc_firmware::scheduler::TICK_US;
 use fcc_firmware::sensors::SensorInputs;
-use fcc_firmware::sitl::linux::LinuxSide;
-use fcc_firmware::sitl::scenario::Scenario;
-use fcc_firmware::sitl::sim::Sim;
 use fcc_msgs::StreamRates;
+use fcc_sim::linux::LinuxSide;
+use fcc_sim::scenario::Scenario;
+use fcc_sim::sim::Sim;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -74,13 +74,13 @@ pub struct Capture {
 }
 
 struct Shadow {
-    imu: fcc_firmware::sitl::sensor_models::ImuModel,
-    mag: fcc_firmware::sitl::sensor_models::MagModel,
-    baro: fcc_firmware::sitl::sensor_models::BaroModel,
-    gps: fcc_firmware::sitl::sensor_models::GpsModel,
-    battery: fcc_firmware::sitl::sensor_models::BatteryModel,
-    laser: fcc_firmware::sitl::rangefinders::LaserModel,
-    sonar: fcc_firmware::sitl::rangefinders::SonarModel,
+    imu: fcc_sim::sensor_models::ImuModel,
+    mag: fcc_sim::sensor_models::MagModel,
+    baro: fcc_sim::sensor_models::BaroModel,
+    gps: fcc_sim::sensor_models::GpsModel,
+    battery: fcc_sim::sensor_models::BatteryModel,
+    laser: fcc_sim::rangefinders::LaserModel,
+    sonar: fcc_sim::rangefinders::SonarModel,
 }
 
 fn timer_overhead_ns() -> f64 {

@@ -1,4 +1,4 @@
-//! Host tool: fly the SITL's octorotor (physics + sensor models of `fcc_firmware::sitl`) in closed
+//! Host tool: fly the SITL's octorotor (physics + sensor models of `fcc_sim`) in closed
 //! loop with the host build of the flight core, and record every tick's sensor inputs, the
 //! operator's commands and setpoints, and the motor outputs.
 //!
@@ -14,8 +14,8 @@ use fcc_firmware::commands::{Command, VelocitySetpoint};
 use fcc_firmware::geometry::MOTOR_COUNT;
 use fcc_firmware::scheduler::TICK_US;
 use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
-use fcc_firmware::sitl::scenario::Scenario;
-use fcc_firmware::sitl::sim::Sim;
+use fcc_sim::scenario::Scenario;
+use fcc_sim::sim::Sim;
 use nalgebra::Vector3;
 
 const SCENARIO: &str = "
