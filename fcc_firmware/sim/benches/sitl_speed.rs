@@ -12,7 +12,7 @@ use std::path::Path;
 use std::time::Instant;
 
 fn main() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../launch_configs/scenarios");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch_configs/scenarios");
     println!("| scenario | simulated s | wall s | sim s / wall s | tick incl. sensor models, ns | share of the 2 ms period |");
     println!("|---|---:|---:|---:|---:|---:|");
     for name in ["hover", "square", "elevator"] {

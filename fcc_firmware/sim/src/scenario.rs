@@ -353,7 +353,7 @@ mod tests {
 
     #[test]
     fn repo_scenarios_load() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../launch_configs/scenarios");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch_configs/scenarios");
         let mut n = 0;
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
