@@ -13,7 +13,7 @@ fn main() {
                 st.vel_ned_mps.as_slice(),
                 st.omega_frd_radps.as_slice(),
                 &st.rotor_speed_frac[..3],
-                &sim.core.motors()[..3]
+                &sim.fc.core.motors()[..3]
             );
         }
     }

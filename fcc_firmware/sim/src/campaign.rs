@@ -187,7 +187,7 @@ pub fn fly(f: &Flight) -> Outcome {
 pub fn fly_logged(f: &Flight) -> (Outcome, FlightLog) {
     let mut sim = Sim::new(f.scenario.clone()).unwrap_or_else(|e| panic!("{e}"));
     sim.run();
-    let still_armed = sim.core.armed();
+    let still_armed = sim.fc.core.armed();
     sim.finish();
     let log = std::mem::take(&mut sim.log);
     (score(f, &log, still_armed), log)

@@ -2,8 +2,9 @@
 //!
 //! std, host only; the MCU program (`fcc_firmware`, `no_std`) knows nothing of it. The
 //! simulator implements the core's hardware traits (`SensorBoard`, `MotorOutputs`) with models
-//! of the paper's octorotor and sensors, owns time (lockstep) and runs the core's one flight
-//! tick ([`fcc_firmware::scheduler`]) every 2 ms.
+//! of the paper's octorotor and sensors, owns time (lockstep) and runs the flight computer's tick
+//! ([`fcc_firmware::scheduler::FlightComputer::tick`], the one the board and the QEMU replay
+//! run) every 2 ms.
 //!
 //! Layers (bottom-up):
 //! - World: [`physics`] (6-DOF rigid body, per-motor lag, drag, landing gear and ground

@@ -2,8 +2,9 @@
 //! in-process stand-in for the Linux computer (the same waypoint logic `fcc_mission` uses).
 //!
 //! One call to [`Sim::tick`] advances 2 ms: four 0.5 ms physics substeps, the sensors sample the
-//! true state, the board trait hands them to [`fcc_firmware::scheduler::tick`], and the motor commands
-//! go back to the physics on the next tick (one-tick actuation delay, as on the board).
+//! true state, and the flight computer's tick ([`FlightComputer::tick`], the board's) polls
+//! them; its motor commands go back to the physics on the next tick (one-tick actuation delay,
+//! as on the board).
 
 use super::linux::LinuxSide;
 use super::log::{FlightLog, LogSample};
@@ -14,9 +15,9 @@ use super::sensor_models::{BaroModel, BaroParams, BatteryModel, GpsModel, ImuMod
 use super::terrain::Terrain;
 use super::wind::Wind;
 use fcc_firmware::commands::Mode;
-use fcc_firmware::flight::FlightCore;
 use fcc_firmware::geometry::MOTOR_COUNT;
-use fcc_firmware::scheduler::{self, TICK_US};
+use fcc_firmware::link::LinkEndpoint;
+use fcc_firmware::scheduler::{FlightComputer, TICK_US};
 use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -113,7 +114,8 @@ struct Carried {
 pub struct Sim {
     pub scenario: Scenario,
     pub t_us: u64,
-    pub core: FlightCore,
+    /// The MCU program under test (flight core + link endpoint), unchanged.
+    pub fc: FlightComputer,
     pub body: Octorotor,
     pub board: SimBoard,
     wind: Wind,
@@ -125,11 +127,14 @@ pub struct Sim {
     carried: Option<Carried>,
     ticks: u64,
     pub log: FlightLog,
-    /// Wall time spent inside the flight core's tick (sensors polled + step), for the benchmark.
+    /// Wall time spent inside the flight computer's tick (sensors polled + step, plus the link
+    /// when served), for the benchmark.
     pub core_wall_ns: u128,
     /// The board's UART served on a pty (`--link-pty`): the Linux side is then a real process
     /// (bridge + mission node) and the in-process stand-in is off.
-    link: Option<(fcc_firmware::link::LinkEndpoint, super::pty::PtyLink)>,
+    link: Option<super::pty::PtyLink>,
+    /// The bytes read from the pty in one tick.
+    rx: Vec<u8>,
     /// The gear has been truly airborne since the last ground contact.
     airborne_since_contact: bool,
     /// A crash or tip-over ended the flight (truth).
@@ -220,7 +225,9 @@ impl Sim {
             calibrate(&mut params, &board, &scenario.sensors, seed);
         }
         Ok(Self {
-            core: FlightCore::new(params),
+            // Telemetry off until a link is served: the in-process mission computer reads the
+            // core directly.
+            fc: FlightComputer::new(params, fcc_msgs::StreamRates::OFF),
             body,
             board,
             wind: Wind::new(scenario.wind.clone(), seed),
@@ -253,6 +260,7 @@ impl Sim {
             },
             core_wall_ns: 0,
             link: None,
+            rx: Vec::new(),
             airborne_since_contact: false,
             crashed: false,
             sim_events: Vec::new(),
@@ -262,12 +270,13 @@ impl Sim {
 
     /// Serve the flight core's link on a pseudo-terminal instead of the in-process Linux side.
     pub fn serve_link(&mut self, pty: super::pty::PtyLink, rates: fcc_msgs::StreamRates) {
-        self.link = Some((fcc_firmware::link::LinkEndpoint::new(rates), pty));
+        self.fc.link = LinkEndpoint::new(rates);
+        self.link = Some(pty);
     }
 
-    /// The served link, if any.
-    pub fn link(&self) -> Option<&(fcc_firmware::link::LinkEndpoint, super::pty::PtyLink)> {
-        self.link.as_ref()
+    /// The served link, if any: the MCU's endpoint and the pty.
+    pub fn link(&self) -> Option<(&LinkEndpoint, &super::pty::PtyLink)> {
+        self.link.as_ref().map(|pty| (&self.fc.link, pty))
     }
 
     /// The in-process mission computer (its refusal counters).
@@ -314,7 +323,7 @@ impl Sim {
         }
         self.airborne_since_contact = false;
         let tilt_deg = tilt_deg(&q);
-        let mode = self.core.mode();
+        let mode = self.fc.core.mode();
         let (vz, vh) = (v.z, v.x.hypot(v.y));
         let outcome =
             super::truth::classify_contact(vz, vh, tilt_deg, self.body.params.gear_height_m);
@@ -347,7 +356,7 @@ impl Sim {
         }
         let c = &mut self.log.truth;
         let dt = TICK_US as f64 * 1e-6;
-        if self.core.armed() && !self.core.telemetry().attitude_active {
+        if self.fc.core.armed() && !self.fc.core.telemetry().attitude_active {
             c.attitude_off_airborne_s += dt;
         }
         c.max_tilt_deg = c.max_tilt_deg.max(tilt_deg(&st.q_body_to_ned));
@@ -438,33 +447,40 @@ impl Sim {
         let t0 = std::time::Instant::now();
         // The R/C receiver's frame (50 Hz), before the tick that uses it.
         if let Some(p) = self.receiver.poll(self.t_us) {
-            self.core.pilot(self.t_us, &p);
+            self.fc.core.pilot(self.t_us, &p);
         }
-        if let Some((ep, pty)) = self.link.as_mut() {
+        if let Some(pty) = self.link.as_mut() {
             // The UART: whatever the Linux side wrote since the last tick (unless the wire is cut).
-            let mut rx = [0u8; 1024];
+            let mut chunk = [0u8; 1024];
+            self.rx.clear();
             loop {
-                let n = pty.read_available(&mut rx);
+                let n = pty.read_available(&mut chunk);
                 if n == 0 {
                     break;
                 }
                 if linux_on {
-                    ep.on_bytes(self.t_us, &rx[..n], &mut self.core);
+                    self.rx.extend_from_slice(&chunk[..n]);
                 }
             }
-            let inputs =
-                scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
             let mut tx = [0u8; 1024];
-            let n = ep.poll_tx(self.t_us, &self.core, &inputs, &mut tx);
+            let n = self.fc.tick(
+                self.t_us,
+                &self.rx,
+                &mut self.board,
+                &mut self.motors,
+                &mut tx,
+            );
             if linux_on {
                 pty.write_or_drop(&tx[..n]);
             }
         } else {
-            // The in-process Linux computer runs at 20 Hz, before the MCU's tick at the same instant.
+            // The in-process Linux computer runs at 20 Hz, before the MCU's tick at the same
+            // instant; it talks to the core directly, so the link has nothing to carry.
             if self.ticks % 25 == 0 && linux_on {
-                self.linux.update(self.t_us, &mut self.core);
+                self.linux.update(self.t_us, &mut self.fc.core);
             }
-            scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
+            self.fc
+                .tick(self.t_us, &[], &mut self.board, &mut self.motors, &mut []);
         }
         self.core_wall_ns += t0.elapsed().as_nanos();
         self.count_truth();
@@ -486,8 +502,8 @@ impl Sim {
     fn record(&mut self) {
         let st = &self.body.state;
         let (roll, pitch, yaw) = st.q_body_to_ned.euler_angles();
-        let nav = *self.core.nav();
-        let tel = *self.core.telemetry();
+        let nav = *self.fc.core.nav();
+        let tel = *self.fc.core.telemetry();
         let a = self.board.truth.accel_ned_mps2;
         let (sy, cy) = (
             nav.euler.yaw_rad.sin() as f64,
@@ -496,10 +512,10 @@ impl Sim {
         let accel_true_fr = [(cy * a.x + sy * a.y) as f32, (-sy * a.x + cy * a.y) as f32];
         self.log.samples.push(LogSample {
             t_s: self.t_s(),
-            mode: self.core.mode(),
-            failsafe: self.core.failsafe(),
-            armed: self.core.armed(),
-            landed: self.core.landed(),
+            mode: self.fc.core.mode(),
+            failsafe: self.fc.core.failsafe(),
+            armed: self.fc.core.armed(),
+            landed: self.fc.core.landed(),
             plan: self.linux.status(),
             true_pos_ned_m: st.pos_ned_m.into(),
             true_vel_ned_mps: st.vel_ned_mps.into(),
@@ -514,7 +530,7 @@ impl Sim {
                 .terrain
                 .ground_down_at(st.pos_ned_m.x, st.pos_ned_m.y)
                 - st.pos_ned_m.z,
-            motors: *self.core.motors(),
+            motors: *self.fc.core.motors(),
         });
     }
 

@@ -109,7 +109,7 @@ pub fn capture(name: &str, with_link: bool) -> Capture {
         matches!(sim.log.plan_kind, "hover" | "mission"),
         "capture needs a flown scenario (the carried ones set the specific force differently)"
     );
-    let params = *sim.core.params();
+    let params = *sim.fc.core.params();
     let mut twin = FlightCore::new(params);
     let mut twin_linux = LinuxSide::new(&s).expect("mission computer");
     let mut link = LinkEndpoint::new(StreamRates::DEFAULT);
@@ -166,21 +166,21 @@ pub fn capture(name: &str, with_link: bool) -> Capture {
         step_ns.push((ns - overhead).max(0.0));
         assert_eq!(
             &motors,
-            sim.core.motors(),
+            sim.fc.core.motors(),
             "twin core diverged at t = {t} µs: the captured samples are not the ones the simulator's core saw"
         );
         if with_link {
-            let n = link.poll_tx(t, &sim.core, &inputs, &mut tx);
+            let n = link.poll_tx(t, &sim.fc.core, &inputs, &mut tx);
             telemetry.extend_from_slice(&tx[..n]);
         }
         let (roll, pitch, yaw) = st.q_body_to_ned.euler_angles();
-        let e = sim.core.nav().euler;
+        let e = sim.fc.core.nav().euler;
         ticks.push(Tick {
             t_us: t,
             inputs,
             true_euler_rad: [roll, pitch, yaw],
             airborne: !body.on_ground(),
-            calibrated: sim.core.nav().calibrated,
+            calibrated: sim.fc.core.nav().calibrated,
             core_euler_rad: [e.roll_rad, e.pitch_rad, e.yaw_rad],
         });
     }

@@ -1,11 +1,12 @@
 //! The flight-control image for the TI TM4C1294 (Cortex-M4F, 120 MHz, 1 MB flash, 256 KB RAM).
 //!
 //! - Clock tree to 120 MHz from the 25 MHz crystal (`tm4c129x-hal` sysctl).
-//! - The 500 Hz SysTick exception (240,000 core cycles) runs, in this order: the link's received
-//!   bytes into `fcc_firmware::link::LinkEndpoint::on_bytes` (setpoints, commands, parameters,
-//!   time sync), the unchanged `fcc_firmware::scheduler::tick` → `FlightCore::step`, then
-//!   `LinkEndpoint::poll_tx` (telemetry, acknowledgements) into the UART's transmit ring; the
-//!   step's duration (DWT cycle counter) goes into the link's `Status` loop-time figures.
+//! - The 500 Hz SysTick exception (240,000 core cycles) hands the S.BUS frames to the core, then
+//!   runs the flight computer's tick (`fcc_firmware::scheduler::FlightComputer::tick`, the same
+//!   one the simulator and the QEMU replay run): the link's received bytes (setpoints,
+//!   commands, parameters, time sync) → `FlightCore::step` → telemetry and acknowledgements into
+//!   the UART's transmit ring; the handler's duration (DWT cycle counter) goes into the link's
+//!   `Status` loop-time figures.
 //! - The link to the Linux computer: UART0 (PA0 = U0RX, PA1 = U0TX; the LaunchPad's ICDI
 //!   virtual COM port), 921600 baud 8N1 (divisor 8 + 9/64 at 120 MHz: 921,305 baud, −0.03 %).
 //!   The UART0 interrupt, at a higher priority than SysTick, moves bytes between the 16-byte
@@ -57,11 +58,9 @@ use fcc_board::drivers::ms5611::{Ms5611, Osr};
 use fcc_board::drivers::pwm::{tm4c::Pwm0Esc, EscOutputs, PwmConfig};
 use fcc_board::drivers::sbus::{self, SbusDecoder, SbusFrame};
 use fcc_board::drivers::sonar::{SonarConfig, SonarParser};
-use fcc_firmware::flight::FlightCore;
-use fcc_firmware::link::LinkEndpoint;
 use fcc_firmware::params::Params;
 use fcc_firmware::pilot::PilotInput;
-use fcc_firmware::scheduler::{self, TICK_US};
+use fcc_firmware::scheduler::{FlightComputer, TICK_US};
 use fcc_firmware::sensors::{SensorBoard, SensorInputs};
 use tm4c129x_hal::{
     self as hal,
@@ -183,7 +182,8 @@ impl<const N: usize> ByteRing<N> {
 }
 
 /// UART0 interrupt → SysTick.
-static LINK_RX: ByteRing<2048> = ByteRing::new();
+const LINK_RX_BYTES: usize = 2048;
+static LINK_RX: ByteRing<LINK_RX_BYTES> = ByteRing::new();
 /// SysTick → UART0 interrupt.
 static LINK_TX: ByteRing<2048> = ByteRing::new();
 /// Received bytes dropped: RX ring full, or a framing/parity/break/overrun error on the line.
@@ -499,8 +499,7 @@ impl SensorBoard for Tm4cSensors {
 }
 
 struct Board {
-    core: FlightCore,
-    link: LinkEndpoint,
+    fc: FlightComputer,
     sensors: Tm4cSensors,
     escs: EscOutputs<Pwm0Esc>,
     sbus: SbusDecoder,
@@ -766,8 +765,7 @@ fn main() -> ! {
 
     cortex_m::interrupt::free(|cs| {
         BOARD.borrow(cs).set(Some(Board {
-            core: FlightCore::new(Params::default()),
-            link: LinkEndpoint::default(),
+            fc: FlightComputer::new(Params::default(), fcc_msgs::StreamRates::DEFAULT),
             sensors,
             escs,
             sbus: SbusDecoder::new(),
@@ -811,41 +809,38 @@ fn SysTick() {
     let t0 = DWT::cycle_count();
     b.now_us += TICK_US;
 
-    // 1. Link in: everything the UART received since the last tick.
-    let mut rx = [0u8; 256];
-    loop {
-        let n = LINK_RX.pop_into(&mut rx);
-        if n == 0 {
-            break;
-        }
-        b.link.on_bytes(b.now_us, &rx[..n], &mut b.core);
-    }
-
-    // 1b. Pilot: the S.BUS frames received since the last tick (frame-lost frames repeat old
-    //     channels and are not passed on; the core times the receiver out after 0.5 s).
+    // 1. Pilot: the S.BUS frames received since the last tick (frame-lost frames repeat old
+    //    channels and are not passed on; the core times the receiver out after 0.5 s). They
+    //    take effect in the tick's step.
     while let Some(byte) = SBUS_RX.pop() {
         if let Some(f) = b.sbus.push(byte) {
             if f.failsafe || !f.frame_lost {
-                b.core.pilot(b.now_us, &pilot_input(&f, b.now_us));
+                b.fc.core.pilot(b.now_us, &pilot_input(&f, b.now_us));
             }
         }
     }
 
-    // 2. Sensors → core → ESCs.
-    let inputs = scheduler::tick(&mut b.core, &mut b.sensors, &mut b.escs, b.now_us);
-
-    // 3. Link out: at most what the transmit ring can take now (the endpoint drops and counts
-    //    telemetry that does not fit; replies wait for the next tick).
+    // 2. The tick: everything the UART received since the last tick (the whole ring) in;
+    //    sensors → core → ESCs; out at most what the transmit ring can take now (the endpoint
+    //    drops and counts telemetry that does not fit; replies wait for the next tick).
+    let mut rx = [0u8; LINK_RX_BYTES];
+    let n_rx = LINK_RX.pop_into(&mut rx);
     let mut tx = [0u8; 512];
     let room = LINK_TX.free().min(tx.len());
-    let n = b.link.poll_tx(b.now_us, &b.core, &inputs, &mut tx[..room]);
+    let n = b.fc.tick(
+        b.now_us,
+        rx.get(..n_rx).unwrap_or_default(),
+        &mut b.sensors,
+        &mut b.escs,
+        tx.get_mut(..room).unwrap_or_default(),
+    );
     if let Some(bytes) = tx.get(..n).filter(|b| !b.is_empty()) {
         LINK_TX.push_slice(bytes);
         kick_tx();
     }
 
     let cycles = DWT::cycle_count().wrapping_sub(t0);
-    b.link.record_loop_time_us(cycles / (SYSCLK_HZ / 1_000_000));
+    b.fc.link.record_loop_time_us(cycles / (SYSCLK_HZ / 1_000_000));
 }
 
 /// Any panic stops the motors (ESC pulses → 1000 µs via reset) by resetting the MCU.
