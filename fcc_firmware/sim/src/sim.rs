@@ -111,6 +111,81 @@ struct Carried {
     attitude: Option<UnitQuaternion<f64>>,
 }
 
+impl SimBoard {
+    /// The scenario's sensor models (seeded with its seed), on the scenario's terrain and air.
+    fn new(scenario: &Scenario) -> Self {
+        let seed = scenario.seed;
+        let s = &scenario.sensors;
+        SimBoard {
+            imu: ImuModel::new(s.imu.clone(), seed),
+            mag: MagModel::new(s.mag.clone(), seed),
+            // The barometer's atmosphere (and its thermometer) is the scenario's air.
+            baro: BaroModel::new(
+                BaroParams {
+                    t0_c: scenario.air_temp_c,
+                    ..s.baro.clone()
+                },
+                seed,
+            ),
+            gps: GpsModel::new(s.gps.clone(), seed),
+            battery: BatteryModel::new(Default::default(), seed),
+            laser: LaserModel::new(s.laser.clone(), seed),
+            sonar: SonarModel::new(s.sonar.clone(), seed),
+            terrain: scenario.terrain.clone(),
+            air_temp_c: scenario.air_temp_c,
+            polled_ranges: Vec::new(),
+            truth: Truth {
+                pos_ned_m: Vector3::zeros(),
+                vel_ned_mps: Vector3::zeros(),
+                accel_ned_mps2: Vector3::zeros(),
+                q_body_to_ned: UnitQuaternion::identity(),
+                omega_frd_radps: Vector3::zeros(),
+                specific_force_frd_mps2: Vector3::new(0.0, 0.0, -fcc_nav::GRAVITY_MPS2 as f64),
+                rotor_speed_mean: 0.0,
+                in_flight: false,
+                current_a: 0.5,
+            },
+        }
+    }
+}
+
+impl Carried {
+    /// The rig or the elevator of a carried plan; `None` when the vehicle flies.
+    fn of(plan: &FlightPlan) -> Option<Self> {
+        match plan {
+            FlightPlan::Rig {
+                height_m,
+                roll_deg,
+                pitch_deg,
+            } => Some(Self {
+                profile: vec![[*height_m as f64, 0.0, 0.0]],
+                attitude: Some(UnitQuaternion::from_euler_angles(
+                    (*roll_deg as f64).to_radians(),
+                    (*pitch_deg as f64).to_radians(),
+                    0.0,
+                )),
+            }),
+            FlightPlan::Elevator {
+                floors,
+                floor_height_m,
+                speed_mps,
+                accel_mps2,
+                dwell_s,
+            } => Some(Self {
+                profile: super::linux::elevator_profile(
+                    floors,
+                    *floor_height_m,
+                    *speed_mps,
+                    *accel_mps2,
+                    *dwell_s,
+                ),
+                attitude: None,
+            }),
+            _ => None,
+        }
+    }
+}
+
 pub struct Sim {
     pub scenario: Scenario,
     pub t_us: u64,
@@ -157,69 +232,9 @@ impl Sim {
             Vector3::new(0.0, 0.0, start_down),
             0.0,
         );
-        let s = &scenario.sensors;
-        let board = SimBoard {
-            imu: ImuModel::new(s.imu.clone(), seed),
-            mag: MagModel::new(s.mag.clone(), seed),
-            // The barometer's atmosphere (and its thermometer) is the scenario's air.
-            baro: BaroModel::new(
-                BaroParams {
-                    t0_c: scenario.air_temp_c,
-                    ..s.baro.clone()
-                },
-                seed,
-            ),
-            gps: GpsModel::new(s.gps.clone(), seed),
-            battery: BatteryModel::new(Default::default(), seed),
-            laser: LaserModel::new(s.laser.clone(), seed),
-            sonar: SonarModel::new(s.sonar.clone(), seed),
-            terrain: scenario.terrain.clone(),
-            air_temp_c: scenario.air_temp_c,
-            polled_ranges: Vec::new(),
-            truth: Truth {
-                pos_ned_m: Vector3::zeros(),
-                vel_ned_mps: Vector3::zeros(),
-                accel_ned_mps2: Vector3::zeros(),
-                q_body_to_ned: UnitQuaternion::identity(),
-                omega_frd_radps: Vector3::zeros(),
-                specific_force_frd_mps2: Vector3::new(0.0, 0.0, -fcc_nav::GRAVITY_MPS2 as f64),
-                rotor_speed_mean: 0.0,
-                in_flight: false,
-                current_a: 0.5,
-            },
-        };
+        let board = SimBoard::new(&scenario);
         let linux = LinuxSide::new(&scenario)?;
-        let carried = match &scenario.flight {
-            FlightPlan::Rig {
-                height_m,
-                roll_deg,
-                pitch_deg,
-            } => Some(Carried {
-                profile: vec![[*height_m as f64, 0.0, 0.0]],
-                attitude: Some(UnitQuaternion::from_euler_angles(
-                    (*roll_deg as f64).to_radians(),
-                    (*pitch_deg as f64).to_radians(),
-                    0.0,
-                )),
-            }),
-            FlightPlan::Elevator {
-                floors,
-                floor_height_m,
-                speed_mps,
-                accel_mps2,
-                dwell_s,
-            } => Some(Carried {
-                profile: super::linux::elevator_profile(
-                    floors,
-                    *floor_height_m,
-                    *speed_mps,
-                    *accel_mps2,
-                    *dwell_s,
-                ),
-                attitude: None,
-            }),
-            _ => None,
-        };
+        let carried = Carried::of(&scenario.flight);
         let mut params = scenario.params;
         if scenario.sensors.calibration.enabled {
             calibrate(&mut params, &board, &scenario.sensors, seed);

@@ -513,32 +513,17 @@ static BOARD: Mutex<Cell<Option<Board>>> = Mutex::new(Cell::new(None));
 /// allow 20 MHz, PS §7.5).
 static IMU_SPI_HZ: AtomicU32 = AtomicU32::new(1_000_000);
 
-/// Pins, SSI modules and UARTs of the sensors; each driver's start-up sequence. A sensor whose
-/// start-up fails is left out (`None`), see the module docs.
-#[allow(clippy::too_many_arguments)]
-fn setup_sensors<P>(
+/// The SPI sensors: SSI2 (MPU-9250) on PD0–PD3, SSI3 (MS5611) on PQ0–PQ3, their power, and
+/// each driver's start-up (`None` when it fails; the IMU then runs its bus at 10 MHz).
+fn spi_sensors(
     ssi2: SSI2,
     ssi3: SSI3,
-    uart2: UART2,
-    uart3: UART3,
-    uart6: UART6,
     portd: GPIO_PORTD_AHB,
     portq: GPIO_PORTQ,
-    portj: GPIO_PORTJ_AHB,
-    portp: GPIO_PORTP,
-    gps_pins: (
-        P,
-        hal::gpio::gpioa::PA6<hal::gpio::AlternateFunction<AF1, hal::gpio::PushPull>>,
-    ),
-    clocks: &hal::sysctl::Clocks,
     pc: &hal::sysctl::PowerControl,
-) -> Tm4cSensors
-where
-    P: hal::serial::TxPin<UART2>,
-{
+    delay: &mut CycleDelay,
+) -> (Option<Mpu9250<SsiSpi>>, Option<Ms5611<SsiSpi>>) {
     use hal::sysctl::{self, Domain, PowerState, RunMode};
-    let mut delay = CycleDelay;
-
     // SPI: SSI2 (IMU) on PD0–PD3 (AF15), SSI3 (barometer) on PQ0–PQ3 (AF14); chip selects GPIO.
     let mut pd = portd.split(pc);
     let _imu_pins = (
@@ -571,7 +556,7 @@ where
 
     let imu_spi = SsiSpi::new(ssi2_regs, pd_data, 2, 1_000_000, Some(&IMU_SPI_HZ));
     let mut imu = Mpu9250::new(imu_spi, Mpu9250Config::default());
-    let imu = match imu.init(&mut delay) {
+    let imu = match imu.init(delay) {
         Ok(()) => {
             IMU_SPI_HZ.store(10_000_000, Ordering::Relaxed);
             Some(imu)
@@ -580,7 +565,36 @@ where
     };
     let baro_spi = SsiSpi::new(ssi3_regs, pq_data, 1, 10_000_000, None);
     let mut baro = Ms5611::new(baro_spi, Osr::Osr4096);
-    let baro = baro.init(&mut delay).ok().map(|_| baro);
+    let baro = baro.init(delay).ok().map(|_| baro);
+    (imu, baro)
+}
+
+/// Pins, SSI modules and UARTs of the sensors; each driver's start-up sequence. A sensor whose
+/// start-up fails is left out (`None`), see the module docs.
+#[allow(clippy::too_many_arguments)]
+fn setup_sensors<P>(
+    ssi2: SSI2,
+    ssi3: SSI3,
+    uart2: UART2,
+    uart3: UART3,
+    uart6: UART6,
+    portd: GPIO_PORTD_AHB,
+    portq: GPIO_PORTQ,
+    portj: GPIO_PORTJ_AHB,
+    portp: GPIO_PORTP,
+    gps_pins: (
+        P,
+        hal::gpio::gpioa::PA6<hal::gpio::AlternateFunction<AF1, hal::gpio::PushPull>>,
+    ),
+    clocks: &hal::sysctl::Clocks,
+    pc: &hal::sysctl::PowerControl,
+) -> Tm4cSensors
+where
+    P: hal::serial::TxPin<UART2>,
+{
+    let mut delay = CycleDelay;
+
+    let (imu, baro) = spi_sensors(ssi2, ssi3, portd, portq, pc, &mut delay);
 
     // GPS on UART2: NAV-PVT every 200 ms, then the receiver's port to 38400 baud (sent at the
     // u-blox default of 9600; a receiver already at 38400 ignores it and is simply read there).
@@ -703,13 +717,7 @@ fn main() -> ! {
     // The interrupt handler owns the registers from here on (through UART0::ptr()); keep the
     // configured pins and peripheral alive without using the blocking HAL calls.
     let _uart = uart.split();
-    {
-        // SAFETY: UART0 is configured and its interrupt is not yet unmasked in the NVIC.
-        let u = unsafe { &*UART0::ptr() };
-        u.ifls.write(|w| w.rx().rx4_8().tx().tx2_8());
-        u.icr.write(|w| unsafe { w.bits(0x7FF) });
-        u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
-    }
+    link_uart_interrupts();
 
     // The S.BUS receiver: UART7 RX on PC4, 100000 baud 8E2 (the HAL configures 8N1; parity
     // and two stop bits are set in LCRH with the UART disabled, as the datasheet requires).
@@ -726,27 +734,7 @@ fn main() -> ! {
         &clocks,
         &sc.power_control,
     );
-    {
-        // SAFETY: UART7 is configured and its interrupt is not yet unmasked in the NVIC.
-        let u = unsafe { &*UART7::ptr() };
-        u.ctl.modify(|_, w| w.uarten().clear_bit());
-        u.lcrh.write(|w| {
-            w.wlen()
-                ._8()
-                .fen()
-                .set_bit()
-                .pen()
-                .set_bit()
-                .eps()
-                .set_bit()
-                .stp2()
-                .set_bit()
-        });
-        u.ctl.modify(|_, w| w.uarten().set_bit());
-        u.ifls.write(|w| w.rx().rx4_8());
-        u.icr.write(|w| unsafe { w.bits(0x7FF) });
-        u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
-    }
+    sbus_uart_8e2();
 
     let sensors = setup_sensors(
         p.SSI2,
@@ -786,15 +774,53 @@ fn main() -> ! {
         NVIC::unmask(Interrupt::UART7);
     }
 
-    let syst = &mut cp.SYST;
+    start_tick(&mut cp.SYST);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// The link UART's FIFO levels and interrupts (RX ≥ 8 bytes, RX timeout, overrun; TX ≤ 4
+/// bytes is enabled by `kick_tx`), after the HAL configured it.
+fn link_uart_interrupts() {
+    // SAFETY: UART0 is configured and its interrupt is not yet unmasked in the NVIC.
+    let u = unsafe { &*UART0::ptr() };
+    u.ifls.write(|w| w.rx().rx4_8().tx().tx2_8());
+    u.icr.write(|w| unsafe { w.bits(0x7FF) });
+    u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
+}
+
+/// UART7 to 8E2 for S.BUS (the HAL configures 8N1; parity and two stop bits are set in LCRH
+/// with the UART disabled, as the datasheet requires), its FIFO level and RX interrupts.
+fn sbus_uart_8e2() {
+    // SAFETY: UART7 is configured and its interrupt is not yet unmasked in the NVIC.
+    let u = unsafe { &*UART7::ptr() };
+    u.ctl.modify(|_, w| w.uarten().clear_bit());
+    u.lcrh.write(|w| {
+        w.wlen()
+            ._8()
+            .fen()
+            .set_bit()
+            .pen()
+            .set_bit()
+            .eps()
+            .set_bit()
+            .stp2()
+            .set_bit()
+    });
+    u.ctl.modify(|_, w| w.uarten().set_bit());
+    u.ifls.write(|w| w.rx().rx4_8());
+    u.icr.write(|w| unsafe { w.bits(0x7FF) });
+    u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
+}
+
+/// SysTick from the core clock at the 500 Hz control rate, its exception on.
+fn start_tick(syst: &mut cortex_m::peripheral::SYST) {
     syst.set_clock_source(SystClkSource::Core);
     syst.set_reload(TICK_RELOAD);
     syst.clear_current();
     syst.enable_interrupt();
     syst.enable_counter();
-    loop {
-        cortex_m::asm::wfi();
-    }
 }
 
 /// The 500 Hz control tick. It runs with interrupts enabled (the UART0 handler preempts it);
