@@ -1,5 +1,6 @@
-//! Lockstep speed of the simulator and wall time of the flight core's 500 Hz tick (sensor
-//! models sampled + `FlightCore::step`), printed as a table. A benchmark, never asserted in a
+//! Lockstep speed of the simulator and wall time of the flight computer's 500 Hz tick (sensor
+//! models sampled + `FlightCore::step`; the link idle: the in-process mission computer talks
+//! to the core directly), printed as a table. A benchmark, never asserted in a
 //! test: shared machines are noisy.
 //!
 //! ```text

@@ -490,12 +490,15 @@ impl Sim {
             }
         } else {
             // The in-process Linux computer runs at 20 Hz, before the MCU's tick at the same
-            // instant; it talks to the core directly, so the link has nothing to carry.
+            // instant; it talks to the core directly, so the link has no peer: what it sends
+            // (its Hello once, then nothing with telemetry off) goes nowhere. Room for that
+            // Hello keeps it from being encoded again every tick.
             if self.ticks % 25 == 0 && linux_on {
                 self.linux.update(self.t_us, &mut self.fc.core);
             }
+            let mut tx = [0u8; 64];
             self.fc
-                .tick(self.t_us, &[], &mut self.board, &mut self.motors, &mut []);
+                .tick(self.t_us, &[], &mut self.board, &mut self.motors, &mut tx);
         }
         self.core_wall_ns += t0.elapsed().as_nanos();
         self.count_truth();
