@@ -87,7 +87,7 @@ done
 # The flight-safety campaign (issue 13): 72 seeds × 7 scenario families = 504 flights scored on
 # the simulator's truth, full durations (5-minute velocity cruises, 100 s gale hovers).
 echo "== fcc-campaign (504 flights)" >&2
-cargo build -q --release -p fcc_firmware --bin fcc-campaign >&2
+cargo build -q --release -p fcc_sim --bin fcc-campaign >&2
 campaign_status=0
 target/release/fcc-campaign --per-family 72 --long --out "$raw.campaign" >"$raw.campaign.log" 2>&1 \
     || campaign_status=$?
@@ -118,7 +118,7 @@ cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
     echo
     echo "## Flight-safety campaign (truth)"
     echo
-    echo "\`target/release/fcc-campaign --per-family 72 --long\` ($campaign_wall; exit status $campaign_status: 0 = every check held). Families and checks: \`fcc_firmware/src/sitl/campaign.rs\`; every figure is the simulator's truth unless named \`est_\` (the vehicle's own estimate). p50/p95/worst over the family's flights, the worst flight's seed (re-fly it: \`fcc-campaign --only FAMILY:SEED --long --csv log.csv\`). The test command flies the short form (6 seeds per family, 1-minute cruises, \`tests/tests/campaign.rs\`)."
+    echo "\`target/release/fcc-campaign --per-family 72 --long\` ($campaign_wall; exit status $campaign_status: 0 = every check held). Families and checks: \`fcc_firmware/sim/src/campaign.rs\`; every figure is the simulator's truth unless named \`est_\` (the vehicle's own estimate). p50/p95/worst over the family's flights, the worst flight's seed (re-fly it: \`fcc-campaign --only FAMILY:SEED --long --csv log.csv\`). The test command flies the short form (6 seeds per family, 1-minute cruises, \`tests/tests/campaign.rs\`)."
     echo
     cat "$raw.campaign"
 } >"$out_md"

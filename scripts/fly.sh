@@ -32,7 +32,7 @@ fi
 if ! "$py" -c 'import mcap, mcap_ros2.decoder, rosbags.highlevel' 2>/dev/null; then
   .venv-dds/bin/pip install -q --disable-pip-version-check mcap mcap-ros2-support rosbags
 fi
-cargo build --release --locked -p fcc_firmware --bin fcc-sitl
+cargo build --release --locked -p fcc_sim --bin fcc-sitl
 cargo build --release --locked -p fcc_bridge --bin fcc-bridge
 cargo build --release --locked -p fcc_mission --features ros --bin fcc-mission --bin fcc-launch
 cargo build --release --locked -p fcc_bridge --bin fcc-report

@@ -19,7 +19,7 @@ loopback_only "$0" "$minutes" "$@"
 bin="${FCC_BIN_DIR:-$root/target/release}"
 for b in fcc-sitl fcc-wire-fault fcc-bridge fcc-mission; do
   if [ ! -x "$bin/$b" ]; then
-    echo "soak.sh: $bin/$b missing: cargo build --release -p fcc_firmware -p fcc_bridge -p fcc_tests --bins && cargo build --release -p fcc_mission --features ros --bin fcc-mission" >&2
+    echo "soak.sh: $bin/$b missing: cargo build --release -p fcc_sim -p fcc_bridge -p fcc_tests --bins && cargo build --release -p fcc_mission --features ros --bin fcc-mission" >&2
     exit 2
   fi
 done

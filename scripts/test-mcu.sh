@@ -56,6 +56,10 @@ awk -v B=$BUDGET '/^STEP/ {
   for (i = 1; i <= NF; i++) { if ($i == "mean") lm = $(i+1); if ($i == "max" && !lx) lx = $(i+1); if ($i == "bytes/tick;") lb = $(i-1) }
   tot = $NF; if (tot == "insns") tot = $(NF-1)
   printf "link TX after each step (poll_tx, %s B/tick): mean %d insns (%.1f%%), max %d; step + link worst tick %d insns (%.1f%%)\n", lb, lm, 100*lm/B, lx, tot, 100*tot/B
+}
+/^TICK/ {
+  for (i = 1; i <= NF; i++) { if ($i == "mean") tm = $(i+1); if ($i == "max") tx = $(i+1) }
+  printf "whole tick (FlightComputer::tick: link in, step, link out): mean %d insns (%.1f%%), max %d (%.1f%%)\n", tm, 100*tm/B, tx, 100*tx/B
 }' "$OUT"
 echo "(instructions, not cycles: on the TM4C129 at 120 MHz expect roughly 1.2-2 cycles per instruction with flash wait states)"
 "$BOARD/target/release/compare" "$OUT" "$BOARD/data/expected.bin" "$TOL"

@@ -43,8 +43,13 @@ fi
 
 run() { if [ -n "$netns" ]; then "$netns" "$@"; else "$@"; fi; }
 
-# The MCU core must build without std (no heap, no OS).
-run cargo build --offline --locked -p fcc_firmware --no-default-features
+# The MCU core builds without std (no heap, no OS) by default, and depends on nothing of the
+# simulator (the nested crate fcc_sim) or of the Linux side.
+run cargo build --offline --locked -p fcc_firmware
+core_deps=$(cargo tree --offline --locked -p fcc_firmware -e normal --prefix none --format '{p}' | awk '{print $1}' | sort -u)
+if sim_deps=$(grep -xE 'fcc_sim|fcc_mission|fcc_bridge|serde_yaml|serde_path_to_error|rand|rand_chacha|rand_distr|clap|nix|signal-hook|tokio' <<<"$core_deps"); then
+  echo "test.sh: fcc_firmware (the MCU core) depends on: $(echo $sim_deps)" >&2; exit 1
+fi
 run cargo build --offline --locked -p fcc_msgs --no-default-features
 # The dependency rules (issue 15): who may depend on the bridge application, fcc_mission on
 # fcc_msgs + fcc_ros only, the MCU crate's default build without the simulator, no import circles.

@@ -7,6 +7,7 @@
 use crate::commands::{Command, CommandError, FailsafeCause, Mode, VelocitySetpoint, KILL_CONFIRM};
 use crate::control::accel::AccelController;
 use crate::control::attitude::{TiltPid, YawController};
+use crate::control::heading::Heading;
 use crate::control::mixer::{Mixer, MixerSaturation};
 use crate::control::velocity::{CrossTrack, VelocityController};
 use crate::control::vertical::VerticalController;
@@ -61,6 +62,19 @@ const SETPOINT_ABS_LIMIT_MPS: f32 = 50.0;
 const PILOT_LOCK_SPEED_MPS: f32 = 0.5;
 /// Pilot mode: the heading command leads the heading by at most this much, rad.
 const PILOT_YAW_LEAD_RAD: f32 = 0.5;
+
+/// What the horizontal loops commanded this step.
+struct Horizontal {
+    /// Velocity command after cross-track compensation (NED north, east), m/s.
+    v_cmd_ne: [f32; 2],
+    /// Acceleration command (NED north, east), after the tilt limit, m/s².
+    a_cmd_ne: [f32; 2],
+    /// Observer estimates and the raw accelerometer, heading frame (forward, right), m/s².
+    a_est_fr: [f32; 2],
+    a_meas_fr: [f32; 2],
+    /// Tilt command (forward, right), rad: pitch = −forward, roll = right.
+    tilt_cmd_fr_rad: [f32; 2],
+}
 
 /// What one step did, for telemetry and tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -656,13 +670,12 @@ impl FlightCore {
                 let d =
                     self.pilot
                         .demand(l.max_horiz_speed_mps, l.max_climb_mps, l.max_descent_mps);
-                let (sy, cy) = fcc_nav::math::sincosf(nav.euler.yaw_rad);
                 let pos = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
                 let speed = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
                 let v = match d.vel_fr_mps {
                     Some(v) => {
                         self.hold_ne_m = pos;
-                        [cy * v[0] - sy * v[1], sy * v[0] + cy * v[1]]
+                        Heading::new(nav.euler.yaw_rad).to_ne(v)
                     }
                     None if speed > PILOT_LOCK_SPEED_MPS => {
                         self.hold_ne_m = pos;
@@ -841,6 +854,8 @@ impl FlightCore {
         }
     }
 
+    /// The control cascade for this step's velocity, climb-rate and heading commands:
+    /// [`Self::horizontal`] → [`Self::vertical`] → [`Self::attitude`] → mixer.
     fn control(
         &mut self,
         dt_s: f32,
@@ -849,16 +864,51 @@ impl FlightCore {
         vz_cmd_down: f32,
         yaw_cmd: f32,
     ) {
-        let c = self.params.control;
-        let e = nav.euler;
         if self.land.landed() && vz_cmd_down < -0.2 {
             self.land.take_off();
         }
         // Every loop flies until the land detector confirms touchdown (never the estimated
         // altitude alone: it can be off by more than the gear height).
         let airborne = !self.land.landed();
+        let heading = Heading::new(nav.euler.yaw_rad);
+        let h = self.horizontal(dt_s, nav, &heading, v_cmd_ne, airborne);
+        let thrust_n = self.vertical(dt_s, nav, vz_cmd_down);
+        let torque = self.attitude(dt_s, nav, h.tilt_cmd_fr_rad, yaw_cmd, airborne);
+        let (mut motors, sat) = self.mixer.mix(thrust_n, torque);
+        if self.land.landed() {
+            motors = [self.params.airframe.idle_cmd; MOTOR_COUNT];
+        }
+        self.motors = motors;
+        self.telemetry = StepTelemetry {
+            t_us: nav.t_us,
+            vel_cmd_ned_mps: [h.v_cmd_ne[0], h.v_cmd_ne[1], vz_cmd_down],
+            accel_cmd_ne_mps2: h.a_cmd_ne,
+            accel_est_fr_mps2: h.a_est_fr,
+            accel_est_ne_mps2: heading.to_ne(h.a_est_fr),
+            accel_meas_fr_mps2: h.a_meas_fr,
+            roll_cmd_rad: h.tilt_cmd_fr_rad[1],
+            pitch_cmd_rad: -h.tilt_cmd_fr_rad[0],
+            yaw_cmd_rad: yaw_cmd,
+            thrust_n,
+            torque_nm: torque,
+            cross_track_m: self.cross_track.error_m(),
+            saturation: sat,
+            attitude_active: airborne,
+        };
+    }
 
-        // Horizontal: cross-track (velocity mode only) → velocity PI → acceleration command.
+    /// Horizontal: cross-track (velocity mode only) → velocity PI → acceleration command (NED)
+    /// → per heading-frame axis, the observer and the acceleration controller → tilt command,
+    /// limited to [`Self::tilt_limit_rad`]; counts the wind limit.
+    fn horizontal(
+        &mut self,
+        dt_s: f32,
+        nav: &NavState,
+        heading: &Heading,
+        v_cmd_ne: [f32; 2],
+        airborne: bool,
+    ) -> Horizontal {
+        let e = nav.euler;
         let v_ne = [nav.vel_ned_mps[0], nav.vel_ned_mps[1]];
         let p_ne = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         let v_cmd = if self.mode == Mode::Velocity && airborne {
@@ -867,12 +917,7 @@ impl FlightCore {
             self.cross_track.reset();
             v_cmd_ne
         };
-        let (sy, cy) = fcc_nav::math::sincosf(e.yaw_rad);
-        let to_fr = |v: [f32; 2]| [cy * v[0] + sy * v[1], -sy * v[0] + cy * v[1]];
-        let sat_ne = [
-            cy * self.tilt_sat_fr[0] - sy * self.tilt_sat_fr[1],
-            sy * self.tilt_sat_fr[0] + cy * self.tilt_sat_fr[1],
-        ];
+        let sat_ne = heading.to_ne(self.tilt_sat_fr);
         let sat_ne = [sign_or_zero(sat_ne[0]), sign_or_zero(sat_ne[1])];
         let mut a_cmd_ne = if airborne {
             self.vel_ctrl.update(dt_s, v_cmd, v_ne, sat_ne)
@@ -883,9 +928,9 @@ impl FlightCore {
             self.vel_ctrl.reset();
         }
         // Heading frame (forward, right): observer and acceleration controller per axis.
-        let a_cmd_fr = to_fr(a_cmd_ne);
-        let v_fr = to_fr(v_ne);
-        let a_meas_fr = to_fr([nav.accel_ned_mps2[0], nav.accel_ned_mps2[1]]);
+        let a_cmd_fr = heading.to_fr(a_cmd_ne);
+        let v_fr = heading.to_fr(v_ne);
+        let a_meas_fr = heading.to_fr([nav.accel_ned_mps2[0], nav.accel_ned_mps2[1]]);
         let tilt_fr = [-e.pitch_rad, e.roll_rad];
         let max_tilt = self.tilt_limit_rad(nav);
         let mut tilt_cmd = [0.0f32; 2];
@@ -912,13 +957,22 @@ impl FlightCore {
         if n > max_tilt {
             self.tilt_sat_fr = [sign_or_zero(tilt_cmd[0]), sign_or_zero(tilt_cmd[1])];
             tilt_cmd = [tilt_cmd[0] * max_tilt / n, tilt_cmd[1] * max_tilt / n];
-            a_cmd_ne = clamp_norm(a_cmd_ne, c.model_k1_mps2_per_rad * max_tilt);
+            let k1 = self.params.control.model_k1_mps2_per_rad;
+            a_cmd_ne = clamp_norm(a_cmd_ne, k1 * max_tilt);
         }
         self.tilt_cmd_fr_rad = tilt_cmd;
-        let pitch_cmd = -tilt_cmd[0];
-        let roll_cmd = tilt_cmd[1];
+        Horizontal {
+            v_cmd_ne: v_cmd,
+            a_cmd_ne,
+            a_est_fr: a_est,
+            a_meas_fr,
+            tilt_cmd_fr_rad: tilt_cmd,
+        }
+    }
 
-        // Vertical: climb-rate PI → thrust.
+    /// Vertical: climb-rate PI → collective thrust (N); none once landed.
+    fn vertical(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) -> f32 {
+        let e = nav.euler;
         let tilt_cos = fcc_nav::math::cosf(e.roll_rad) * fcc_nav::math::cosf(e.pitch_rad);
         // Final descent: the rangefinders see the ground, so the climb rate relative to it is
         // what the touchdown speed is about (paper B's fused height, issue: use in flight).
@@ -930,66 +984,56 @@ impl FlightCore {
         } else {
             -nav.vel_ned_mps[2]
         };
-        let thrust_n = if self.land.landed() {
+        if self.land.landed() {
             self.vert_ctrl.reset();
             0.0
         } else {
+            // Note: `step` resets the telemetry before the cascade runs, so this (and the yaw
+            // loop's `ys` below) reads `MixerSaturation::default()`, not the last mix.
             let sat = self.telemetry.saturation.thrust_shift_sign;
             self.vert_ctrl
                 .update(dt_s, -vz_cmd_down, vz_up_meas, tilt_cos, sat)
-        };
+        }
+    }
 
-        // Attitude and yaw → torques → mixer.
+    /// Attitude and yaw → body torques (N·m) for the mixer; near the ground (not airborne),
+    /// rate damping only.
+    fn attitude(
+        &mut self,
+        dt_s: f32,
+        nav: &NavState,
+        tilt_cmd_fr_rad: [f32; 2],
+        yaw_cmd: f32,
+        airborne: bool,
+    ) -> [f32; 3] {
+        let e = nav.euler;
         let r = nav.rate_frd_radps;
-        let (torque, yaw_sat) = if airborne {
-            let t_roll = self.roll_pid.update(dt_s, roll_cmd, e.roll_rad, r[0], true);
-            let t_pitch = self
-                .pitch_pid
-                .update(dt_s, pitch_cmd, e.pitch_rad, r[1], true);
-            let yaw_rate = fcc_nav::attitude::euler_rates(r, e.roll_rad, e.pitch_rad)[2];
-            let ys = if self.telemetry.saturation.yaw_scale < 1.0 {
-                1.0
-            } else {
-                0.0
-            };
-            let t_yaw = self.yaw_ctrl.update(
-                dt_s,
-                yaw_cmd,
-                e.yaw_rad,
-                yaw_rate,
-                ys * sign_or_zero(yaw_cmd - e.yaw_rad),
-            );
-            ([t_roll, t_pitch, t_yaw], ys)
-        } else {
+        if !airborne {
             self.roll_pid.reset();
             self.pitch_pid.reset();
             self.yaw_ctrl.reset();
-            // Rate damping only while near the ground.
-            let d = c.att_d_nm_per_radps;
-            ([-d * r[0], -d * r[1], 0.0], 0.0)
-        };
-        let _ = yaw_sat;
-        let (mut motors, sat) = self.mixer.mix(thrust_n, torque);
-        if self.land.landed() {
-            motors = [self.params.airframe.idle_cmd; MOTOR_COUNT];
+            let d = self.params.control.att_d_nm_per_radps;
+            return [-d * r[0], -d * r[1], 0.0];
         }
-        self.motors = motors;
-        self.telemetry = StepTelemetry {
-            t_us: nav.t_us,
-            vel_cmd_ned_mps: [v_cmd[0], v_cmd[1], vz_cmd_down],
-            accel_cmd_ne_mps2: a_cmd_ne,
-            accel_est_fr_mps2: a_est,
-            accel_est_ne_mps2: [cy * a_est[0] - sy * a_est[1], sy * a_est[0] + cy * a_est[1]],
-            accel_meas_fr_mps2: a_meas_fr,
-            roll_cmd_rad: roll_cmd,
-            pitch_cmd_rad: pitch_cmd,
-            yaw_cmd_rad: yaw_cmd,
-            thrust_n,
-            torque_nm: torque,
-            cross_track_m: self.cross_track.error_m(),
-            saturation: sat,
-            attitude_active: airborne,
+        let (pitch_cmd, roll_cmd) = (-tilt_cmd_fr_rad[0], tilt_cmd_fr_rad[1]);
+        let t_roll = self.roll_pid.update(dt_s, roll_cmd, e.roll_rad, r[0], true);
+        let t_pitch = self
+            .pitch_pid
+            .update(dt_s, pitch_cmd, e.pitch_rad, r[1], true);
+        let yaw_rate = fcc_nav::attitude::euler_rates(r, e.roll_rad, e.pitch_rad)[2];
+        let ys = if self.telemetry.saturation.yaw_scale < 1.0 {
+            1.0
+        } else {
+            0.0
         };
+        let t_yaw = self.yaw_ctrl.update(
+            dt_s,
+            yaw_cmd,
+            e.yaw_rad,
+            yaw_rate,
+            ys * sign_or_zero(yaw_cmd - e.yaw_rad),
+        );
+        [t_roll, t_pitch, t_yaw]
     }
 
     /// Height of the rangefinders above the ground, for landing: the rangefinder fusion when

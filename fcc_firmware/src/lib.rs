@@ -1,27 +1,37 @@
-//! # fcc_firmware — the flight-control MCU program and its simulator
+//! # fcc_firmware — the flight-control MCU program
 //!
 //! Paper A's MCU software: 500 Hz navigation and control for an octorotor, written `no_std`, no
 //! heap, f32, with time passed in and hardware behind traits.
 //!
 //! Layers (bottom-up):
 //! - [`sensors`]: sample types (body FRD, SI units, MCU µs) and the hardware traits
-//!   (`SensorBoard`, `MotorOutputs`) a board or the simulator implements.
-//! - [`nav`]: wires samples into `fcc_nav`'s complementary filters → [`nav::NavState`] (NED).
+//!   (`SensorBoard`, `MotorOutputs`) a board or the simulator implements; [`geometry`]: the
+//!   octorotor's motor layout (the mixer's and the simulator's one source).
+//! - [`nav`]: wires samples into `fcc_nav`'s complementary filters → [`nav::NavState`] (NED);
+//!   [`nav_health`]: the estimator-fault monitors; [`land_detector`]: touchdown and landed.
 //! - [`control`]: plain controller structs with `update(dt_s, …)`: cross-track velocity
 //!   tracking, forgetting-PI acceleration control on the Luenberger observer, vertical, attitude
 //!   PID, yaw, octorotor mixer.
 //! - [`flight`]: [`flight::FlightCore::step`]`(now_us, &SensorInputs) -> [f32; 8]` — modes
-//!   (disarmed, hold, velocity, land), setpoint time-to-live, failsafes, limits, geofence.
-//! - [`scheduler`]: the 500 Hz tick that polls a board and drives the ESCs.
-//! - [`pilot`]: the R/C pilot override (switch, receiver failsafe, sticks → velocity).
-//! - [`params`]: every gain and limit, documented defaults for the paper's vehicle.
+//!   (disarmed, hold, velocity, land, pilot), setpoint time-to-live, failsafes, limits,
+//!   geofence; [`commands`]: what the operator may ask (commands, velocity setpoints) and the
+//!   refusals; [`pilot`]: the R/C pilot override (switch, receiver failsafe, sticks → velocity);
+//!   [`params`]: every gain and limit, documented defaults for the paper's vehicle.
+//! - [`touchdown_gate`]: LAND's last decimetres wait for a lull in the gusts.
+//! - [`link`]: the MCU end of the serial link to the Linux computer (`fcc_msgs` frames in →
+//!   commands, setpoints, parameters; telemetry out).
+//! - [`scheduler`]: [`scheduler::FlightComputer::tick`] — the one 500 Hz tick (link in → sensors
+//!   → core → ESCs → link out) that the board, the simulator and the QEMU replay all run.
 //!
-//! Inputs: sensor samples, velocity setpoints with time-to-live and commands
-//! ([`commands`]). Outputs: ESC commands 0..1 per motor, plus [`flight::StepTelemetry`].
+//! Inputs: sensor samples, the link's bytes (velocity setpoints with time-to-live, commands,
+//! parameters) and R/C frames. Outputs: ESC commands 0..1 per motor, the link's bytes
+//! (telemetry, acknowledgements), plus [`flight::StepTelemetry`].
 //!
-//! The `sitl` feature (std) adds [`sitl`]: octorotor physics, wind, sensor models behind the same
-//! traits, scenario files and the `fcc-sitl` binary.
-#![cfg_attr(not(feature = "std"), no_std)]
+//! The simulator is a crate of its own beside this one (`fcc_firmware/sim`, package `fcc_sim`,
+//! std): octorotor physics, wind, sensor models behind the same traits, scenario files and the
+//! `fcc-sitl`/`fcc-campaign` binaries. This crate has no simulator dependency and is `no_std`
+//! (unit tests link std).
+#![cfg_attr(not(test), no_std)]
 
 pub mod commands;
 pub mod control;
@@ -36,6 +46,3 @@ pub mod pilot;
 pub mod scheduler;
 pub mod sensors;
 pub mod touchdown_gate;
-
-#[cfg(feature = "sitl")]
-pub mod sitl;

@@ -7,7 +7,7 @@
 
 use crate::nav_health::{Innovations, NavHealth};
 use crate::params::NavParams;
-use crate::sensors::SensorInputs;
+use crate::sensors::{BaroSample, GpsFix, ImuSample, SensorInputs};
 use fcc_nav::attitude::{
     accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, rot_body_to_ned, AttitudeEstimator,
     Euler,
@@ -198,136 +198,14 @@ impl Navigator {
         let mut imu_dt_s = 0.0;
         let mut innov = Innovations::default();
         if let Some(imu) = s.imu {
-            let dt_s = match self.last_imu_us {
-                Some(t) if imu.t_us > t => ((imu.t_us - t) as f32 * 1e-6).min(0.02),
-                _ => 0.002,
-            };
-            self.last_imu_us = Some(imu.t_us);
-            imu_dt_s = dt_s;
-            let gyro = [
-                imu.gyro_frd_radps[0] - self.gyro_bias_frd_radps[0],
-                imu.gyro_frd_radps[1] - self.gyro_bias_frd_radps[1],
-                imu.gyro_frd_radps[2] - self.gyro_bias_frd_radps[2],
-            ];
             let mag = s.mag.map(|m| m.mag_frd_ut);
-            let f = imu.accel_frd_mps2;
-            let f_lp = [
-                self.tilt_accel_lpf[0].update(f[0]),
-                self.tilt_accel_lpf[1].update(f[1]),
-                self.tilt_accel_lpf[2].update(f[2]),
-            ];
-            // Remove the manoeuvre acceleration (GPS-derived, NED → body) from the specific
-            // force before it is read as a gravity direction.
-            let r = rot_body_to_ned(&self.att.euler());
-            let a = if self.state.gps_ok {
-                self.gps_accel_ned_mps2
-            } else {
-                [0.0; 3]
-            };
-            let mut f_tilt = f_lp;
-            for (i, ft) in f_tilt.iter_mut().enumerate() {
-                *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
-            }
-            self.att.mag_realign_allowed = on_ground_disarmed;
-            let euler = if self.calibrated {
-                self.att.update(gyro, Some(f_tilt), mag, dt_s)
-            } else {
-                self.att.euler()
-            };
-            // The tilt monitor samples at 50 Hz (its hold time is seconds; asin/atan2 at 500 Hz
-            // would cost the MCU ~10 % of a step).
-            self.tilt_check_tick = (self.tilt_check_tick + 1) % TILT_CHECK_EVERY;
-            let n_f = fcc_nav::math::sqrtf(
-                f_tilt[0] * f_tilt[0] + f_tilt[1] * f_tilt[1] + f_tilt[2] * f_tilt[2],
-            );
-            if self.calibrated
-                && self.tilt_check_tick == 0
-                && fcc_nav::math::fabsf(n_f - fcc_nav::GRAVITY_MPS2) <= self.params.accel_gate_mps2
-            {
-                let (r_a, p_a) = accel_tilt_rad(f_tilt);
-                let d = fcc_nav::math::hypotf(r_a - euler.roll_rad, p_a - euler.pitch_rad);
-                innov.tilt_rad = Some(d);
-            }
-            let a_ned = linear_accel_ned_mps2(&euler, imu.accel_frd_mps2);
-            if self.calibrated {
-                self.horiz.update([a_ned[0], a_ned[1]], dt_s);
-                self.vert.update(a_ned[2], dt_s);
-            }
-            self.state.euler = euler;
-            self.state.rate_frd_radps = gyro;
-            self.state.accel_ned_mps2 = a_ned;
+            imu_dt_s = self.imu_update(imu, mag, on_ground_disarmed, &mut innov);
         }
         if let Some(b) = s.baro {
-            if b.temperature_c.is_finite() {
-                self.air_temp_c = b.temperature_c;
-            }
-            let alt = pressure_to_alt_m(b.pressure_pa, self.p0_pa);
-            self.state.baro_alt_m = alt;
-            let dt_s = self
-                .last_baro_us
-                .map_or(0.0, |t| b.t_us.saturating_sub(t) as f32 * 1e-6);
-            self.last_baro_us = Some(b.t_us);
-            if self.calibrated {
-                let z = self.range_aid.measurement(
-                    dt_s,
-                    self.vert.alt_m(),
-                    alt,
-                    self.aid_height_m(),
-                    self.ground.reinit_count(),
-                );
-                self.vert.baro_alt(z);
-                self.set_vert_aided(self.range_aid.aiding());
-                let baro_corr = alt - self.range_aid.baro_offset_m();
-                innov.baro_alt_m = Some(fcc_nav::math::fabsf(baro_corr - self.vert.alt_m()));
-            }
+            self.baro_update(b, &mut innov);
         }
         if let Some(g) = s.gps {
-            if g.fix_ok && g.lat_deg.is_finite() && g.lon_deg.is_finite() {
-                let lla = Lla {
-                    lat_deg: g.lat_deg,
-                    lon_deg: g.lon_deg,
-                    alt_m: g.alt_m as f64,
-                };
-                if self.home.is_none() && self.calibrated {
-                    self.home = Some(LocalNed::new(lla));
-                    let p = self.state.pos_ned_m;
-                    self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
-                    self.state.pos_ned_m = [0.0, 0.0, p[2]];
-                }
-                if let Some((t0, v0)) = self.last_gps_vel {
-                    let dt = now_us.saturating_sub(t0) as f32 * 1e-6;
-                    if dt > 0.05 && dt < 1.0 {
-                        // First-order smoothing (~0.5 s) of the differenced GPS velocity.
-                        let k = (dt / 0.5).min(1.0);
-                        for i in 0..3 {
-                            let a = (g.vel_ned_mps[i] - v0[i]) / dt;
-                            self.gps_accel_ned_mps2[i] += k * (a - self.gps_accel_ned_mps2[i]);
-                        }
-                    }
-                }
-                self.last_gps_vel = Some((now_us, g.vel_ned_mps));
-                if let Some(home) = &self.home {
-                    let ned = home.lla_to_ned(&lla);
-                    let delay_steps = (self.params.gps_latency_s / 0.002 + 0.5) as usize;
-                    let p = self.horiz.pos_ne_m();
-                    let d = fcc_nav::math::hypotf(ned[0] as f32 - p[0], ned[1] as f32 - p[1]);
-                    innov.gps_m = Some(d);
-                    self.last_gps_us = Some(now_us);
-                    if !NavHealth::gps_acceptable(d) {
-                        // A jump (multipath, spoofing): not fused; the monitor times it.
-                        self.horiz.clear_gps();
-                    } else {
-                        self.horiz.gps([ned[0] as f32, ned[1] as f32], delay_steps);
-                        if g.vel_ned_mps.iter().all(|v| v.is_finite()) {
-                            self.horiz.gps_velocity(
-                                [g.vel_ned_mps[0], g.vel_ned_mps[1]],
-                                delay_steps,
-                                self.params.gps_vel_gain,
-                            );
-                        }
-                    }
-                }
-            }
+            self.gps_update(now_us, g, &mut innov);
         }
         let faults = if self.calibrated {
             self.health.update(imu_dt_s, &innov)
@@ -341,22 +219,8 @@ impl Navigator {
         if !gps_ok && self.last_gps_us.is_some() {
             self.horiz.clear_gps();
         }
-        // Ground altitude (paper B): predict with the vertical velocity, fuse the rangefinders.
         if self.calibrated {
-            let e = self.state.euler;
-            self.ground.predict(imu_dt_s, self.vert.vel_down_mps());
-            if let Some(l) = s.laser {
-                self.state.laser_m = Some(l.range_m);
-                self.ground.update_laser(l.range_m, e.roll_rad, e.pitch_rad);
-            }
-            if let Some(r) = s.sonar {
-                self.state.sonar_m = Some(r.range_m);
-                self.ground
-                    .update_sonar(r.range_m, e.roll_rad, e.pitch_rad, self.air_temp_c);
-            }
-            self.state.ground = self.ground.output();
-            self.state.ground_rate_up_mps =
-                -self.vert.vel_down_mps() + self.ground.rate_residual_mps();
+            self.ground_update(imu_dt_s, s);
         }
         let pn = self.horiz.pos_ne_m();
         let vn = self.horiz.vel_ne_mps();
@@ -369,6 +233,171 @@ impl Navigator {
         self.state.home_set = self.home.is_some();
         self.state.calibrated = self.calibrated;
         &self.state
+    }
+
+    /// IMU sample: attitude (gyro, the GPS-compensated accelerometer, the magnetometer), the
+    /// tilt innovation (at 50 Hz), the NED acceleration into the horizontal and vertical
+    /// filters. Returns the IMU period, s.
+    fn imu_update(
+        &mut self,
+        imu: ImuSample,
+        mag: Option<[f32; 3]>,
+        on_ground_disarmed: bool,
+        innov: &mut Innovations,
+    ) -> f32 {
+        let dt_s = match self.last_imu_us {
+            Some(t) if imu.t_us > t => ((imu.t_us - t) as f32 * 1e-6).min(0.02),
+            _ => 0.002,
+        };
+        self.last_imu_us = Some(imu.t_us);
+        let gyro = [
+            imu.gyro_frd_radps[0] - self.gyro_bias_frd_radps[0],
+            imu.gyro_frd_radps[1] - self.gyro_bias_frd_radps[1],
+            imu.gyro_frd_radps[2] - self.gyro_bias_frd_radps[2],
+        ];
+        let f = imu.accel_frd_mps2;
+        let f_lp = [
+            self.tilt_accel_lpf[0].update(f[0]),
+            self.tilt_accel_lpf[1].update(f[1]),
+            self.tilt_accel_lpf[2].update(f[2]),
+        ];
+        // Remove the manoeuvre acceleration (GPS-derived, NED → body) from the specific
+        // force before it is read as a gravity direction.
+        let r = rot_body_to_ned(&self.att.euler());
+        let a = if self.state.gps_ok {
+            self.gps_accel_ned_mps2
+        } else {
+            [0.0; 3]
+        };
+        let mut f_tilt = f_lp;
+        for (i, ft) in f_tilt.iter_mut().enumerate() {
+            *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
+        }
+        self.att.mag_realign_allowed = on_ground_disarmed;
+        let euler = if self.calibrated {
+            self.att.update(gyro, Some(f_tilt), mag, dt_s)
+        } else {
+            self.att.euler()
+        };
+        // The tilt monitor samples at 50 Hz (its hold time is seconds; asin/atan2 at 500 Hz
+        // would cost the MCU ~10 % of a step).
+        self.tilt_check_tick = (self.tilt_check_tick + 1) % TILT_CHECK_EVERY;
+        let n_f = fcc_nav::math::sqrtf(
+            f_tilt[0] * f_tilt[0] + f_tilt[1] * f_tilt[1] + f_tilt[2] * f_tilt[2],
+        );
+        if self.calibrated
+            && self.tilt_check_tick == 0
+            && fcc_nav::math::fabsf(n_f - fcc_nav::GRAVITY_MPS2) <= self.params.accel_gate_mps2
+        {
+            let (r_a, p_a) = accel_tilt_rad(f_tilt);
+            let d = fcc_nav::math::hypotf(r_a - euler.roll_rad, p_a - euler.pitch_rad);
+            innov.tilt_rad = Some(d);
+        }
+        let a_ned = linear_accel_ned_mps2(&euler, imu.accel_frd_mps2);
+        if self.calibrated {
+            self.horiz.update([a_ned[0], a_ned[1]], dt_s);
+            self.vert.update(a_ned[2], dt_s);
+        }
+        self.state.euler = euler;
+        self.state.rate_frd_radps = gyro;
+        self.state.accel_ned_mps2 = a_ned;
+        dt_s
+    }
+
+    /// Barometer sample: altitude (with the rangefinder aid's offset) into the vertical filter,
+    /// its innovation.
+    fn baro_update(&mut self, b: BaroSample, innov: &mut Innovations) {
+        if b.temperature_c.is_finite() {
+            self.air_temp_c = b.temperature_c;
+        }
+        let alt = pressure_to_alt_m(b.pressure_pa, self.p0_pa);
+        self.state.baro_alt_m = alt;
+        let dt_s = self
+            .last_baro_us
+            .map_or(0.0, |t| b.t_us.saturating_sub(t) as f32 * 1e-6);
+        self.last_baro_us = Some(b.t_us);
+        if self.calibrated {
+            let z = self.range_aid.measurement(
+                dt_s,
+                self.vert.alt_m(),
+                alt,
+                self.aid_height_m(),
+                self.ground.reinit_count(),
+            );
+            self.vert.baro_alt(z);
+            self.set_vert_aided(self.range_aid.aiding());
+            let baro_corr = alt - self.range_aid.baro_offset_m();
+            innov.baro_alt_m = Some(fcc_nav::math::fabsf(baro_corr - self.vert.alt_m()));
+        }
+    }
+
+    /// GPS fix: home on the first one after calibration, the differenced-velocity acceleration
+    /// (attitude compensation), position and velocity into the horizontal filter unless it
+    /// jumped; its innovation.
+    fn gps_update(&mut self, now_us: u64, g: GpsFix, innov: &mut Innovations) {
+        if g.fix_ok && g.lat_deg.is_finite() && g.lon_deg.is_finite() {
+            let lla = Lla {
+                lat_deg: g.lat_deg,
+                lon_deg: g.lon_deg,
+                alt_m: g.alt_m as f64,
+            };
+            if self.home.is_none() && self.calibrated {
+                self.home = Some(LocalNed::new(lla));
+                let p = self.state.pos_ned_m;
+                self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
+                self.state.pos_ned_m = [0.0, 0.0, p[2]];
+            }
+            if let Some((t0, v0)) = self.last_gps_vel {
+                let dt = now_us.saturating_sub(t0) as f32 * 1e-6;
+                if dt > 0.05 && dt < 1.0 {
+                    // First-order smoothing (~0.5 s) of the differenced GPS velocity.
+                    let k = (dt / 0.5).min(1.0);
+                    for i in 0..3 {
+                        let a = (g.vel_ned_mps[i] - v0[i]) / dt;
+                        self.gps_accel_ned_mps2[i] += k * (a - self.gps_accel_ned_mps2[i]);
+                    }
+                }
+            }
+            self.last_gps_vel = Some((now_us, g.vel_ned_mps));
+            if let Some(home) = &self.home {
+                let ned = home.lla_to_ned(&lla);
+                let delay_steps = (self.params.gps_latency_s / 0.002 + 0.5) as usize;
+                let p = self.horiz.pos_ne_m();
+                let d = fcc_nav::math::hypotf(ned[0] as f32 - p[0], ned[1] as f32 - p[1]);
+                innov.gps_m = Some(d);
+                self.last_gps_us = Some(now_us);
+                if !NavHealth::gps_acceptable(d) {
+                    // A jump (multipath, spoofing): not fused; the monitor times it.
+                    self.horiz.clear_gps();
+                } else {
+                    self.horiz.gps([ned[0] as f32, ned[1] as f32], delay_steps);
+                    if g.vel_ned_mps.iter().all(|v| v.is_finite()) {
+                        self.horiz.gps_velocity(
+                            [g.vel_ned_mps[0], g.vel_ned_mps[1]],
+                            delay_steps,
+                            self.params.gps_vel_gain,
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Ground altitude (paper B): predict with the vertical velocity, fuse the rangefinders.
+    fn ground_update(&mut self, imu_dt_s: f32, s: &SensorInputs) {
+        let e = self.state.euler;
+        self.ground.predict(imu_dt_s, self.vert.vel_down_mps());
+        if let Some(l) = s.laser {
+            self.state.laser_m = Some(l.range_m);
+            self.ground.update_laser(l.range_m, e.roll_rad, e.pitch_rad);
+        }
+        if let Some(r) = s.sonar {
+            self.state.sonar_m = Some(r.range_m);
+            self.ground
+                .update_sonar(r.range_m, e.roll_rad, e.pitch_rad, self.air_temp_c);
+        }
+        self.state.ground = self.ground.output();
+        self.state.ground_rate_up_mps = -self.vert.vel_down_mps() + self.ground.rate_residual_mps();
     }
 
     /// Paper B's fused height when it may aid the vertical filter: fused from a rangefinder

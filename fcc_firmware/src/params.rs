@@ -2,7 +2,7 @@
 //! octorotor (4.5 kg, 1.05 m, 8 × 10×4.5" props, 650 Kv, 5S).
 //!
 //! Units are in the field names. Defaults were tuned in the SITL against noisy sensor models
-//! (see `sitl::sensor_models`), not against perfect sensors.
+//! (see `fcc_sim::sensor_models`), not against perfect sensors.
 
 use fcc_nav::complementary::CfGains;
 use fcc_nav::observer::AccelObserverParams;

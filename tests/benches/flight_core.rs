@@ -10,7 +10,7 @@
 mod common;
 
 use common::{capture, load_scenario, note, row, thousands, verdict};
-use fcc_firmware::sitl::sim::Sim;
+use fcc_sim::sim::Sim;
 use std::time::Instant;
 
 /// Issue 9's MCU budget: 2 % of the 240,000-cycle budget of one 2 ms period. It is stated in MCU

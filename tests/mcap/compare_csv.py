@@ -4,7 +4,7 @@
   compare_csv.py REPORT_DIR/summary.json FLIGHT.csv [--tol 0.02] [--sitl-out SITL_STDOUT]
 
 * Cross-track: the report's legs (bag state/odom, ENU → NED) vs est_n_m/est_e_m of the CSV over
-  the same leg windows, same formula as fcc_firmware::sitl::metrics::leg_tracks/track_summary;
+  the same leg windows, same formula as fcc_sim::metrics::leg_tracks/track_summary;
   |diff| ≤ --tol.
 * Hover box (paper A Fig. 16), the definition of metrics::hover_box / the flight core's hover
   test: the window is the MCU in HOLD while armed (here: the CSV's own mode column, the longest

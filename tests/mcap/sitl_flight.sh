@@ -7,7 +7,7 @@
 # and compares its cross-track figures, hover box and observer ratio with the flight core's
 # own log of the same flight (compare_csv.py).
 #   usage: tests/mcap/sitl_flight.sh OUT_DIR [PYTHON]
-# Needs: cargo build --release -p fcc_bridge --bins --examples; -p fcc_firmware --bin fcc-sitl.
+# Needs: cargo build --release -p fcc_bridge --bins --examples; -p fcc_sim --bin fcc-sitl.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"

@@ -1,9 +1,9 @@
 //! The Monte-Carlo flight-safety campaign, short form (issue 13): 6 seeds × 7 scenario
 //! families (42 flights), every flight scored on the simulator's truth
-//! (`fcc_firmware::sitl::campaign`). The benchmark flies ≥ 500 (BENCHMARKS.md):
+//! (`fcc_sim::campaign`). The benchmark flies ≥ 500 (BENCHMARKS.md):
 //!
 //! ```text
-//! cargo run --release -p fcc_firmware --bin fcc-campaign -- --per-family 72 --long
+//! cargo run --release -p fcc_sim --bin fcc-campaign -- --per-family 72 --long
 //! ```
 //!
 //! Asserted on every flight: no crash or tip-over, no unplanned ground contact, the attitude
@@ -15,7 +15,7 @@
 //! printed with their failures but not asserted: the vehicle does not meet them yet (the issue
 //! stays open on them).
 
-use fcc_firmware::sitl::campaign;
+use fcc_sim::campaign;
 
 #[test]
 fn short_campaign_on_truth() {

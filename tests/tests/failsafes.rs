@@ -4,7 +4,7 @@
 mod common;
 
 use fcc_firmware::commands::{FailsafeCause, Mode};
-use fcc_firmware::sitl::scenario::Fault;
+use fcc_sim::scenario::Fault;
 
 #[test]
 fn silent_mission_computer_hold_then_land() {
@@ -24,7 +24,7 @@ fn silent_mission_computer_hold_then_land() {
         after[0].mode == Mode::Velocity,
         "flying the leg when the link goes silent"
     );
-    let ttl_s = fcc_firmware::sitl::linux::SETPOINT_TTL_MS as f64 * 1e-3;
+    let ttl_s = fcc_sim::linux::SETPOINT_TTL_MS as f64 * 1e-3;
     let hold = after.iter().find(|x| x.mode == Mode::Hold).expect("holds");
     let land = after.iter().find(|x| x.mode == Mode::Land).expect("lands");
     let disarm = after.iter().find(|x| !x.armed).expect("disarms");
@@ -46,7 +46,7 @@ fn silent_mission_computer_hold_then_land() {
         land.t_s - silent_from_s
     );
     // Touchdown: on the ground, slow, then disarmed.
-    let gear = fcc_firmware::sitl::physics::VehicleParams::default().gear_height_m;
+    let gear = fcc_sim::physics::VehicleParams::default().gear_height_m;
     assert!(
         (disarm.true_agl_m - gear).abs() < 0.06,
         "on the ground: {:.3} m",

@@ -4,21 +4,21 @@
 
 mod common;
 
-use fcc_firmware::sitl::metrics;
+use fcc_sim::metrics;
 use std::sync::OnceLock;
 
-fn hover() -> &'static fcc_firmware::sitl::log::FlightLog {
-    static LOG: OnceLock<fcc_firmware::sitl::log::FlightLog> = OnceLock::new();
+fn hover() -> &'static fcc_sim::log::FlightLog {
+    static LOG: OnceLock<fcc_sim::log::FlightLog> = OnceLock::new();
     LOG.get_or_init(|| common::fly("hover"))
 }
 
-fn square() -> &'static fcc_firmware::sitl::log::FlightLog {
-    static LOG: OnceLock<fcc_firmware::sitl::log::FlightLog> = OnceLock::new();
+fn square() -> &'static fcc_sim::log::FlightLog {
+    static LOG: OnceLock<fcc_sim::log::FlightLog> = OnceLock::new();
     LOG.get_or_init(|| common::fly("square"))
 }
 
-fn yaw_disturbance() -> &'static fcc_firmware::sitl::log::FlightLog {
-    static LOG: OnceLock<fcc_firmware::sitl::log::FlightLog> = OnceLock::new();
+fn yaw_disturbance() -> &'static fcc_sim::log::FlightLog {
+    static LOG: OnceLock<fcc_sim::log::FlightLog> = OnceLock::new();
     LOG.get_or_init(|| common::fly("yaw_disturbance"))
 }
 
@@ -136,7 +136,7 @@ fn same_seed_same_flight_other_seed_other_flight() {
     let b = common::fly_scenario(s.clone());
     s.seed += 1;
     let c = common::fly_scenario(s);
-    let pos = |l: &fcc_firmware::sitl::log::FlightLog| {
+    let pos = |l: &fcc_sim::log::FlightLog| {
         l.samples
             .iter()
             .map(|x| x.true_pos_ned_m)

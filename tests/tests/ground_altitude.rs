@@ -4,8 +4,8 @@
 
 mod common;
 
-use fcc_firmware::sitl::log::FlightLog;
-use fcc_firmware::sitl::metrics::{self, GroundStats};
+use fcc_sim::log::FlightLog;
+use fcc_sim::metrics::{self, GroundStats};
 
 fn table(name: &str, rows: &[(&'static str, GroundStats)]) {
     println!("{name}: height above ground vs truth");
@@ -98,7 +98,7 @@ fn landing_over_a_step_onto_a_dark_patch() {
         "landing approach (1 m step, dark landing spot)",
         &metrics::ground_comparison(&log),
     );
-    let gear = fcc_firmware::sitl::physics::VehicleParams::default().gear_height_m;
+    let gear = fcc_sim::physics::VehicleParams::default().gear_height_m;
     // The run ends at the disarm (the mission computer is done), possibly before the next 50 Hz
     // sample: the disarm is the event, the vehicle's state the last sample up to it.
     let disarm_t_s = log

@@ -4,7 +4,7 @@
 mod common;
 
 use fcc_firmware::commands::{FailsafeCause, Mode};
-use fcc_firmware::sitl::scenario::Fault;
+use fcc_sim::scenario::Fault;
 use std::path::PathBuf;
 
 fn mission_file(name: &str, text: &str) -> PathBuf {
@@ -22,7 +22,7 @@ fn square_at(speed: f32) -> String {
 #[test]
 fn speed_and_tilt_limits_hold_for_a_too_fast_mission() {
     let mut s = common::load("square");
-    s.flight = fcc_firmware::sitl::scenario::FlightPlan::Mission {
+    s.flight = fcc_sim::scenario::FlightPlan::Mission {
         mission_file: mission_file("fast", &square_at(12.0)),
     };
     s.params.limits.max_horiz_speed_mps = 5.0;
@@ -56,7 +56,7 @@ fn speed_and_tilt_limits_hold_for_a_too_fast_mission() {
 #[test]
 fn geofence_stops_the_vehicle_at_the_fence() {
     let mut s = common::load("square");
-    s.flight = fcc_firmware::sitl::scenario::FlightPlan::Mission {
+    s.flight = fcc_sim::scenario::FlightPlan::Mission {
         mission_file: mission_file("fence", &square_at(3.0)),
     };
     s.params.limits.fence_radius_m = 25.0;
@@ -101,7 +101,7 @@ fn gps_loss_in_flight_lands_on_baro_and_accel() {
     assert_eq!(land.failsafe, FailsafeCause::GpsLost);
     let timeout = fcc_firmware::params::NavParams::default().gps_timeout_s as f64;
     assert!(land.t_s - 40.0 <= timeout + 0.5);
-    let gear = fcc_firmware::sitl::physics::VehicleParams::default().gear_height_m;
+    let gear = fcc_sim::physics::VehicleParams::default().gear_height_m;
     assert!((disarm.true_agl_m - gear).abs() < 0.06);
     // Altitude held on baro/accel while it descends under control: no hard impact.
     let contact = log

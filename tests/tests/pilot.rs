@@ -8,9 +8,9 @@ mod common;
 
 use fcc_firmware::commands::{FailsafeCause, Mode};
 use fcc_firmware::pilot::{shape, MAX_YAW_RATE_RADPS, RX_TIMEOUT_US};
-use fcc_firmware::sitl::log::LogSample;
-use fcc_firmware::sitl::pilot::{from_raw, to_raw, FRAME_PERIOD_US, LATENCY_US};
-use fcc_firmware::sitl::sim::Sim;
+use fcc_sim::log::LogSample;
+use fcc_sim::pilot::{from_raw, to_raw, FRAME_PERIOD_US, LATENCY_US};
+use fcc_sim::sim::Sim;
 
 /// What half a stick asks for after the S.BUS round trip and the deadband (fraction of full).
 fn half_stick() -> f32 {

@@ -6,8 +6,8 @@
 mod common;
 
 use fcc_firmware::commands::{Command, FailsafeCause, Mode, KILL_CONFIRM};
-use fcc_firmware::sitl::scenario::Fault;
-use fcc_firmware::sitl::{sim::Sim, truth};
+use fcc_sim::scenario::Fault;
+use fcc_sim::{sim::Sim, truth};
 
 #[test]
 fn gps_jump_is_refused_reported_and_answered_by_landing() {
@@ -80,15 +80,23 @@ fn emergency_kill_needs_its_confirmation_and_disarm_is_refused_in_flight() {
     while sim.t_s() < 30.0 {
         sim.tick();
     }
-    assert!(sim.core.armed() && !sim.core.landed(), "flying at 30 s");
+    assert!(
+        sim.fc.core.armed() && !sim.fc.core.landed(),
+        "flying at 30 s"
+    );
     let t = sim.t_us;
     assert!(
-        sim.core.command(t, Command::Disarm).is_err(),
+        sim.fc.core.command(t, Command::Disarm).is_err(),
         "disarm refused in the air"
     );
-    assert!(sim.core.command(t, Command::Kill { confirm: 0 }).is_err());
-    assert!(sim.core.armed());
-    sim.core
+    assert!(sim
+        .fc
+        .core
+        .command(t, Command::Kill { confirm: 0 })
+        .is_err());
+    assert!(sim.fc.core.armed());
+    sim.fc
+        .core
         .command(
             t,
             Command::Kill {
@@ -96,8 +104,8 @@ fn emergency_kill_needs_its_confirmation_and_disarm_is_refused_in_flight() {
             },
         )
         .unwrap();
-    assert!(!sim.core.armed());
-    assert_eq!(sim.core.failsafe(), FailsafeCause::EmergencyKill);
+    assert!(!sim.fc.core.armed());
+    assert_eq!(sim.fc.core.failsafe(), FailsafeCause::EmergencyKill);
 }
 
 #[test]
@@ -110,7 +118,7 @@ fn an_estimator_fault_landing_cannot_be_cancelled_by_the_operator() {
         offset_ned_m: [30.0, -20.0, 0.0],
     });
     let mut sim = Sim::new(s).unwrap();
-    while sim.core.nav().nav_faults == 0 {
+    while sim.fc.core.nav().nav_faults == 0 {
         assert!(sim.t_s() < 40.0, "no fault by 40 s");
         sim.tick();
     }
@@ -118,8 +126,8 @@ fn an_estimator_fault_landing_cannot_be_cancelled_by_the_operator() {
     // The operator insists: velocity mode and fresh setpoints every tick for 3 s.
     while sim.t_s() < t_fault + 3.0 {
         let t = sim.t_us;
-        let _ = sim.core.command(t, Command::Velocity);
-        let _ = sim.core.setpoint(
+        let _ = sim.fc.core.command(t, Command::Velocity);
+        let _ = sim.fc.core.setpoint(
             t,
             VelocitySetpoint {
                 vel_ned_mps: [1.0, 0.0, 0.0],
@@ -131,9 +139,9 @@ fn an_estimator_fault_landing_cannot_be_cancelled_by_the_operator() {
     }
     println!(
         "fault at {t_fault:.2} s; after 3 s of operator commands: {:?} ({:?})",
-        sim.core.mode(),
-        sim.core.failsafe()
+        sim.fc.core.mode(),
+        sim.fc.core.failsafe()
     );
-    assert_eq!(sim.core.mode(), Mode::Land);
-    assert_eq!(sim.core.failsafe(), FailsafeCause::EstimatorFault);
+    assert_eq!(sim.fc.core.mode(), Mode::Land);
+    assert_eq!(sim.fc.core.failsafe(), FailsafeCause::EstimatorFault);
 }

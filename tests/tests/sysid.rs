@@ -38,7 +38,7 @@ fn fitted_k1_k2_match_the_defaults() {
     report_and_check(&ls, &iv);
 }
 
-fn add_flight(log: &fcc_firmware::sitl::log::FlightLog, ls: &mut PlaneFit, iv: &mut WindIvFit) {
+fn add_flight(log: &fcc_sim::log::FlightLog, ls: &mut PlaneFit, iv: &mut WindIvFit) {
     let airborne: Vec<_> = log
         .samples
         .iter()

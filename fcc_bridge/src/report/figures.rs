@@ -1,5 +1,5 @@
 //! The flight's figures from a bag, computed like the flight core's metrics
-//! (`fcc_firmware::sitl::metrics`) but from the recorded ROS topics (ENU → NED).
+//! (`fcc_sim::metrics`) but from the recorded ROS topics (ENU → NED).
 
 pub use super::series::{decode, Series};
 use fcc_msgs::ros::Status;
@@ -113,7 +113,7 @@ pub fn legs(s: &Series, mission: &fcc_mission::Mission) -> Vec<Leg> {
 pub const MIN_HOVER_S: f64 = 10.0;
 
 /// The hover (paper A Fig. 16) and its box, defined as the flight core's hover test does
-/// (`fcc_firmware::sitl::metrics::hover_box`, `tests/tests/flight_core.rs`): the window is the
+/// (`fcc_sim::metrics::hover_box`, `tests/tests/flight_core.rs`): the window is the
 /// time the MCU holds position in HOLD mode while armed; the hold point is the estimated
 /// position where the hold began (the MCU holds that point); the box is the largest
 /// |estimate − hold point| per axis (N, E, altitude) over the window.

@@ -16,6 +16,7 @@
 
 use fcc_firmware::commands::{Command, VelocitySetpoint};
 use fcc_firmware::geometry::MOTOR_COUNT;
+use fcc_firmware::scheduler::FlightComputer;
 use fcc_firmware::sensors::*;
 
 pub const INPUT_MAGIC: &[u8; 4] = b"FCCR";
@@ -31,6 +32,9 @@ pub enum Event {
 
 /// At most this many events per tick are carried (more are dropped by the reader).
 pub const MAX_EVENTS: usize = 4;
+
+/// The link's transmit room per replayed tick (what the board's tick offers at most).
+pub const TX_BYTES: usize = 512;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TickRecord {
@@ -257,7 +261,7 @@ pub fn apply_events(core: &mut fcc_firmware::flight::FlightCore, rec: &TickRecor
     }
 }
 
-/// A board that hands out the recorded samples: the scheduler's tick runs unchanged on it.
+/// A board that hands out the recorded samples: the flight computer's tick runs unchanged on it.
 pub struct ReplayBoard {
     pub next: SensorInputs,
 }
@@ -278,24 +282,26 @@ impl MotorOutputs for MotorLatch {
     }
 }
 
-/// Replays a whole recording on a fresh core, calling `each(tick_index, motors)` after every
-/// step. Returns the number of ticks stepped.
+/// Replays a whole recording on a fresh flight computer (its tick, as the QEMU image runs it:
+/// no received bytes, telemetry at the default rates), calling `each(tick_index, motors)` after
+/// every tick. Returns the number of ticks.
 pub fn replay<F: FnMut(u32, &[f32; MOTOR_COUNT])>(
     params: fcc_firmware::params::Params,
     input: &[u8],
     mut each: F,
 ) -> Option<u32> {
     let stream = InputStream::new(input)?;
-    let mut core = fcc_firmware::flight::FlightCore::new(params);
+    let mut fc = FlightComputer::new(params, fcc_msgs::StreamRates::DEFAULT);
     let mut board = ReplayBoard {
         next: SensorInputs::default(),
     };
     let mut motors = MotorLatch::default();
+    let mut tx = [0u8; TX_BYTES];
     let mut n = 0;
     for rec in stream {
-        apply_events(&mut core, &rec);
+        apply_events(&mut fc.core, &rec);
         board.next = rec.inputs;
-        fcc_firmware::scheduler::tick(&mut core, &mut board, &mut motors, rec.now_us);
+        fc.tick(rec.now_us, &[], &mut board, &mut motors, &mut tx);
         each(n, &motors.0);
         n += 1;
     }

@@ -23,10 +23,10 @@ use fcc_firmware::link::LinkEndpoint;
 use fcc_firmware::params::Params;
 use fcc_firmware::scheduler::TICK_US;
 use fcc_firmware::sensors::SensorInputs;
-use fcc_firmware::sitl::linux::LinuxSide;
-use fcc_firmware::sitl::scenario::Scenario;
-use fcc_firmware::sitl::sim::Sim;
 use fcc_msgs::StreamRates;
+use fcc_sim::linux::LinuxSide;
+use fcc_sim::scenario::Scenario;
+use fcc_sim::sim::Sim;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -74,13 +74,13 @@ pub struct Capture {
 }
 
 struct Shadow {
-    imu: fcc_firmware::sitl::sensor_models::ImuModel,
-    mag: fcc_firmware::sitl::sensor_models::MagModel,
-    baro: fcc_firmware::sitl::sensor_models::BaroModel,
-    gps: fcc_firmware::sitl::sensor_models::GpsModel,
-    battery: fcc_firmware::sitl::sensor_models::BatteryModel,
-    laser: fcc_firmware::sitl::rangefinders::LaserModel,
-    sonar: fcc_firmware::sitl::rangefinders::SonarModel,
+    imu: fcc_sim::sensor_models::ImuModel,
+    mag: fcc_sim::sensor_models::MagModel,
+    baro: fcc_sim::sensor_models::BaroModel,
+    gps: fcc_sim::sensor_models::GpsModel,
+    battery: fcc_sim::sensor_models::BatteryModel,
+    laser: fcc_sim::rangefinders::LaserModel,
+    sonar: fcc_sim::rangefinders::SonarModel,
 }
 
 fn timer_overhead_ns() -> f64 {
@@ -109,7 +109,7 @@ pub fn capture(name: &str, with_link: bool) -> Capture {
         matches!(sim.log.plan_kind, "hover" | "mission"),
         "capture needs a flown scenario (the carried ones set the specific force differently)"
     );
-    let params = *sim.core.params();
+    let params = *sim.fc.core.params();
     let mut twin = FlightCore::new(params);
     let mut twin_linux = LinuxSide::new(&s).expect("mission computer");
     let mut link = LinkEndpoint::new(StreamRates::DEFAULT);
@@ -166,21 +166,21 @@ pub fn capture(name: &str, with_link: bool) -> Capture {
         step_ns.push((ns - overhead).max(0.0));
         assert_eq!(
             &motors,
-            sim.core.motors(),
+            sim.fc.core.motors(),
             "twin core diverged at t = {t} µs: the captured samples are not the ones the simulator's core saw"
         );
         if with_link {
-            let n = link.poll_tx(t, &sim.core, &inputs, &mut tx);
+            let n = link.poll_tx(t, &sim.fc.core, &inputs, &mut tx);
             telemetry.extend_from_slice(&tx[..n]);
         }
         let (roll, pitch, yaw) = st.q_body_to_ned.euler_angles();
-        let e = sim.core.nav().euler;
+        let e = sim.fc.core.nav().euler;
         ticks.push(Tick {
             t_us: t,
             inputs,
             true_euler_rad: [roll, pitch, yaw],
             airborne: !body.on_ground(),
-            calibrated: sim.core.nav().calibrated,
+            calibrated: sim.fc.core.nav().calibrated,
             core_euler_rad: [e.roll_rad, e.pitch_rad, e.yaw_rad],
         });
     }

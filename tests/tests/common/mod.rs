@@ -3,9 +3,9 @@
 
 #![allow(dead_code)]
 
-use fcc_firmware::sitl::log::FlightLog;
-use fcc_firmware::sitl::scenario::Scenario;
-use fcc_firmware::sitl::sim::Sim;
+use fcc_sim::log::FlightLog;
+use fcc_sim::scenario::Scenario;
+use fcc_sim::sim::Sim;
 use std::path::PathBuf;
 
 pub fn scenario_path(name: &str) -> PathBuf {

@@ -1,11 +1,12 @@
 //! The flight-control image for the TI TM4C1294 (Cortex-M4F, 120 MHz, 1 MB flash, 256 KB RAM).
 //!
 //! - Clock tree to 120 MHz from the 25 MHz crystal (`tm4c129x-hal` sysctl).
-//! - The 500 Hz SysTick exception (240,000 core cycles) runs, in this order: the link's received
-//!   bytes into `fcc_firmware::link::LinkEndpoint::on_bytes` (setpoints, commands, parameters,
-//!   time sync), the unchanged `fcc_firmware::scheduler::tick` → `FlightCore::step`, then
-//!   `LinkEndpoint::poll_tx` (telemetry, acknowledgements) into the UART's transmit ring; the
-//!   step's duration (DWT cycle counter) goes into the link's `Status` loop-time figures.
+//! - The 500 Hz SysTick exception (240,000 core cycles) hands the S.BUS frames to the core, then
+//!   runs the flight computer's tick (`fcc_firmware::scheduler::FlightComputer::tick`, the same
+//!   one the simulator and the QEMU replay run): the link's received bytes (setpoints,
+//!   commands, parameters, time sync) → `FlightCore::step` → telemetry and acknowledgements into
+//!   the UART's transmit ring; the handler's duration (DWT cycle counter) goes into the link's
+//!   `Status` loop-time figures.
 //! - The link to the Linux computer: UART0 (PA0 = U0RX, PA1 = U0TX; the LaunchPad's ICDI
 //!   virtual COM port), 921600 baud 8N1 (divisor 8 + 9/64 at 120 MHz: 921,305 baud, −0.03 %).
 //!   The UART0 interrupt, at a higher priority than SysTick, moves bytes between the 16-byte
@@ -57,11 +58,9 @@ use fcc_board::drivers::ms5611::{Ms5611, Osr};
 use fcc_board::drivers::pwm::{tm4c::Pwm0Esc, EscOutputs, PwmConfig};
 use fcc_board::drivers::sbus::{self, SbusDecoder, SbusFrame};
 use fcc_board::drivers::sonar::{SonarConfig, SonarParser};
-use fcc_firmware::flight::FlightCore;
-use fcc_firmware::link::LinkEndpoint;
 use fcc_firmware::params::Params;
 use fcc_firmware::pilot::PilotInput;
-use fcc_firmware::scheduler::{self, TICK_US};
+use fcc_firmware::scheduler::{FlightComputer, TICK_US};
 use fcc_firmware::sensors::{SensorBoard, SensorInputs};
 use tm4c129x_hal::{
     self as hal,
@@ -183,7 +182,8 @@ impl<const N: usize> ByteRing<N> {
 }
 
 /// UART0 interrupt → SysTick.
-static LINK_RX: ByteRing<2048> = ByteRing::new();
+const LINK_RX_BYTES: usize = 2048;
+static LINK_RX: ByteRing<LINK_RX_BYTES> = ByteRing::new();
 /// SysTick → UART0 interrupt.
 static LINK_TX: ByteRing<2048> = ByteRing::new();
 /// Received bytes dropped: RX ring full, or a framing/parity/break/overrun error on the line.
@@ -499,8 +499,7 @@ impl SensorBoard for Tm4cSensors {
 }
 
 struct Board {
-    core: FlightCore,
-    link: LinkEndpoint,
+    fc: FlightComputer,
     sensors: Tm4cSensors,
     escs: EscOutputs<Pwm0Esc>,
     sbus: SbusDecoder,
@@ -514,32 +513,17 @@ static BOARD: Mutex<Cell<Option<Board>>> = Mutex::new(Cell::new(None));
 /// allow 20 MHz, PS §7.5).
 static IMU_SPI_HZ: AtomicU32 = AtomicU32::new(1_000_000);
 
-/// Pins, SSI modules and UARTs of the sensors; each driver's start-up sequence. A sensor whose
-/// start-up fails is left out (`None`), see the module docs.
-#[allow(clippy::too_many_arguments)]
-fn setup_sensors<P>(
+/// The SPI sensors: SSI2 (MPU-9250) on PD0–PD3, SSI3 (MS5611) on PQ0–PQ3, their power, and
+/// each driver's start-up (`None` when it fails; the IMU then runs its bus at 10 MHz).
+fn spi_sensors(
     ssi2: SSI2,
     ssi3: SSI3,
-    uart2: UART2,
-    uart3: UART3,
-    uart6: UART6,
     portd: GPIO_PORTD_AHB,
     portq: GPIO_PORTQ,
-    portj: GPIO_PORTJ_AHB,
-    portp: GPIO_PORTP,
-    gps_pins: (
-        P,
-        hal::gpio::gpioa::PA6<hal::gpio::AlternateFunction<AF1, hal::gpio::PushPull>>,
-    ),
-    clocks: &hal::sysctl::Clocks,
     pc: &hal::sysctl::PowerControl,
-) -> Tm4cSensors
-where
-    P: hal::serial::TxPin<UART2>,
-{
+    delay: &mut CycleDelay,
+) -> (Option<Mpu9250<SsiSpi>>, Option<Ms5611<SsiSpi>>) {
     use hal::sysctl::{self, Domain, PowerState, RunMode};
-    let mut delay = CycleDelay;
-
     // SPI: SSI2 (IMU) on PD0–PD3 (AF15), SSI3 (barometer) on PQ0–PQ3 (AF14); chip selects GPIO.
     let mut pd = portd.split(pc);
     let _imu_pins = (
@@ -572,7 +556,7 @@ where
 
     let imu_spi = SsiSpi::new(ssi2_regs, pd_data, 2, 1_000_000, Some(&IMU_SPI_HZ));
     let mut imu = Mpu9250::new(imu_spi, Mpu9250Config::default());
-    let imu = match imu.init(&mut delay) {
+    let imu = match imu.init(delay) {
         Ok(()) => {
             IMU_SPI_HZ.store(10_000_000, Ordering::Relaxed);
             Some(imu)
@@ -581,7 +565,36 @@ where
     };
     let baro_spi = SsiSpi::new(ssi3_regs, pq_data, 1, 10_000_000, None);
     let mut baro = Ms5611::new(baro_spi, Osr::Osr4096);
-    let baro = baro.init(&mut delay).ok().map(|_| baro);
+    let baro = baro.init(delay).ok().map(|_| baro);
+    (imu, baro)
+}
+
+/// Pins, SSI modules and UARTs of the sensors; each driver's start-up sequence. A sensor whose
+/// start-up fails is left out (`None`), see the module docs.
+#[allow(clippy::too_many_arguments)]
+fn setup_sensors<P>(
+    ssi2: SSI2,
+    ssi3: SSI3,
+    uart2: UART2,
+    uart3: UART3,
+    uart6: UART6,
+    portd: GPIO_PORTD_AHB,
+    portq: GPIO_PORTQ,
+    portj: GPIO_PORTJ_AHB,
+    portp: GPIO_PORTP,
+    gps_pins: (
+        P,
+        hal::gpio::gpioa::PA6<hal::gpio::AlternateFunction<AF1, hal::gpio::PushPull>>,
+    ),
+    clocks: &hal::sysctl::Clocks,
+    pc: &hal::sysctl::PowerControl,
+) -> Tm4cSensors
+where
+    P: hal::serial::TxPin<UART2>,
+{
+    let mut delay = CycleDelay;
+
+    let (imu, baro) = spi_sensors(ssi2, ssi3, portd, portq, pc, &mut delay);
 
     // GPS on UART2: NAV-PVT every 200 ms, then the receiver's port to 38400 baud (sent at the
     // u-blox default of 9600; a receiver already at 38400 ignores it and is simply read there).
@@ -704,13 +717,7 @@ fn main() -> ! {
     // The interrupt handler owns the registers from here on (through UART0::ptr()); keep the
     // configured pins and peripheral alive without using the blocking HAL calls.
     let _uart = uart.split();
-    {
-        // SAFETY: UART0 is configured and its interrupt is not yet unmasked in the NVIC.
-        let u = unsafe { &*UART0::ptr() };
-        u.ifls.write(|w| w.rx().rx4_8().tx().tx2_8());
-        u.icr.write(|w| unsafe { w.bits(0x7FF) });
-        u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
-    }
+    link_uart_interrupts();
 
     // The S.BUS receiver: UART7 RX on PC4, 100000 baud 8E2 (the HAL configures 8N1; parity
     // and two stop bits are set in LCRH with the UART disabled, as the datasheet requires).
@@ -727,27 +734,7 @@ fn main() -> ! {
         &clocks,
         &sc.power_control,
     );
-    {
-        // SAFETY: UART7 is configured and its interrupt is not yet unmasked in the NVIC.
-        let u = unsafe { &*UART7::ptr() };
-        u.ctl.modify(|_, w| w.uarten().clear_bit());
-        u.lcrh.write(|w| {
-            w.wlen()
-                ._8()
-                .fen()
-                .set_bit()
-                .pen()
-                .set_bit()
-                .eps()
-                .set_bit()
-                .stp2()
-                .set_bit()
-        });
-        u.ctl.modify(|_, w| w.uarten().set_bit());
-        u.ifls.write(|w| w.rx().rx4_8());
-        u.icr.write(|w| unsafe { w.bits(0x7FF) });
-        u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
-    }
+    sbus_uart_8e2();
 
     let sensors = setup_sensors(
         p.SSI2,
@@ -766,8 +753,7 @@ fn main() -> ! {
 
     cortex_m::interrupt::free(|cs| {
         BOARD.borrow(cs).set(Some(Board {
-            core: FlightCore::new(Params::default()),
-            link: LinkEndpoint::default(),
+            fc: FlightComputer::new(Params::default(), fcc_msgs::StreamRates::DEFAULT),
             sensors,
             escs,
             sbus: SbusDecoder::new(),
@@ -788,15 +774,53 @@ fn main() -> ! {
         NVIC::unmask(Interrupt::UART7);
     }
 
-    let syst = &mut cp.SYST;
+    start_tick(&mut cp.SYST);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// The link UART's FIFO levels and interrupts (RX ≥ 8 bytes, RX timeout, overrun; TX ≤ 4
+/// bytes is enabled by `kick_tx`), after the HAL configured it.
+fn link_uart_interrupts() {
+    // SAFETY: UART0 is configured and its interrupt is not yet unmasked in the NVIC.
+    let u = unsafe { &*UART0::ptr() };
+    u.ifls.write(|w| w.rx().rx4_8().tx().tx2_8());
+    u.icr.write(|w| unsafe { w.bits(0x7FF) });
+    u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
+}
+
+/// UART7 to 8E2 for S.BUS (the HAL configures 8N1; parity and two stop bits are set in LCRH
+/// with the UART disabled, as the datasheet requires), its FIFO level and RX interrupts.
+fn sbus_uart_8e2() {
+    // SAFETY: UART7 is configured and its interrupt is not yet unmasked in the NVIC.
+    let u = unsafe { &*UART7::ptr() };
+    u.ctl.modify(|_, w| w.uarten().clear_bit());
+    u.lcrh.write(|w| {
+        w.wlen()
+            ._8()
+            .fen()
+            .set_bit()
+            .pen()
+            .set_bit()
+            .eps()
+            .set_bit()
+            .stp2()
+            .set_bit()
+    });
+    u.ctl.modify(|_, w| w.uarten().set_bit());
+    u.ifls.write(|w| w.rx().rx4_8());
+    u.icr.write(|w| unsafe { w.bits(0x7FF) });
+    u.im.write(|w| w.rxim().set_bit().rtim().set_bit().oeim().set_bit());
+}
+
+/// SysTick from the core clock at the 500 Hz control rate, its exception on.
+fn start_tick(syst: &mut cortex_m::peripheral::SYST) {
     syst.set_clock_source(SystClkSource::Core);
     syst.set_reload(TICK_RELOAD);
     syst.clear_current();
     syst.enable_interrupt();
     syst.enable_counter();
-    loop {
-        cortex_m::asm::wfi();
-    }
 }
 
 /// The 500 Hz control tick. It runs with interrupts enabled (the UART0 handler preempts it);
@@ -811,41 +835,38 @@ fn SysTick() {
     let t0 = DWT::cycle_count();
     b.now_us += TICK_US;
 
-    // 1. Link in: everything the UART received since the last tick.
-    let mut rx = [0u8; 256];
-    loop {
-        let n = LINK_RX.pop_into(&mut rx);
-        if n == 0 {
-            break;
-        }
-        b.link.on_bytes(b.now_us, &rx[..n], &mut b.core);
-    }
-
-    // 1b. Pilot: the S.BUS frames received since the last tick (frame-lost frames repeat old
-    //     channels and are not passed on; the core times the receiver out after 0.5 s).
+    // 1. Pilot: the S.BUS frames received since the last tick (frame-lost frames repeat old
+    //    channels and are not passed on; the core times the receiver out after 0.5 s). They
+    //    take effect in the tick's step.
     while let Some(byte) = SBUS_RX.pop() {
         if let Some(f) = b.sbus.push(byte) {
             if f.failsafe || !f.frame_lost {
-                b.core.pilot(b.now_us, &pilot_input(&f, b.now_us));
+                b.fc.core.pilot(b.now_us, &pilot_input(&f, b.now_us));
             }
         }
     }
 
-    // 2. Sensors → core → ESCs.
-    let inputs = scheduler::tick(&mut b.core, &mut b.sensors, &mut b.escs, b.now_us);
-
-    // 3. Link out: at most what the transmit ring can take now (the endpoint drops and counts
-    //    telemetry that does not fit; replies wait for the next tick).
+    // 2. The tick: everything the UART received since the last tick (the whole ring) in;
+    //    sensors → core → ESCs; out at most what the transmit ring can take now (the endpoint
+    //    drops and counts telemetry that does not fit; replies wait for the next tick).
+    let mut rx = [0u8; LINK_RX_BYTES];
+    let n_rx = LINK_RX.pop_into(&mut rx);
     let mut tx = [0u8; 512];
     let room = LINK_TX.free().min(tx.len());
-    let n = b.link.poll_tx(b.now_us, &b.core, &inputs, &mut tx[..room]);
+    let n = b.fc.tick(
+        b.now_us,
+        rx.get(..n_rx).unwrap_or_default(),
+        &mut b.sensors,
+        &mut b.escs,
+        tx.get_mut(..room).unwrap_or_default(),
+    );
     if let Some(bytes) = tx.get(..n).filter(|b| !b.is_empty()) {
         LINK_TX.push_slice(bytes);
         kick_tx();
     }
 
     let cycles = DWT::cycle_count().wrapping_sub(t0);
-    b.link.record_loop_time_us(cycles / (SYSCLK_HZ / 1_000_000));
+    b.fc.link.record_loop_time_us(cycles / (SYSCLK_HZ / 1_000_000));
 }
 
 /// Any panic stops the motors (ESC pulses → 1000 µs via reset) by resetting the MCU.

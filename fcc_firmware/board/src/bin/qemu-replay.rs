@@ -1,17 +1,19 @@
 //! QEMU test image (machine `mps2-an386`, Cortex-M4 with FPU): replays a recorded flight
-//! (`data/inputs.bin`, made by the host `record` tool from the SITL) through the unchanged
-//! `fcc_firmware::scheduler::tick` → `FlightCore::step`, prints every tick's motor commands over
-//! semihosting (f32 bit patterns, hex) for the host to compare, and measures each step with
-//! SysTick.
+//! (`data/inputs.bin`, made by the host `record` tool from the SITL) through the flight
+//! computer's tick the board runs (`fcc_firmware::scheduler::FlightComputer::tick`: link in →
+//! `FlightCore::step` → link out), prints every tick's motor commands over semihosting (f32 bit
+//! patterns, hex) for the host to compare, and measures each tick with SysTick.
 //!
 //! Instruction counting: run QEMU with `-icount shift=0` (virtual clock advances 1 ns per
 //! executed instruction). SysTick runs from the mps2's CPU clock on that virtual clock; the image
 //! calibrates SysTick ticks → instructions with a loop of known length, so the per-step figures
 //! are in instructions. Output lines:
 //!   `M <tick> <8 × hex f32>` per tick, then `CAL`, `STEP`, `LINK`, `SELF`, `DONE` summary lines.
-//! `LINK` is the link's transmit side run after each step as the board does (telemetry frames
-//! at the default stream rates; the recording has no received bytes, so `on_bytes` is not
-//! exercised).
+//! `STEP` is the step inside the tick: from the core polling the board to the motor commands
+//! written (SysTick read in the replay board's `poll` and the ESC latch's `write`). `LINK` is
+//! the rest of the tick after the step, the link's transmit side (telemetry frames at the
+//! default stream rates into at most 512 bytes; the recording has no received bytes, so
+//! `on_bytes` is not exercised). `TICK` is the whole tick.
 #![no_std]
 #![no_main]
 
@@ -19,11 +21,11 @@ use core::fmt::Write;
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hio};
-use fcc_board::replay::{apply_events, InputStream, MotorLatch, OutputStream, ReplayBoard};
-use fcc_firmware::flight::FlightCore;
-use fcc_firmware::link::LinkEndpoint;
+use fcc_board::replay::{apply_events, InputStream, MotorLatch, OutputStream, ReplayBoard, TX_BYTES};
+use fcc_firmware::geometry::MOTOR_COUNT;
 use fcc_firmware::params::Params;
-use fcc_firmware::sensors::SensorInputs;
+use fcc_firmware::scheduler::FlightComputer;
+use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
 
 static INPUTS: &[u8] = include_bytes!("../../data/inputs.bin");
 static EXPECTED: &[u8] = include_bytes!("../../data/expected.bin");
@@ -64,6 +66,32 @@ fn elapsed(start: u32, end: u32) -> u32 {
     start.wrapping_sub(end) & SYST_MASK
 }
 
+/// The recorded samples, with SysTick read when the core polls them (its step starts).
+struct TimedBoard {
+    replay: ReplayBoard,
+    polled_at: u32,
+}
+
+impl SensorBoard for TimedBoard {
+    fn poll(&mut self, now_us: u64) -> SensorInputs {
+        self.polled_at = SYST::get_current();
+        self.replay.poll(now_us)
+    }
+}
+
+/// The ESC latch, with SysTick read when the step has written the motor commands.
+struct TimedEscs {
+    latch: MotorLatch,
+    written_at: u32,
+}
+
+impl MotorOutputs for TimedEscs {
+    fn write(&mut self, now_us: u64, cmd: &[f32; MOTOR_COUNT]) {
+        self.latch.write(now_us, cmd);
+        self.written_at = SYST::get_current();
+    }
+}
+
 /// `n` iterations of a 2-instruction loop (`subs`, `bne`): 2n instructions.
 #[inline(never)]
 fn known_loop(n: u32) {
@@ -100,32 +128,32 @@ fn main() -> ! {
         loop {}
     };
     let mut expected = OutputStream::new(EXPECTED);
-    let mut core = FlightCore::new(Params::default());
-    let mut board = ReplayBoard { next: SensorInputs::default() };
-    let mut motors = MotorLatch::default();
-    // The link's transmit side as the board runs it after each step (telemetry at the default
-    // stream rates into at most 512 bytes); it reads the core and does not change it.
-    let mut link = LinkEndpoint::default();
-    let mut tx = [0u8; 512];
-    let (mut link_sum, mut link_max, mut link_bytes, mut total_max) = (0u64, 0u32, 0u64, 0u32);
+    // The board's flight computer: telemetry at the default stream rates into at most 512 bytes
+    // per tick (the link reads the core and does not change it).
+    let mut fc = FlightComputer::new(Params::default(), fcc_msgs::StreamRates::DEFAULT);
+    let mut board = TimedBoard { replay: ReplayBoard { next: SensorInputs::default() }, polled_at: 0 };
+    let mut motors = TimedEscs { latch: MotorLatch::default(), written_at: 0 };
+    let mut tx = [0u8; TX_BYTES];
+    let (mut link_sum, mut link_max, mut link_bytes) = (0u64, 0u32, 0u64);
+    let (mut tick_sum, mut tick_max) = (0u64, 0u32);
     let (mut n, mut sum, mut min, mut max, mut max_at) = (0u32, 0u64, u32::MAX, 0u32, 0u32);
     let (mut armed_n, mut armed_sum, mut armed_max) = (0u32, 0u64, 0u32);
     let mut max_diff = 0.0f32;
     let mut compared = 0u32;
     for rec in stream {
-        apply_events(&mut core, &rec);
-        board.next = rec.inputs;
+        apply_events(&mut fc.core, &rec);
+        board.replay.next = rec.inputs;
         let a = SYST::get_current();
-        let inputs = fcc_firmware::scheduler::tick(&mut core, &mut board, &mut motors, rec.now_us);
-        let b = SYST::get_current();
-        let t = elapsed(a, b);
-        let nb = link.poll_tx(rec.now_us, &core, &inputs, &mut tx);
+        let nb = fc.tick(rec.now_us, &[], &mut board, &mut motors, &mut tx);
         let c = SYST::get_current();
-        let tl = elapsed(b, c);
+        let t = elapsed(board.polled_at, motors.written_at);
+        let tl = elapsed(motors.written_at, c);
+        let tt = elapsed(a, c);
         link_sum += tl as u64;
         link_max = link_max.max(tl);
         link_bytes += nb as u64;
-        total_max = total_max.max(t + tl);
+        tick_sum += tt as u64;
+        tick_max = tick_max.max(tt);
         sum += t as u64;
         if t < min {
             min = t;
@@ -134,18 +162,18 @@ fn main() -> ! {
             max = t;
             max_at = n;
         }
-        if core.armed() {
+        if fc.core.armed() {
             armed_n += 1;
             armed_sum += t as u64;
             armed_max = armed_max.max(t);
         }
         let _ = write!(out, "M {}", n);
-        for v in motors.0 {
+        for v in motors.latch.0 {
             let _ = write!(out, " {:08x}", v.to_bits());
         }
         let _ = writeln!(out);
         if let Some(e) = expected.as_mut().and_then(|e| e.next()) {
-            for (x, y) in e.iter().zip(motors.0.iter()) {
+            for (x, y) in e.iter().zip(motors.latch.0.iter()) {
                 let d = libm::fabsf(x - y);
                 if !(d <= max_diff) {
                     max_diff = if d.is_nan() { f32::INFINITY } else { d };
@@ -172,12 +200,19 @@ fn main() -> ! {
     );
     let _ = writeln!(
         out,
-        "LINK all {} ticks: poll_tx mean {:.0} max {:.0} insns, {:.1} bytes/tick; step + poll_tx max {:.0} insns",
+        "LINK all {} ticks: poll_tx mean {:.0} max {:.0} insns, {:.1} bytes/tick; whole tick max {:.0} insns",
         n,
         if n > 0 { link_sum as f32 / n as f32 * k } else { 0.0 },
         link_max as f32 * k,
         if n > 0 { link_bytes as f32 / n as f32 } else { 0.0 },
-        total_max as f32 * k
+        tick_max as f32 * k
+    );
+    let _ = writeln!(
+        out,
+        "TICK all {} ticks: FlightComputer::tick mean {:.0} max {:.0} insns",
+        n,
+        if n > 0 { tick_sum as f32 / n as f32 * k } else { 0.0 },
+        tick_max as f32 * k
     );
     let _ = writeln!(out, "SELF compared {} ticks with the embedded host outputs: max abs diff {:e}", compared, max_diff);
     let _ = writeln!(out, "DONE {}", n);

@@ -1,4 +1,4 @@
-//! Host tool: fly the SITL's octorotor (physics + sensor models of `fcc_firmware::sitl`) in closed
+//! Host tool: fly the SITL's octorotor (physics + sensor models of `fcc_sim`) in closed
 //! loop with the host build of the flight core, and record every tick's sensor inputs, the
 //! operator's commands and setpoints, and the motor outputs.
 //!
@@ -12,10 +12,10 @@
 use fcc_board::replay::{encode, Event};
 use fcc_firmware::commands::{Command, VelocitySetpoint};
 use fcc_firmware::geometry::MOTOR_COUNT;
-use fcc_firmware::scheduler::TICK_US;
+use fcc_firmware::scheduler::{FlightComputer, TICK_US};
 use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
-use fcc_firmware::sitl::scenario::Scenario;
-use fcc_firmware::sitl::sim::Sim;
+use fcc_sim::scenario::Scenario;
+use fcc_sim::sim::Sim;
 use nalgebra::Vector3;
 
 const SCENARIO: &str = "
@@ -39,6 +39,8 @@ impl MotorOutputs for Latch {
 struct Board<'a> {
     sim: &'a mut Sim,
     prev_vel: Vector3<f64>,
+    /// What the last poll handed the core (recorded).
+    polled: SensorInputs,
 }
 
 impl SensorBoard for Board<'_> {
@@ -51,7 +53,7 @@ impl SensorBoard for Board<'_> {
         let current = s.body.electrical_power_w() / 18.5;
         let b = &mut s.board;
         let _ = self.prev_vel;
-        SensorInputs {
+        self.polled = SensorInputs {
             imu: Some(b.imu.sample(now_us, st.omega_frd_radps, f, mean)),
             mag: b.mag.sample(now_us, &st.q_body_to_ned),
             baro: b.baro.sample(now_us, -st.pos_ned_m.z, in_flight),
@@ -59,7 +61,8 @@ impl SensorBoard for Board<'_> {
             laser: b.laser.sample(now_us, st.pos_ned_m, &st.q_body_to_ned, &b.terrain, b.air_temp_c),
             sonar: b.sonar.sample(now_us, st.pos_ned_m, &st.q_body_to_ned, &b.terrain, b.air_temp_c),
             battery: b.battery.sample(now_us, current, TICK_US as f64 * 1e-6),
-        }
+        };
+        self.polled
     }
 }
 
@@ -73,7 +76,10 @@ fn main() {
     // The Sim supplies the physics and the sensor models; its own core and Linux stand-in are
     // not used (this loop is the lockstep tick, so the inputs can be recorded).
     let mut sim = Sim::new(scenario).expect("sim");
-    let mut core = fcc_firmware::flight::FlightCore::new(params);
+    // The flight computer's tick as the replay runs it (no link traffic: the mission computer
+    // below talks to the core directly and is recorded as events).
+    let mut fc = FlightComputer::new(params, fcc_msgs::StreamRates::DEFAULT);
+    let mut tx = [0u8; fcc_board::replay::TX_BYTES];
 
     let mut w = encode::InputWriter::new();
     let mut outputs: Vec<[f32; MOTOR_COUNT]> = Vec::new();
@@ -98,14 +104,14 @@ fn main() {
             let sp = |v: [f32; 3]| VelocitySetpoint { vel_ned_mps: v, yaw_rad: None, ttl_ms: 300 };
             match armed_at {
                 None => {
-                    if core.navigator().ready().is_ok() {
+                    if fc.core.navigator().ready().is_ok() {
                         events.push(Event::Command(Command::Arm));
                         armed_at = Some(t_us);
                     }
                 }
                 Some(t0) => {
                     let since = (t_us - t0) as f64 * 1e-6;
-                    let alt = -core.nav().pos_ned_m[2];
+                    let alt = -fc.core.nav().pos_ned_m[2];
                     if since < 4.0 {
                         events.push(Event::Setpoint(sp([0.0, 0.0, -(0.8 * (3.0 - alt)).clamp(-1.0, 1.5)])));
                     } else if since < 7.0 {
@@ -121,13 +127,13 @@ fn main() {
         }
         for e in &events {
             let _ = match *e {
-                Event::Command(c) => core.command(t_us, c),
-                Event::Setpoint(s) => core.setpoint(t_us, s),
+                Event::Command(c) => fc.core.command(t_us, c),
+                Event::Setpoint(s) => fc.core.setpoint(t_us, s),
             };
         }
-        let mut board = Board { sim: &mut sim, prev_vel: Vector3::zeros() };
-        let inputs = fcc_firmware::scheduler::tick(&mut core, &mut board, &mut motors, t_us);
-        w.tick(t_us, &inputs, &events);
+        let mut board = Board { sim: &mut sim, prev_vel: Vector3::zeros(), polled: SensorInputs::default() };
+        fc.tick(t_us, &[], &mut board, &mut motors, &mut tx);
+        w.tick(t_us, &board.polled, &events);
         outputs.push(motors.0);
     }
     let inputs = w.finish();
@@ -155,7 +161,7 @@ fn main() {
         inputs.len(),
         expected.len(),
         [st.pos_ned_m.x, st.pos_ned_m.y, st.pos_ned_m.z],
-        core.mode(),
-        core.armed(),
+        fc.core.mode(),
+        fc.core.armed(),
     );
 }

@@ -4,7 +4,7 @@
 //! Leaflet") uses the ILM-150-R by the UK company MDL — 0.5–150 m reflectorless (650 m to a
 //! reflector), accuracy 5 cm, resolution 1 cm, 9 Hz, RS-232 — and reports that over a dark
 //! surface (105–184 s of its ground test) "the laser altimeter diverges to 99999 m". Our SITL
-//! model (`fcc_firmware/src/sitl/rangefinders.rs`) uses the same figures.
+//! model (`fcc_firmware/sim/src/rangefinders.rs`) uses the same figures.
 //!
 //! **Format ASSUMPTION.** The leaflet's exact ASCII framing is not available to us, so this
 //! parser accepts the family of formats such laser distance modules use (one reading per line,

@@ -6,7 +6,7 @@ use super::rangefinders::{LaserParams, SonarParams};
 use super::sensor_models::{BaroParams, GpsParams, ImuParams, MagParams};
 use super::terrain::Terrain;
 use super::wind::WindParams;
-use crate::params::Params;
+use fcc_firmware::params::Params;
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -353,7 +353,7 @@ mod tests {
 
     #[test]
     fn repo_scenarios_load() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../launch_configs/scenarios");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch_configs/scenarios");
         let mut n = 0;
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();

@@ -1,5 +1,5 @@
 //! Sensor models for the SITL: turn the true state into the samples the flight core sees
-//! ([`crate::sensors`]), with datasheet noise figures, biases, vibration, quantisation, rates
+//! ([`fcc_firmware::sensors`]), with datasheet noise figures, biases, vibration, quantisation, rates
 //! and latency.
 //!
 //! Every model owns a `ChaCha8Rng` seeded from the `seed` given to `new`, XOR a per-model
@@ -27,7 +27,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 
-use crate::sensors::{BaroSample, BatterySample, GpsFix, ImuSample, MagSample};
+use fcc_firmware::sensors::{BaroSample, BatterySample, GpsFix, ImuSample, MagSample};
 
 /// Standard gravity, m/s² (used to convert g / mg / µg figures).
 pub const G0: f64 = 9.80665;

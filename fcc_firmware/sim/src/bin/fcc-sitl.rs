@@ -1,11 +1,11 @@
 //! `fcc-sitl`: fly a scenario in lockstep, faster than real time, and print paper A's figures.
 //!
 //! ```text
-//! cargo run --release -p fcc_firmware --bin fcc-sitl -- --scenario launch_configs/scenarios/hover.yaml
+//! cargo run --release -p fcc_sim --bin fcc-sitl -- --scenario launch_configs/scenarios/hover.yaml
 //! ```
 
 use clap::Parser;
-use fcc_firmware::sitl::{metrics, scenario::Scenario, sim::Sim};
+use fcc_sim::{metrics, scenario::Scenario, sim::Sim};
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -86,7 +86,7 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     }
     if args.link_pty {
-        let pty = match fcc_firmware::sitl::pty::PtyLink::open(args.pty_link.as_deref()) {
+        let pty = match fcc_sim::pty::PtyLink::open(args.pty_link.as_deref()) {
             Ok(p) => p,
             Err(e) => {
                 eprintln!("fcc-sitl: cannot open a pseudo-terminal: {e}");
@@ -133,7 +133,7 @@ fn main() -> ExitCode {
     // A closed stdout (e.g. piped into `head`) is not an error worth a panic.
     let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), report.as_bytes());
     if let Some(path) = args.csv {
-        if let Err(e) = fcc_firmware::sitl::log::write_csv(&sim.log, &path) {
+        if let Err(e) = fcc_sim::log::write_csv(&sim.log, &path) {
             eprintln!("fcc-sitl: {}: {e}", path.display());
             return ExitCode::from(1);
         }

@@ -2,8 +2,9 @@
 //! in-process stand-in for the Linux computer (the same waypoint logic `fcc_mission` uses).
 //!
 //! One call to [`Sim::tick`] advances 2 ms: four 0.5 ms physics substeps, the sensors sample the
-//! true state, the board trait hands them to [`crate::scheduler::tick`], and the motor commands
-//! go back to the physics on the next tick (one-tick actuation delay, as on the board).
+//! true state, and the flight computer's tick ([`FlightComputer::tick`], the board's) polls
+//! them; its motor commands go back to the physics on the next tick (one-tick actuation delay,
+//! as on the board).
 
 use super::linux::LinuxSide;
 use super::log::{FlightLog, LogSample};
@@ -13,11 +14,11 @@ use super::scenario::{Fault, FlightPlan, Scenario};
 use super::sensor_models::{BaroModel, BaroParams, BatteryModel, GpsModel, ImuModel, MagModel};
 use super::terrain::Terrain;
 use super::wind::Wind;
-use crate::commands::Mode;
-use crate::flight::FlightCore;
-use crate::geometry::MOTOR_COUNT;
-use crate::scheduler::{self, TICK_US};
-use crate::sensors::{MotorOutputs, SensorBoard, SensorInputs};
+use fcc_firmware::commands::Mode;
+use fcc_firmware::geometry::MOTOR_COUNT;
+use fcc_firmware::link::LinkEndpoint;
+use fcc_firmware::scheduler::{FlightComputer, TICK_US};
+use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
 use nalgebra::{UnitQuaternion, Vector3};
 
 const PHYSICS_SUBSTEPS: u32 = 4;
@@ -36,7 +37,7 @@ pub struct SimBoard {
     pub terrain: Terrain,
     pub air_temp_c: f64,
     /// Rangefinder samples handed to the core since the last log pass: (laser?, sample).
-    polled_ranges: Vec<(bool, crate::sensors::RangeSample)>,
+    polled_ranges: Vec<(bool, fcc_firmware::sensors::RangeSample)>,
     truth: Truth,
 }
 
@@ -110,50 +111,12 @@ struct Carried {
     attitude: Option<UnitQuaternion<f64>>,
 }
 
-pub struct Sim {
-    pub scenario: Scenario,
-    pub t_us: u64,
-    pub core: FlightCore,
-    pub body: Octorotor,
-    pub board: SimBoard,
-    wind: Wind,
-    wind_ned: Vector3<f64>,
-    motors: MotorLatch,
-    linux: LinuxSide,
-    /// The scripted R/C pilot's receiver (scenario `pilot:`).
-    receiver: super::pilot::SimReceiver,
-    carried: Option<Carried>,
-    ticks: u64,
-    pub log: FlightLog,
-    /// Wall time spent inside the flight core's tick (sensors polled + step), for the benchmark.
-    pub core_wall_ns: u128,
-    /// The board's UART served on a pty (`--link-pty`): the Linux side is then a real process
-    /// (bridge + mission node) and the in-process stand-in is off.
-    link: Option<(crate::link::LinkEndpoint, super::pty::PtyLink)>,
-    /// The gear has been truly airborne since the last ground contact.
-    airborne_since_contact: bool,
-    /// A crash or tip-over ended the flight (truth).
-    crashed: bool,
-    /// The simulator's own events (crashes), merged into the log's at [`Self::finish`].
-    sim_events: Vec<(f64, String)>,
-}
-
-impl Sim {
-    pub fn new(scenario: Scenario) -> Result<Self, String> {
+impl SimBoard {
+    /// The scenario's sensor models (seeded with its seed), on the scenario's terrain and air.
+    fn new(scenario: &Scenario) -> Self {
         let seed = scenario.seed;
-        let gear = scenario.vehicle.gear_height_m;
-        let start_down = scenario.terrain.ground_down_at(0.0, 0.0) - gear;
-        let body = Octorotor::new(
-            air_at(
-                &scenario.vehicle,
-                scenario.air_temp_c,
-                scenario.sensors.baro.p0_pa,
-            ),
-            Vector3::new(0.0, 0.0, start_down),
-            0.0,
-        );
         let s = &scenario.sensors;
-        let board = SimBoard {
+        SimBoard {
             imu: ImuModel::new(s.imu.clone(), seed),
             mag: MagModel::new(s.mag.clone(), seed),
             // The barometer's atmosphere (and its thermometer) is the scenario's air.
@@ -182,14 +145,19 @@ impl Sim {
                 in_flight: false,
                 current_a: 0.5,
             },
-        };
-        let linux = LinuxSide::new(&scenario)?;
-        let carried = match &scenario.flight {
+        }
+    }
+}
+
+impl Carried {
+    /// The rig or the elevator of a carried plan; `None` when the vehicle flies.
+    fn of(plan: &FlightPlan) -> Option<Self> {
+        match plan {
             FlightPlan::Rig {
                 height_m,
                 roll_deg,
                 pitch_deg,
-            } => Some(Carried {
+            } => Some(Self {
                 profile: vec![[*height_m as f64, 0.0, 0.0]],
                 attitude: Some(UnitQuaternion::from_euler_angles(
                     (*roll_deg as f64).to_radians(),
@@ -203,7 +171,7 @@ impl Sim {
                 speed_mps,
                 accel_mps2,
                 dwell_s,
-            } => Some(Carried {
+            } => Some(Self {
                 profile: super::linux::elevator_profile(
                     floors,
                     *floor_height_m,
@@ -214,13 +182,67 @@ impl Sim {
                 attitude: None,
             }),
             _ => None,
-        };
+        }
+    }
+}
+
+pub struct Sim {
+    pub scenario: Scenario,
+    pub t_us: u64,
+    /// The MCU program under test (flight core + link endpoint), unchanged.
+    pub fc: FlightComputer,
+    pub body: Octorotor,
+    pub board: SimBoard,
+    wind: Wind,
+    wind_ned: Vector3<f64>,
+    motors: MotorLatch,
+    linux: LinuxSide,
+    /// The scripted R/C pilot's receiver (scenario `pilot:`).
+    receiver: super::pilot::SimReceiver,
+    carried: Option<Carried>,
+    ticks: u64,
+    pub log: FlightLog,
+    /// Wall time spent inside the flight computer's tick (sensors polled + step, plus the link
+    /// when served), for the benchmark.
+    pub core_wall_ns: u128,
+    /// The board's UART served on a pty (`--link-pty`): the Linux side is then a real process
+    /// (bridge + mission node) and the in-process stand-in is off.
+    link: Option<super::pty::PtyLink>,
+    /// The bytes read from the pty in one tick.
+    rx: Vec<u8>,
+    /// The gear has been truly airborne since the last ground contact.
+    airborne_since_contact: bool,
+    /// A crash or tip-over ended the flight (truth).
+    crashed: bool,
+    /// The simulator's own events (crashes), merged into the log's at [`Self::finish`].
+    sim_events: Vec<(f64, String)>,
+}
+
+impl Sim {
+    pub fn new(scenario: Scenario) -> Result<Self, String> {
+        let seed = scenario.seed;
+        let gear = scenario.vehicle.gear_height_m;
+        let start_down = scenario.terrain.ground_down_at(0.0, 0.0) - gear;
+        let body = Octorotor::new(
+            air_at(
+                &scenario.vehicle,
+                scenario.air_temp_c,
+                scenario.sensors.baro.p0_pa,
+            ),
+            Vector3::new(0.0, 0.0, start_down),
+            0.0,
+        );
+        let board = SimBoard::new(&scenario);
+        let linux = LinuxSide::new(&scenario)?;
+        let carried = Carried::of(&scenario.flight);
         let mut params = scenario.params;
         if scenario.sensors.calibration.enabled {
             calibrate(&mut params, &board, &scenario.sensors, seed);
         }
         Ok(Self {
-            core: FlightCore::new(params),
+            // Telemetry off until a link is served: the in-process mission computer reads the
+            // core directly.
+            fc: FlightComputer::new(params, fcc_msgs::StreamRates::OFF),
             body,
             board,
             wind: Wind::new(scenario.wind.clone(), seed),
@@ -253,6 +275,7 @@ impl Sim {
             },
             core_wall_ns: 0,
             link: None,
+            rx: Vec::new(),
             airborne_since_contact: false,
             crashed: false,
             sim_events: Vec::new(),
@@ -262,12 +285,13 @@ impl Sim {
 
     /// Serve the flight core's link on a pseudo-terminal instead of the in-process Linux side.
     pub fn serve_link(&mut self, pty: super::pty::PtyLink, rates: fcc_msgs::StreamRates) {
-        self.link = Some((crate::link::LinkEndpoint::new(rates), pty));
+        self.fc.link = LinkEndpoint::new(rates);
+        self.link = Some(pty);
     }
 
-    /// The served link, if any.
-    pub fn link(&self) -> Option<&(crate::link::LinkEndpoint, super::pty::PtyLink)> {
-        self.link.as_ref()
+    /// The served link, if any: the MCU's endpoint and the pty.
+    pub fn link(&self) -> Option<(&LinkEndpoint, &super::pty::PtyLink)> {
+        self.link.as_ref().map(|pty| (&self.fc.link, pty))
     }
 
     /// The in-process mission computer (its refusal counters).
@@ -314,7 +338,7 @@ impl Sim {
         }
         self.airborne_since_contact = false;
         let tilt_deg = tilt_deg(&q);
-        let mode = self.core.mode();
+        let mode = self.fc.core.mode();
         let (vz, vh) = (v.z, v.x.hypot(v.y));
         let outcome =
             super::truth::classify_contact(vz, vh, tilt_deg, self.body.params.gear_height_m);
@@ -347,7 +371,7 @@ impl Sim {
         }
         let c = &mut self.log.truth;
         let dt = TICK_US as f64 * 1e-6;
-        if self.core.armed() && !self.core.telemetry().attitude_active {
+        if self.fc.core.armed() && !self.fc.core.telemetry().attitude_active {
             c.attitude_off_airborne_s += dt;
         }
         c.max_tilt_deg = c.max_tilt_deg.max(tilt_deg(&st.q_body_to_ned));
@@ -438,33 +462,43 @@ impl Sim {
         let t0 = std::time::Instant::now();
         // The R/C receiver's frame (50 Hz), before the tick that uses it.
         if let Some(p) = self.receiver.poll(self.t_us) {
-            self.core.pilot(self.t_us, &p);
+            self.fc.core.pilot(self.t_us, &p);
         }
-        if let Some((ep, pty)) = self.link.as_mut() {
+        if let Some(pty) = self.link.as_mut() {
             // The UART: whatever the Linux side wrote since the last tick (unless the wire is cut).
-            let mut rx = [0u8; 1024];
+            let mut chunk = [0u8; 1024];
+            self.rx.clear();
             loop {
-                let n = pty.read_available(&mut rx);
+                let n = pty.read_available(&mut chunk);
                 if n == 0 {
                     break;
                 }
                 if linux_on {
-                    ep.on_bytes(self.t_us, &rx[..n], &mut self.core);
+                    self.rx.extend_from_slice(&chunk[..n]);
                 }
             }
-            let inputs =
-                scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
             let mut tx = [0u8; 1024];
-            let n = ep.poll_tx(self.t_us, &self.core, &inputs, &mut tx);
+            let n = self.fc.tick(
+                self.t_us,
+                &self.rx,
+                &mut self.board,
+                &mut self.motors,
+                &mut tx,
+            );
             if linux_on {
                 pty.write_or_drop(&tx[..n]);
             }
         } else {
-            // The in-process Linux computer runs at 20 Hz, before the MCU's tick at the same instant.
+            // The in-process Linux computer runs at 20 Hz, before the MCU's tick at the same
+            // instant; it talks to the core directly, so the link has no peer: what it sends
+            // (its Hello once, then nothing with telemetry off) goes nowhere. Room for that
+            // Hello keeps it from being encoded again every tick.
             if self.ticks % 25 == 0 && linux_on {
-                self.linux.update(self.t_us, &mut self.core);
+                self.linux.update(self.t_us, &mut self.fc.core);
             }
-            scheduler::tick(&mut self.core, &mut self.board, &mut self.motors, self.t_us);
+            let mut tx = [0u8; 64];
+            self.fc
+                .tick(self.t_us, &[], &mut self.board, &mut self.motors, &mut tx);
         }
         self.core_wall_ns += t0.elapsed().as_nanos();
         self.count_truth();
@@ -486,8 +520,8 @@ impl Sim {
     fn record(&mut self) {
         let st = &self.body.state;
         let (roll, pitch, yaw) = st.q_body_to_ned.euler_angles();
-        let nav = *self.core.nav();
-        let tel = *self.core.telemetry();
+        let nav = *self.fc.core.nav();
+        let tel = *self.fc.core.telemetry();
         let a = self.board.truth.accel_ned_mps2;
         let (sy, cy) = (
             nav.euler.yaw_rad.sin() as f64,
@@ -496,10 +530,10 @@ impl Sim {
         let accel_true_fr = [(cy * a.x + sy * a.y) as f32, (-sy * a.x + cy * a.y) as f32];
         self.log.samples.push(LogSample {
             t_s: self.t_s(),
-            mode: self.core.mode(),
-            failsafe: self.core.failsafe(),
-            armed: self.core.armed(),
-            landed: self.core.landed(),
+            mode: self.fc.core.mode(),
+            failsafe: self.fc.core.failsafe(),
+            armed: self.fc.core.armed(),
+            landed: self.fc.core.landed(),
             plan: self.linux.status(),
             true_pos_ned_m: st.pos_ned_m.into(),
             true_vel_ned_mps: st.vel_ned_mps.into(),
@@ -514,7 +548,7 @@ impl Sim {
                 .terrain
                 .ground_down_at(st.pos_ned_m.x, st.pos_ned_m.y)
                 - st.pos_ned_m.z,
-            motors: *self.core.motors(),
+            motors: *self.fc.core.motors(),
         });
     }
 
@@ -568,7 +602,7 @@ fn tilt_deg(q: &UnitQuaternion<f64>) -> f64 {
 /// The operator's pre-flight calibrations: offsets measured with a residual error (see
 /// [`super::scenario::CalibrationParams`]).
 fn calibrate(
-    params: &mut crate::params::Params,
+    params: &mut fcc_firmware::params::Params,
     board: &SimBoard,
     s: &super::scenario::SensorParams,
     seed: u64,

@@ -195,7 +195,7 @@ pub fn fly(f: &Flight) -> Outcome {
 pub fn fly_logged(f: &Flight) -> (Outcome, FlightLog) {
     let mut sim = Sim::new(f.scenario.clone()).unwrap_or_else(|e| panic!("{e}"));
     sim.run();
-    let still_armed = sim.core.armed();
+    let still_armed = sim.fc.core.armed();
     sim.finish();
     let log = std::mem::take(&mut sim.log);
     (score(f, &log, still_armed), log)
@@ -253,19 +253,19 @@ fn score(f: &Flight, log: &FlightLog, still_armed: bool) -> Outcome {
         o.failures
             .push(("disarmed", "still armed at the end of the run".into()));
     }
-    let failsafe = |c: crate::commands::FailsafeCause| {
+    let failsafe = |c: fcc_firmware::commands::FailsafeCause| {
         log.samples.iter().any(|s| s.failsafe == c) as u8 as f64
     };
     fig(
         &mut o,
         "wind_limit_landings",
-        failsafe(crate::commands::FailsafeCause::WindLimit),
+        failsafe(fcc_firmware::commands::FailsafeCause::WindLimit),
         None,
     );
     fig(
         &mut o,
         "estimator_faults",
-        failsafe(crate::commands::FailsafeCause::EstimatorFault),
+        failsafe(fcc_firmware::commands::FailsafeCause::EstimatorFault),
         Some(0.0),
     );
     fig(&mut o, "max_tilt_deg", t.max_tilt_deg, None);

@@ -1,10 +1,10 @@
 //! What a simulated flight leaves behind: a 50 Hz log of truth beside estimates and commands,
 //! and the Linux side's events.
 
-use crate::commands::{FailsafeCause, Mode};
-use crate::flight::StepTelemetry;
-use crate::geometry::MOTOR_COUNT;
-use crate::nav::NavState;
+use fcc_firmware::commands::{FailsafeCause, Mode};
+use fcc_firmware::flight::StepTelemetry;
+use fcc_firmware::geometry::MOTOR_COUNT;
+use fcc_firmware::nav::NavState;
 
 /// What the in-process Linux computer is doing.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,13 +1,13 @@
-//! `fcc-campaign`: the Monte-Carlo flight-safety campaign (`fcc_firmware::sitl::campaign`):
+//! `fcc-campaign`: the Monte-Carlo flight-safety campaign (`fcc_sim::campaign`):
 //! seeds × scenario families, scored on the simulator's truth; prints the table of
 //! percentiles and worst cases and every failure; exit status 1 if any flight failed.
 //!
 //! ```text
-//! cargo run --release -p fcc_firmware --bin fcc-campaign -- --per-family 72 --long
+//! cargo run --release -p fcc_sim --bin fcc-campaign -- --per-family 72 --long
 //! ```
 
 use clap::Parser;
-use fcc_firmware::sitl::campaign;
+use fcc_sim::campaign;
 use std::process::ExitCode;
 
 /// `println!` that tolerates a closed stdout (e.g. piped into `head`).
@@ -97,9 +97,9 @@ fn fly_one(only: &str, csv: &std::path::Path, long: bool) -> ExitCode {
     let f = campaign::generate(family, seed, long);
     let (o, log) = campaign::fly_logged(&f);
     say!("{family} seed {seed}: {}", f.what);
-    say!("{}", fcc_firmware::sitl::metrics::summary(&log));
+    say!("{}", fcc_sim::metrics::summary(&log));
     say!("failures: {:?}", o.failures);
-    if let Err(e) = fcc_firmware::sitl::log::write_csv(&log, csv) {
+    if let Err(e) = fcc_sim::log::write_csv(&log, csv) {
         eprintln!("fcc-campaign: {}: {e}", csv.display());
         return ExitCode::from(1);
     }

@@ -1,18 +1,19 @@
-//! Lockstep speed of the simulator and wall time of the flight core's 500 Hz tick (sensor
-//! models sampled + `FlightCore::step`), printed as a table. A benchmark, never asserted in a
+//! Lockstep speed of the simulator and wall time of the flight computer's 500 Hz tick (sensor
+//! models sampled + `FlightCore::step`; the link idle: the in-process mission computer talks
+//! to the core directly), printed as a table. A benchmark, never asserted in a
 //! test: shared machines are noisy.
 //!
 //! ```text
-//! cargo bench -p fcc_firmware --bench sitl_speed
+//! cargo bench -p fcc_sim --bench sitl_speed
 //! ```
 
-use fcc_firmware::sitl::scenario::Scenario;
-use fcc_firmware::sitl::sim::Sim;
+use fcc_sim::scenario::Scenario;
+use fcc_sim::sim::Sim;
 use std::path::Path;
 use std::time::Instant;
 
 fn main() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../launch_configs/scenarios");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../launch_configs/scenarios");
     println!("| scenario | simulated s | wall s | sim s / wall s | tick incl. sensor models, ns | share of the 2 ms period |");
     println!("|---|---:|---:|---:|---:|---:|");
     for name in ["hover", "square", "elevator"] {

@@ -32,7 +32,7 @@ use serde::Deserialize;
 
 use super::sensor_models::normal;
 use super::terrain::Terrain;
-use crate::sensors::{RangeSample, LASER_NO_RETURN_M};
+use fcc_firmware::sensors::{RangeSample, LASER_NO_RETURN_M};
 
 /// Speed of sound in air, m/s, at `t_c` °C (paper B eq. 1).
 pub fn speed_of_sound_mps(t_c: f64) -> f64 {

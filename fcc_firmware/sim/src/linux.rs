@@ -5,8 +5,8 @@
 
 use super::log::PlanPhase;
 use super::scenario::{FlightPlan, Scenario};
-use crate::commands::{Command, Mode, VelocitySetpoint};
-use crate::flight::FlightCore;
+use fcc_firmware::commands::{Command, Mode, VelocitySetpoint};
+use fcc_firmware::flight::FlightCore;
 use fcc_mission::{Mission, Phase, Request, WaypointFollower};
 
 /// Setpoint time-to-live sent with every velocity setpoint (ms): several 20 Hz periods.
@@ -297,10 +297,10 @@ impl LinuxSide {
 }
 
 /// Count a refused setpoint (and whether the pilot's override refused it).
-fn count(all: &mut u32, pilot: &mut u32, r: Result<(), crate::commands::CommandError>) {
+fn count(all: &mut u32, pilot: &mut u32, r: Result<(), fcc_firmware::commands::CommandError>) {
     if let Err(e) = r {
         *all += 1;
-        if e == crate::commands::CommandError::PilotOverride {
+        if e == fcc_firmware::commands::CommandError::PilotOverride {
             *pilot += 1;
         }
     }

@@ -12,7 +12,7 @@
 //!   (S.BUS failsafe bit), still sending frames; `receiver: silent`: no frames at all (wire cut,
 //!   receiver unpowered) — the core's 0.5 s timeout must notice.
 
-use crate::pilot::PilotInput;
+use fcc_firmware::pilot::PilotInput;
 use serde::Deserialize;
 
 /// Interval between receiver frames handed to the core, µs (50 Hz).
@@ -44,7 +44,7 @@ pub struct PilotEvent {
     pub at_s: f64,
     #[serde(default)]
     pub override_on: bool,
-    /// `[roll, pitch, throttle, yaw]`, −1..1, 0 = centre (see [`crate::pilot::PilotInput`]).
+    /// `[roll, pitch, throttle, yaw]`, −1..1, 0 = centre (see [`fcc_firmware::pilot::PilotInput`]).
     #[serde(default)]
     pub sticks: [f32; 4],
     #[serde(default)]

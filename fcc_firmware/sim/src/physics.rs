@@ -4,7 +4,7 @@
 //! eight 10×4.5" props on 650 Kv motors, 40 A ESCs, 5S 5200 mAh battery.
 //!
 //! Frames: world NED, body FRD. The motor layout and the torque sign conventions come from
-//! [`crate::geometry`] so that the simulator and the mixer can never disagree:
+//! [`fcc_firmware::geometry`] so that the simulator and the mixer can never disagree:
 //! motor `i` at `(x_i, y_i)` with thrust `T_i` (along body −z) gives roll `−y_i·T_i`,
 //! pitch `x_i·T_i`, yaw `−s_i·c_q·T_i` (`s_i = spin_cw(i)`).
 //!
@@ -26,7 +26,7 @@
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::Deserialize;
 
-use crate::geometry::{motor_position_m, spin_cw, MOTOR_COUNT};
+use fcc_firmware::geometry::{motor_position_m, spin_cw, MOTOR_COUNT};
 
 /// Largest deceleration the landing gear applies while absorbing a touchdown (≈3 g), m/s².
 pub const GEAR_MAX_DECEL_MPS2: f64 = 30.0;
@@ -174,7 +174,7 @@ impl Octorotor {
         let mut motor_xy_m = [(0.0, 0.0); MOTOR_COUNT];
         let mut motor_spin = [0.0; MOTOR_COUNT];
         for i in 0..MOTOR_COUNT {
-            // The layout documented in `crate::geometry` (azimuth 22.5° + i·45°), evaluated in
+            // The layout documented in `fcc_firmware::geometry` (azimuth 22.5° + i·45°), evaluated in
             // f64 so that a symmetric command gives exactly zero torque; checked against the
             // shared f32 function so the two can never diverge.
             let az = (22.5 + 45.0 * i as f64).to_radians();
@@ -182,7 +182,7 @@ impl Octorotor {
             let (xg, yg) = motor_position_m(i, arm as f32);
             assert!(
                 (x - xg as f64).abs() < 1e-4 && (y - yg as f64).abs() < 1e-4,
-                "motor layout differs from crate::geometry"
+                "motor layout differs from fcc_firmware::geometry"
             );
             motor_xy_m[i] = (x, y);
             motor_spin[i] = spin_cw(i) as f64;
@@ -203,7 +203,7 @@ impl Octorotor {
         }
     }
 
-    /// Motor positions (x, y) in body FRD, metres (from `crate::geometry`).
+    /// Motor positions (x, y) in body FRD, metres (from `fcc_firmware::geometry`).
     pub fn motor_xy_m(&self) -> &[(f64, f64); MOTOR_COUNT] {
         &self.motor_xy_m
     }
@@ -231,31 +231,10 @@ impl Octorotor {
         if dt_s.is_nan() || dt_s <= 0.0 {
             return;
         }
+        let (thrust, speed_sum) = self.spin_rotors(motor_cmd, dt_s);
         let p = &self.params;
         let m = p.mass_kg;
         let g = p.gravity_mps2;
-
-        // --- rotors: first-order lag on speed (exact discretisation), thrust ∝ speed² ---
-        let alpha = if p.motor_time_constant_s > 0.0 {
-            1.0 - (-dt_s / p.motor_time_constant_s).exp()
-        } else {
-            1.0
-        };
-        let mut thrust = [0.0; MOTOR_COUNT];
-        let mut speed_sum = 0.0;
-        for i in 0..MOTOR_COUNT {
-            let c = motor_cmd[i];
-            let c = if c.is_finite() {
-                (c as f64).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let target = c * p.max_rotor_speed_frac;
-            let w = &mut self.state.rotor_speed_frac[i];
-            *w += (target - *w) * alpha;
-            thrust[i] = p.max_thrust_per_motor_n * *w * *w;
-            speed_sum += *w;
-        }
 
         // --- body-frame forces and torques ---
         let q = self.state.q_body_to_ned;
@@ -297,34 +276,13 @@ impl Octorotor {
         let at_ground = self.state.pos_ned_m.z >= ground_down_m - 1e-9;
         let mut contact = false;
         if at_ground {
-            // Normal force (NED z, negative = pushing up) that brings the vertical velocity to 0,
-            // but no harder than the landing gear's stroke allows (GEAR_MAX_DECEL_MPS2): a
-            // touchdown decelerates over tens of milliseconds, as the accelerometer then sees.
-            let a_stop = (-vel.z / dt_s).max(-GEAR_MAX_DECEL_MPS2);
-            let n_z = m * a_stop - f_air_ned.z - m * g;
-            if n_z < 0.0 {
+            let free_torque_z = torque.z - (omega.cross(&i_omega)).z;
+            if let Some((a, omega_dot_z)) =
+                self.ground_reaction(&f_air_ned, free_torque_z, omega.z, dt_s)
+            {
                 contact = true;
-                let n = -n_z;
-                accel.z = a_stop;
-                // Friction: whatever stops the horizontal sliding, limited by μ·N.
-                let want = Vector3::new(
-                    -m * vel.x / dt_s - f_air_ned.x,
-                    -m * vel.y / dt_s - f_air_ned.y,
-                    0.0,
-                );
-                let lim = p.ground_friction_coeff * n;
-                let fr = if want.norm() <= lim {
-                    want
-                } else {
-                    want * (lim / want.norm())
-                };
-                accel.x = (f_air_ned.x + fr.x) / m;
-                accel.y = (f_air_ned.y + fr.y) / m;
-                // Yaw friction torque, limited by μ·N·r.
-                let want_tz = -inertia.z * omega.z / dt_s - (torque.z - (omega.cross(&i_omega)).z);
-                let lim_tz = p.ground_friction_coeff * n * p.ground_yaw_friction_radius_m;
-                let tz = want_tz.clamp(-lim_tz, lim_tz);
-                omega_dot.z += tz / inertia.z;
+                accel = a;
+                omega_dot.z += omega_dot_z;
             }
         }
 
@@ -368,6 +326,82 @@ impl Octorotor {
         self.state.omega_frd_radps = new_omega;
         self.state.q_body_to_ned = new_q;
         self.in_contact = contact;
+    }
+
+    /// Rotors: first-order lag on speed (exact discretisation), thrust ∝ speed². Returns each
+    /// rotor's thrust (N) and the sum of the rotor speeds (fractions of the maximum).
+    fn spin_rotors(
+        &mut self,
+        motor_cmd: &[f32; MOTOR_COUNT],
+        dt_s: f64,
+    ) -> ([f64; MOTOR_COUNT], f64) {
+        let p = &self.params;
+        let alpha = if p.motor_time_constant_s > 0.0 {
+            1.0 - (-dt_s / p.motor_time_constant_s).exp()
+        } else {
+            1.0
+        };
+        let mut thrust = [0.0; MOTOR_COUNT];
+        let mut speed_sum = 0.0;
+        for i in 0..MOTOR_COUNT {
+            let c = motor_cmd[i];
+            let c = if c.is_finite() {
+                (c as f64).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let target = c * p.max_rotor_speed_frac;
+            let w = &mut self.state.rotor_speed_frac[i];
+            *w += (target - *w) * alpha;
+            thrust[i] = p.max_thrust_per_motor_n * *w * *w;
+            speed_sum += *w;
+        }
+        (thrust, speed_sum)
+    }
+
+    /// The gear standing on the ground: the normal force (NED z, negative = pushing up) that
+    /// brings the vertical velocity to 0, but no harder than the landing gear's stroke allows
+    /// (GEAR_MAX_DECEL_MPS2: a touchdown decelerates over tens of milliseconds, as the
+    /// accelerometer then sees), and friction that stops the sliding (μ·N) and the yaw
+    /// rotation (μ·N·r). `f_air_ned`: the air and rotor forces; `free_torque_z`: the yaw torque
+    /// net of the gyroscopic term. Returns the acceleration (NED) and the yaw friction's angular
+    /// acceleration, or `None` when the ground does not push (lift-off).
+    fn ground_reaction(
+        &self,
+        f_air_ned: &Vector3<f64>,
+        free_torque_z: f64,
+        omega_z: f64,
+        dt_s: f64,
+    ) -> Option<(Vector3<f64>, f64)> {
+        let p = &self.params;
+        let (m, g) = (p.mass_kg, p.gravity_mps2);
+        let vel = self.state.vel_ned_mps;
+        let a_stop = (-vel.z / dt_s).max(-GEAR_MAX_DECEL_MPS2);
+        let n_z = m * a_stop - f_air_ned.z - m * g;
+        if !(n_z < 0.0) {
+            // (also NaN: no contact)
+            return None;
+        }
+        let n = -n_z;
+        // Friction: whatever stops the horizontal sliding, limited by μ·N.
+        let want = Vector3::new(
+            -m * vel.x / dt_s - f_air_ned.x,
+            -m * vel.y / dt_s - f_air_ned.y,
+            0.0,
+        );
+        let lim = p.ground_friction_coeff * n;
+        let fr = if want.norm() <= lim {
+            want
+        } else {
+            want * (lim / want.norm())
+        };
+        let accel = Vector3::new((f_air_ned.x + fr.x) / m, (f_air_ned.y + fr.y) / m, a_stop);
+        // Yaw friction torque, limited by μ·N·r.
+        let inertia_z = p.inertia_diag_kgm2[2];
+        let want_tz = -inertia_z * omega_z / dt_s - free_torque_z;
+        let lim_tz = p.ground_friction_coeff * n * p.ground_yaw_friction_radius_m;
+        let tz = want_tz.clamp(-lim_tz, lim_tz);
+        Some((accel, tz / inertia_z))
     }
 
     /// True kinematic acceleration over the last step, NED, m/s².

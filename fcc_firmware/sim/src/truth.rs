@@ -18,7 +18,7 @@
 //! **unplanned ground contact**.
 
 use super::log::{FlightLog, LogSample, PlanPhase};
-use crate::commands::Mode;
+use fcc_firmware::commands::Mode;
 use std::fmt;
 
 /// Vertical touchdown speed the landing gear absorbs without damage, m/s (its stroke of a few

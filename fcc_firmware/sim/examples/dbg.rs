@@ -1,4 +1,4 @@
-use fcc_firmware::sitl::{scenario::Scenario, sim::Sim};
+use fcc_sim::{scenario::Scenario, sim::Sim};
 fn main() {
     let s = Scenario::load(std::path::Path::new("launch_configs/scenarios/hover.yaml")).unwrap();
     let mut sim = Sim::new(s).unwrap();
@@ -13,7 +13,7 @@ fn main() {
                 st.vel_ned_mps.as_slice(),
                 st.omega_frd_radps.as_slice(),
                 &st.rotor_speed_frac[..3],
-                &sim.core.motors()[..3]
+                &sim.fc.core.motors()[..3]
             );
         }
     }
