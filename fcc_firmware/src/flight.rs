@@ -62,7 +62,7 @@ const PILOT_LOCK_SPEED_MPS: f32 = 0.5;
 const PILOT_YAW_LEAD_RAD: f32 = 0.5;
 
 /// What one step did, for telemetry and tests.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepTelemetry {
     pub t_us: u64,
     /// Horizontal velocity command after cross-track compensation, and vertical command (NED).
