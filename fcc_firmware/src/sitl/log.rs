@@ -151,15 +151,17 @@ impl Spill {
         })
     }
 
+    /// One record in one `write_all`: the buffer takes it whole or not at all, so after a
+    /// failed write (disk full) the file plus the unwritten buffer are still whole records.
     fn put<T: serde::Serialize>(&mut self, tag: u8, v: &T) -> Result<(), SpillError> {
         use std::io::Write;
-        let mut buf = [0u8; SPILL_RECORD_MAX];
-        let n = postcard::to_slice(v, &mut buf)
+        let mut buf = [0u8; 3 + SPILL_RECORD_MAX];
+        let n = postcard::to_slice(v, &mut buf[3..])
             .map_err(SpillError::Codec)?
             .len();
-        self.file.write_all(&[tag])?;
-        self.file.write_all(&(n as u16).to_le_bytes())?;
-        self.file.write_all(&buf[..n])?;
+        buf[0] = tag;
+        buf[1..3].copy_from_slice(&(n as u16).to_le_bytes());
+        self.file.write_all(&buf[..3 + n])?;
         self.records += 1;
         Ok(())
     }
@@ -177,12 +179,14 @@ impl Spill {
         self.records
     }
 
-    /// Read everything back, appending to `log.samples` and `log.ranges` in the order written.
+    /// Read everything back, appending to `log.samples` and `log.ranges` in the order written:
+    /// the file, then what its buffer could not write (nothing is flushed again).
     pub fn read_into(self, log: &mut FlightLog) -> Result<(), SpillError> {
         use std::io::{Read, Seek};
-        let mut file = self.file.into_inner().map_err(|e| e.into_error())?;
+        let (mut file, pending) = self.file.into_parts();
+        let pending = pending.unwrap_or_else(|p| p.into_inner());
         file.seek(std::io::SeekFrom::Start(0))?;
-        let mut r = std::io::BufReader::with_capacity(64 * 1024, file);
+        let mut r = std::io::BufReader::with_capacity(64 * 1024, file).chain(&pending[..]);
         let mut head = [0u8; 3];
         let mut buf = [0u8; SPILL_RECORD_MAX];
         loop {
