@@ -6,7 +6,8 @@
 # (20 % of the soak, ≥ 60 s) in MB/h per process (goal ≤ 1 MB/h each) and the messages lost
 # outside the kill window. Exit 0 when every goal holds.
 #   usage: scripts/soak.sh [MINUTES] [soak_stack.py options]   (default 30 minutes; see
-#          tests/e2e/soak_stack.py: --speed, --ber, --kill-at, --warmup-s, --keep DIR)
+#          tests/e2e/soak_stack.py: --speed, --ber, --kill-at, --warmup-s, --keep DIR,
+#          --bridge-param NAME:=VALUE, e.g. record_split_s:=300)
 # Needs release builds of fcc-sitl, fcc-wire-fault, fcc-bridge and fcc-mission (feature ros),
 # and .venv-dds (scripts/test.sh makes both). Runs in a loopback-only network namespace.
 set -euo pipefail

@@ -66,7 +66,7 @@ impl core::fmt::Display for CommandError {
 }
 
 /// Flight mode of the core.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Mode {
     Disarmed,
     Hold,
@@ -77,7 +77,7 @@ pub enum Mode {
 }
 
 /// Why the core left the mode the operator asked for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum FailsafeCause {
     None,
     /// Velocity setpoint older than its time-to-live → hold.

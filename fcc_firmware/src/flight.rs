@@ -77,7 +77,7 @@ struct Horizontal {
 }
 
 /// What one step did, for telemetry and tests.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepTelemetry {
     pub t_us: u64,
     /// Horizontal velocity command after cross-track compensation, and vertical command (NED).

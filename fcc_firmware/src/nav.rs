@@ -27,7 +27,7 @@ const TILT_CHECK_EVERY: u8 = 10;
 const AID_MAX_VAR_M2: f32 = 0.05;
 
 /// The navigation solution, NED relative to home, body FRD.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NavState {
     pub t_us: u64,
     pub euler: Euler,

@@ -15,7 +15,7 @@ use crate::math::{asinf, atan2f, sincosf, sqrtf};
 use crate::GRAVITY_MPS2;
 
 /// ZYX Euler angles \[rad].
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Euler {
     /// Roll φ, positive right wing down.
     pub roll_rad: f32,

@@ -181,7 +181,7 @@ impl Default for GroundAltitudeParams {
 }
 
 /// Which measurements the current estimate rests on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum GroundSource {
     /// Not initialised, or coasted too long: do not use.
     #[default]
@@ -197,7 +197,7 @@ pub enum GroundSource {
 }
 
 /// The filter's output.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct GroundAltitude {
     /// Height of the sensors above the ground below \[m] (0 when `source == None` and never
     /// initialised).

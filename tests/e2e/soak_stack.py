@@ -7,7 +7,7 @@ loopback-only network namespace:
   + this Cyclone DDS peer (status, imu/data_raw)
 
   soak_stack.py MINUTES [--bin DIR] [--speed 1] [--ber 1e-6] [--kill-at 0.35] [--sample-s 5]
-                [--warmup-s S] [--goal-mb-h 1.0] [--keep DIR]
+                [--warmup-s S] [--goal-mb-h 1.0] [--keep DIR] [--bridge-param NAME:=VALUE]...
 
 At --kill-at × the soak the bridge is SIGKILLed and restarted 2 s later (a new bag). Every
 --sample-s the RSS (VmRSS) of every process is sampled; at the end the least-squares slope after
@@ -87,6 +87,8 @@ def main():
                     help="default: 20 %% of the soak, at least 60 s")
     ap.add_argument("--goal-mb-h", type=float, default=1.0)
     ap.add_argument("--keep", default=None, help="keep logs, bags and samples in this directory")
+    ap.add_argument("--bridge-param", action="append", default=[], metavar="NAME:=VALUE",
+                    help="another ROS parameter for the bridge, e.g. record_split_s:=300")
     a = ap.parse_args()
     total_s = a.minutes * 60.0
     warm = a.warmup_s if a.warmup_s is not None else max(60.0, 0.2 * total_s)
@@ -132,8 +134,9 @@ def main():
         return os.path.exists(p)
 
     def bridge_argv(bag):
+        extra = [x for p in a.bridge_param for x in ("-p", p)]
         return [f"{a.bin}/fcc-bridge", "--device", link_tty, "--ros-args", "-r", "__ns:=/fcc",
-                "-p", f"record:={bag}"]
+                "-p", f"record:={bag}", *extra]
 
     try:
         start("sitl", [f"{a.bin}/fcc-sitl", "--scenario", scn, "--link-pty", "--pty-link", mcu_tty,
@@ -169,7 +172,8 @@ def main():
         modes = {}
         print(f"soak: {a.minutes:g} min at speed {a.speed:g}, BER {a.ber:g}, bridge kill at "
               f"{a.kill_at * total_s:.0f} s, warm-up {warm:.0f} s, RSS every {a.sample_s:g} s; "
-              f"files in {tmp}", flush=True)
+              f"bridge parameters {' '.join(a.bridge_param) or '(defaults)'}; files in {tmp}",
+              flush=True)
         while True:
             t = time.monotonic() - t0
             if t >= total_s:

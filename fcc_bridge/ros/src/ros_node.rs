@@ -93,13 +93,43 @@ fn topic<T: RosMsg>(
     .map_err(|e| format!("topic {name}: {e:?}"))
 }
 
-/// Publisher on a ROS name (relative names go under the node's namespace).
+/// Samples a publisher's DDS writer may hold: rustdds' `ResourceLimits::max_samples` on its
+/// topic, which is both the writer's reliable send window (unacknowledged samples before a write
+/// fails, `WhenFull::Fail`) and the bound on the samples it retains. Without a limit rustdds
+/// retains up to 8192 samples per writer until every matched reader has acknowledged them, and a
+/// best-effort reader (fcc-mission's, most tools') never acknowledges: each writer grew until
+/// 8192 (the bridge +36 MB/h, fcc-mission +4.8 MB/h in `scripts/soak.sh 8`). 256 samples are
+/// 1.3 s at the 200 Hz IMU rate; a reliable reader acknowledges within a heartbeat (0.1 s).
+pub const WRITER_KEEP: i32 = 256;
+
+/// Publisher on a ROS name (relative names go under the node's namespace); its writer holds at
+/// most [`WRITER_KEEP`] samples (and the profile's history depth, if smaller).
 pub fn publisher<T: RosMsg>(
     node: &mut Node,
     name: &str,
     qos: &QosProfile,
 ) -> Result<Publisher<T>, String> {
-    let topic = topic::<T>(node, name, qos)?;
+    use rustdds::{policy::ResourceLimits, TopicDescription};
+    let named = topic::<T>(node, name, qos)?;
+    let limits = rustdds::QosPolicyBuilder::new()
+        .resource_limits(ResourceLimits {
+            max_samples: WRITER_KEEP,
+            max_instances: 1,
+            max_samples_per_instance: WRITER_KEEP,
+        })
+        .build();
+    // The same DDS topic (name and type from ros2-client), with the limit in its QoS: a writer
+    // takes its QoS from its topic.
+    let topic = named
+        .participant()
+        .ok_or_else(|| format!("publisher {name}: DDS participant gone"))?
+        .create_topic(
+            named.name(),
+            T::type_name().dds_msg_type(),
+            &rustdds::QosPolicies::from(qos).modify_by(&limits),
+            rustdds::TopicKind::NoKey,
+        )
+        .map_err(|e| format!("topic {name}: {e:?}"))?;
     node.create_publisher::<T>(&topic, None)
         .map_err(|e| format!("publisher {name}: {e:?}"))
 }

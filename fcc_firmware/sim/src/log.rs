@@ -1,5 +1,7 @@
 //! What a simulated flight leaves behind: a 50 Hz log of truth beside estimates and commands,
-//! and the Linux side's events.
+//! and the Linux side's events. A long real-time run (`fcc-sitl --link-pty`) spills the samples
+//! and rangefinder readings to an unlinked scratch file as they come ([`Spill`]) and reads them
+//! back when the run is closed: flat memory while it flies, the same log afterwards.
 
 use fcc_firmware::commands::{FailsafeCause, Mode};
 use fcc_firmware::flight::StepTelemetry;
@@ -7,7 +9,7 @@ use fcc_firmware::geometry::MOTOR_COUNT;
 use fcc_firmware::nav::NavState;
 
 /// What the in-process Linux computer is doing.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum PlanPhase {
     Waiting,
     Climbing,
@@ -32,7 +34,7 @@ pub enum PlanPhase {
     Carried,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct LogSample {
     pub t_s: f64,
     pub mode: Mode,
@@ -56,7 +58,7 @@ pub struct LogSample {
 }
 
 /// One rangefinder reading as the core received it, with the truth at that moment.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct RangeRecord {
     pub t_s: f64,
     /// Laser altimeter (else sonar).
@@ -82,6 +84,132 @@ pub struct FlightLog {
     pub truth: super::truth::TruthCounters,
     /// The height the plan commands (hover: its `alt_m` above take-off), m.
     pub commanded_alt_m: Option<f64>,
+}
+
+/// Where [`Spill`] fails.
+#[derive(Debug)]
+pub enum SpillError {
+    Io(std::io::Error),
+    /// A record did not encode or decode (postcard).
+    Codec(postcard::Error),
+    /// The file ends inside a record.
+    Truncated,
+    /// A record with an unknown tag.
+    BadTag(u8),
+}
+
+impl std::fmt::Display for SpillError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SpillError::Io(e) => write!(f, "flight-log scratch file: {e}"),
+            SpillError::Codec(e) => write!(f, "flight-log scratch record: {e}"),
+            SpillError::Truncated => f.write_str("flight-log scratch file ends inside a record"),
+            SpillError::BadTag(t) => write!(f, "flight-log scratch record with unknown tag {t}"),
+        }
+    }
+}
+
+impl From<std::io::Error> for SpillError {
+    fn from(e: std::io::Error) -> Self {
+        SpillError::Io(e)
+    }
+}
+
+/// Largest encoded record (a [`LogSample`] is ≈ 330 bytes in postcard).
+const SPILL_RECORD_MAX: usize = 1024;
+const TAG_SAMPLE: u8 = 0;
+const TAG_RANGE: u8 = 1;
+
+/// The log's samples and range readings on disk, in the order they came: each record is a tag
+/// byte, a u16 LE length and the postcard encoding (f32/f64 bit-exact). The file is unlinked as
+/// soon as it is open, so it vanishes with the process whatever ends it.
+pub struct Spill {
+    file: std::io::BufWriter<std::fs::File>,
+    records: u64,
+}
+
+impl Spill {
+    /// A scratch file in `dir` (e.g. `std::env::temp_dir()`).
+    pub fn create(dir: &std::path::Path) -> Result<Self, SpillError> {
+        let name = format!(
+            ".fcc-sitl-log-{}-{:x}",
+            std::process::id(),
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos())
+        );
+        let path = dir.join(name);
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&path)?;
+        std::fs::remove_file(&path)?;
+        Ok(Self {
+            file: std::io::BufWriter::with_capacity(64 * 1024, file),
+            records: 0,
+        })
+    }
+
+    /// One record in one `write_all`: the buffer takes it whole or not at all, so after a
+    /// failed write (disk full) the file plus the unwritten buffer are still whole records.
+    fn put<T: serde::Serialize>(&mut self, tag: u8, v: &T) -> Result<(), SpillError> {
+        use std::io::Write;
+        let mut buf = [0u8; 3 + SPILL_RECORD_MAX];
+        let n = postcard::to_slice(v, &mut buf[3..])
+            .map_err(SpillError::Codec)?
+            .len();
+        buf[0] = tag;
+        buf[1..3].copy_from_slice(&(n as u16).to_le_bytes());
+        self.file.write_all(&buf[..3 + n])?;
+        self.records += 1;
+        Ok(())
+    }
+
+    pub fn push_sample(&mut self, s: &LogSample) -> Result<(), SpillError> {
+        self.put(TAG_SAMPLE, s)
+    }
+
+    pub fn push_range(&mut self, r: &RangeRecord) -> Result<(), SpillError> {
+        self.put(TAG_RANGE, r)
+    }
+
+    /// Records written so far.
+    pub fn records(&self) -> u64 {
+        self.records
+    }
+
+    /// Read everything back, appending to `log.samples` and `log.ranges` in the order written:
+    /// the file, then what its buffer could not write (nothing is flushed again).
+    pub fn read_into(self, log: &mut FlightLog) -> Result<(), SpillError> {
+        use std::io::{Read, Seek};
+        let (mut file, pending) = self.file.into_parts();
+        let pending = pending.unwrap_or_else(|p| p.into_inner());
+        file.seek(std::io::SeekFrom::Start(0))?;
+        let mut r = std::io::BufReader::with_capacity(64 * 1024, file).chain(&pending[..]);
+        let mut head = [0u8; 3];
+        let mut buf = [0u8; SPILL_RECORD_MAX];
+        loop {
+            match r.read_exact(&mut head[..1]) {
+                Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(()),
+                other => other?,
+            }
+            r.read_exact(&mut head[1..])
+                .map_err(|_| SpillError::Truncated)?;
+            let n = u16::from_le_bytes([head[1], head[2]]) as usize;
+            let body = buf.get_mut(..n).ok_or(SpillError::Truncated)?;
+            r.read_exact(body).map_err(|_| SpillError::Truncated)?;
+            match head[0] {
+                TAG_SAMPLE => log
+                    .samples
+                    .push(postcard::from_bytes(body).map_err(SpillError::Codec)?),
+                TAG_RANGE => log
+                    .ranges
+                    .push(postcard::from_bytes(body).map_err(SpillError::Codec)?),
+                t => return Err(SpillError::BadTag(t)),
+            }
+        }
+    }
 }
 
 /// Write the log as CSV (one row per 50 Hz sample) for plotting elsewhere.

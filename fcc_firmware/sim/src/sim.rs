@@ -216,6 +216,11 @@ pub struct Sim {
     crashed: bool,
     /// The simulator's own events (crashes), merged into the log's at [`Self::finish`].
     sim_events: Vec<(f64, String)>,
+    /// Samples and range readings go to this scratch file while the run lasts
+    /// ([`Self::spill_log`]); read back into `log` at [`Self::finish`].
+    spill: Option<super::log::Spill>,
+    /// The scratch file failed to take a record: the rest stays in memory.
+    spill_failed: bool,
 }
 
 impl Sim {
@@ -279,6 +284,8 @@ impl Sim {
             airborne_since_contact: false,
             crashed: false,
             sim_events: Vec::new(),
+            spill: None,
+            spill_failed: false,
             scenario,
         })
     }
@@ -287,6 +294,43 @@ impl Sim {
     pub fn serve_link(&mut self, pty: super::pty::PtyLink, rates: fcc_msgs::StreamRates) {
         self.fc.link = LinkEndpoint::new(rates);
         self.link = Some(pty);
+    }
+
+    /// Keep the 50 Hz samples and the range readings in a scratch file in `dir` while the run
+    /// lasts (flat memory for a long real-time run); [`Self::finish`] reads them back, so the
+    /// log is the same. Should the file fail, the rest is kept in memory (an event says so).
+    pub fn spill_log(&mut self, dir: &std::path::Path) -> Result<(), super::log::SpillError> {
+        self.spill = Some(super::log::Spill::create(dir)?);
+        Ok(())
+    }
+
+    fn spill_error(&mut self, e: super::log::SpillError) {
+        self.spill_failed = true;
+        let t = self.t_s();
+        self.sim_events.push((
+            t,
+            format!("{e}; the flight log is kept in memory from here on"),
+        ));
+    }
+
+    fn keep_sample(&mut self, s: LogSample) {
+        if let (Some(sp), false) = (self.spill.as_mut(), self.spill_failed) {
+            match sp.push_sample(&s) {
+                Ok(()) => return,
+                Err(e) => self.spill_error(e),
+            }
+        }
+        self.log.samples.push(s);
+    }
+
+    fn keep_range(&mut self, r: super::log::RangeRecord) {
+        if let (Some(sp), false) = (self.spill.as_mut(), self.spill_failed) {
+            match sp.push_range(&r) {
+                Ok(()) => return,
+                Err(e) => self.spill_error(e),
+            }
+        }
+        self.log.ranges.push(r);
     }
 
     /// The served link, if any: the MCU's endpoint and the pty.
@@ -504,14 +548,17 @@ impl Sim {
         self.count_truth();
         let p = self.body.state.pos_ned_m;
         let agl = self.board.terrain.ground_down_at(p.x, p.y) - p.z;
-        for (laser, r) in self.board.polled_ranges.drain(..) {
-            self.log.ranges.push(super::log::RangeRecord {
+        let mut polled = std::mem::take(&mut self.board.polled_ranges);
+        for &(laser, r) in &polled {
+            self.keep_range(super::log::RangeRecord {
                 t_s: r.t_us as f64 * 1e-6,
                 laser,
                 range_m: r.range_m,
                 true_agl_m: agl,
             });
         }
+        polled.clear();
+        self.board.polled_ranges = polled; // its capacity, reused
         if self.ticks % LOG_EVERY_TICKS == 0 {
             self.record();
         }
@@ -528,7 +575,7 @@ impl Sim {
             nav.euler.yaw_rad.cos() as f64,
         );
         let accel_true_fr = [(cy * a.x + sy * a.y) as f32, (-sy * a.x + cy * a.y) as f32];
-        self.log.samples.push(LogSample {
+        self.keep_sample(LogSample {
             t_s: self.t_s(),
             mode: self.fc.core.mode(),
             failsafe: self.fc.core.failsafe(),
@@ -562,6 +609,18 @@ impl Sim {
 
     /// Close the log (events of the in-process mission computer) after a run driven by hand.
     pub fn finish(&mut self) -> &FlightLog {
+        if let Some(sp) = self.spill.take() {
+            // The file holds everything before any failure; memory the rest.
+            let samples = std::mem::take(&mut self.log.samples);
+            let ranges = std::mem::take(&mut self.log.ranges);
+            if let Err(e) = sp.read_into(&mut self.log) {
+                let t = self.t_s();
+                self.sim_events
+                    .push((t, format!("flight log incomplete: {e}")));
+            }
+            self.log.samples.extend(samples);
+            self.log.ranges.extend(ranges);
+        }
         let mut events = self.linux.events().to_vec();
         events.extend(self.sim_events.iter().cloned());
         events.sort_by(|a, b| a.0.total_cmp(&b.0));

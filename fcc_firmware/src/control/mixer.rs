@@ -8,7 +8,7 @@
 
 use crate::geometry::{motor_position_m, spin_cw, MOTOR_COUNT};
 
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MixerSaturation {
     /// Roll/pitch torques had to be scaled down (0 < scale < 1).
     pub attitude_scaled: bool,

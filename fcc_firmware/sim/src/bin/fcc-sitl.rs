@@ -106,6 +106,10 @@ fn main() -> ExitCode {
             );
         }
         sim.serve_link(pty, fcc_msgs::StreamRates::DEFAULT);
+        // A board-like run lasts as long as it is left running: its log waits on disk.
+        if let Err(e) = sim.spill_log(&std::env::temp_dir()) {
+            eprintln!("fcc-sitl: {e}; the flight log is kept in memory");
+        }
     }
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
