@@ -7,7 +7,7 @@
 
 use crate::nav_health::{Innovations, NavHealth};
 use crate::params::NavParams;
-use crate::sensors::SensorInputs;
+use crate::sensors::{BaroSample, GpsFix, ImuSample, SensorInputs};
 use fcc_nav::attitude::{
     accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, rot_body_to_ned, AttitudeEstimator,
     Euler,
@@ -179,6 +179,41 @@ impl Navigator {
 
     /// One 500 Hz step. `on_ground_disarmed`: calibration may run (vehicle still).
     pub fn step(&mut self, now_us: u64, s: &SensorInputs, on_ground_disarmed: bool) -> &NavState {
+        let s = &self.remove_sensor_offsets(s);
+        if !self.calibrated {
+            self.calibrate(now_us, s, on_ground_disarmed);
+        }
+        let mut imu_dt_s = 0.0;
+        let mut innov = Innovations::default();
+        if let Some(imu) = s.imu {
+            let mag_frd_ut = s.mag.map(|m| m.mag_frd_ut);
+            imu_dt_s = self.fuse_imu(&imu, mag_frd_ut, on_ground_disarmed, &mut innov);
+        }
+        if let Some(b) = s.baro {
+            self.fuse_baro(&b, &mut innov);
+        }
+        if let Some(g) = s.gps {
+            self.fuse_gps(now_us, &g, &mut innov);
+        }
+        let faults = if self.calibrated {
+            self.health.update(imu_dt_s, &innov)
+        } else {
+            0
+        };
+        let gps_ok = self.gps_fresh_and_healthy(now_us, faults);
+        if !gps_ok && self.last_gps_us.is_some() {
+            self.horiz.clear_gps();
+        }
+        if self.calibrated {
+            self.update_ground(imu_dt_s, s);
+        }
+        self.publish_state(now_us, gps_ok, faults)
+    }
+
+    /// The samples with the configured magnetometer and accelerometer offsets removed (and the
+    /// corrected magnetometer kept for the heading at the end of calibration).
+    #[inline]
+    fn remove_sensor_offsets(&mut self, s: &SensorInputs) -> SensorInputs {
         let mut s = *s;
         if let Some(m) = s.mag.as_mut() {
             for i in 0..3 {
@@ -191,173 +226,238 @@ impl Navigator {
                 imu.accel_frd_mps2[i] -= self.params.accel_offset_frd_mps2[i];
             }
         }
-        let s = &s;
-        if !self.calibrated {
-            self.calibrate(now_us, s, on_ground_disarmed);
-        }
-        let mut imu_dt_s = 0.0;
-        let mut innov = Innovations::default();
-        if let Some(imu) = s.imu {
-            let dt_s = match self.last_imu_us {
-                Some(t) if imu.t_us > t => ((imu.t_us - t) as f32 * 1e-6).min(0.02),
-                _ => 0.002,
-            };
-            self.last_imu_us = Some(imu.t_us);
-            imu_dt_s = dt_s;
-            let gyro = [
-                imu.gyro_frd_radps[0] - self.gyro_bias_frd_radps[0],
-                imu.gyro_frd_radps[1] - self.gyro_bias_frd_radps[1],
-                imu.gyro_frd_radps[2] - self.gyro_bias_frd_radps[2],
-            ];
-            let mag = s.mag.map(|m| m.mag_frd_ut);
-            let f = imu.accel_frd_mps2;
-            let f_lp = [
-                self.tilt_accel_lpf[0].update(f[0]),
-                self.tilt_accel_lpf[1].update(f[1]),
-                self.tilt_accel_lpf[2].update(f[2]),
-            ];
-            // Remove the manoeuvre acceleration (GPS-derived, NED → body) from the specific
-            // force before it is read as a gravity direction.
-            let r = rot_body_to_ned(&self.att.euler());
-            let a = if self.state.gps_ok {
-                self.gps_accel_ned_mps2
-            } else {
-                [0.0; 3]
-            };
-            let mut f_tilt = f_lp;
-            for (i, ft) in f_tilt.iter_mut().enumerate() {
-                *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
-            }
-            self.att.mag_realign_allowed = on_ground_disarmed;
-            let euler = if self.calibrated {
-                self.att.update(gyro, Some(f_tilt), mag, dt_s)
-            } else {
-                self.att.euler()
-            };
-            // The tilt monitor samples at 50 Hz (its hold time is seconds; asin/atan2 at 500 Hz
-            // would cost the MCU ~10 % of a step).
-            self.tilt_check_tick = (self.tilt_check_tick + 1) % TILT_CHECK_EVERY;
-            let n_f = fcc_nav::math::sqrtf(
-                f_tilt[0] * f_tilt[0] + f_tilt[1] * f_tilt[1] + f_tilt[2] * f_tilt[2],
-            );
-            if self.calibrated
-                && self.tilt_check_tick == 0
-                && fcc_nav::math::fabsf(n_f - fcc_nav::GRAVITY_MPS2) <= self.params.accel_gate_mps2
-            {
-                let (r_a, p_a) = accel_tilt_rad(f_tilt);
-                let d = fcc_nav::math::hypotf(r_a - euler.roll_rad, p_a - euler.pitch_rad);
-                innov.tilt_rad = Some(d);
-            }
-            let a_ned = linear_accel_ned_mps2(&euler, imu.accel_frd_mps2);
-            if self.calibrated {
-                self.horiz.update([a_ned[0], a_ned[1]], dt_s);
-                self.vert.update(a_ned[2], dt_s);
-            }
-            self.state.euler = euler;
-            self.state.rate_frd_radps = gyro;
-            self.state.accel_ned_mps2 = a_ned;
-        }
-        if let Some(b) = s.baro {
-            if b.temperature_c.is_finite() {
-                self.air_temp_c = b.temperature_c;
-            }
-            let alt = pressure_to_alt_m(b.pressure_pa, self.p0_pa);
-            self.state.baro_alt_m = alt;
-            let dt_s = self
-                .last_baro_us
-                .map_or(0.0, |t| b.t_us.saturating_sub(t) as f32 * 1e-6);
-            self.last_baro_us = Some(b.t_us);
-            if self.calibrated {
-                let z = self.range_aid.measurement(
-                    dt_s,
-                    self.vert.alt_m(),
-                    alt,
-                    self.aid_height_m(),
-                    self.ground.reinit_count(),
-                );
-                self.vert.baro_alt(z);
-                self.set_vert_aided(self.range_aid.aiding());
-                let baro_corr = alt - self.range_aid.baro_offset_m();
-                innov.baro_alt_m = Some(fcc_nav::math::fabsf(baro_corr - self.vert.alt_m()));
-            }
-        }
-        if let Some(g) = s.gps {
-            if g.fix_ok && g.lat_deg.is_finite() && g.lon_deg.is_finite() {
-                let lla = Lla {
-                    lat_deg: g.lat_deg,
-                    lon_deg: g.lon_deg,
-                    alt_m: g.alt_m as f64,
-                };
-                if self.home.is_none() && self.calibrated {
-                    self.home = Some(LocalNed::new(lla));
-                    let p = self.state.pos_ned_m;
-                    self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
-                    self.state.pos_ned_m = [0.0, 0.0, p[2]];
-                }
-                if let Some((t0, v0)) = self.last_gps_vel {
-                    let dt = now_us.saturating_sub(t0) as f32 * 1e-6;
-                    if dt > 0.05 && dt < 1.0 {
-                        // First-order smoothing (~0.5 s) of the differenced GPS velocity.
-                        let k = (dt / 0.5).min(1.0);
-                        for i in 0..3 {
-                            let a = (g.vel_ned_mps[i] - v0[i]) / dt;
-                            self.gps_accel_ned_mps2[i] += k * (a - self.gps_accel_ned_mps2[i]);
-                        }
-                    }
-                }
-                self.last_gps_vel = Some((now_us, g.vel_ned_mps));
-                if let Some(home) = &self.home {
-                    let ned = home.lla_to_ned(&lla);
-                    let delay_steps = (self.params.gps_latency_s / 0.002 + 0.5) as usize;
-                    let p = self.horiz.pos_ne_m();
-                    let d = fcc_nav::math::hypotf(ned[0] as f32 - p[0], ned[1] as f32 - p[1]);
-                    innov.gps_m = Some(d);
-                    self.last_gps_us = Some(now_us);
-                    if !NavHealth::gps_acceptable(d) {
-                        // A jump (multipath, spoofing): not fused; the monitor times it.
-                        self.horiz.clear_gps();
-                    } else {
-                        self.horiz.gps([ned[0] as f32, ned[1] as f32], delay_steps);
-                        if g.vel_ned_mps.iter().all(|v| v.is_finite()) {
-                            self.horiz.gps_velocity(
-                                [g.vel_ned_mps[0], g.vel_ned_mps[1]],
-                                delay_steps,
-                                self.params.gps_vel_gain,
-                            );
-                        }
-                    }
-                }
-            }
-        }
-        let faults = if self.calibrated {
-            self.health.update(imu_dt_s, &innov)
+        s
+    }
+
+    /// IMU sample: attitude propagated with the bias-corrected gyro and corrected by the
+    /// tilt-filtered accelerometer and the magnetometer (once calibrated), the tilt innovation
+    /// sampled, the NED acceleration fed to the horizontal and vertical filters. Returns the
+    /// IMU interval, s.
+    #[inline]
+    fn fuse_imu(
+        &mut self,
+        imu: &ImuSample,
+        mag_frd_ut: Option<[f32; 3]>,
+        on_ground_disarmed: bool,
+        innov: &mut Innovations,
+    ) -> f32 {
+        let dt_s = self.imu_interval_s(imu.t_us);
+        let gyro = [
+            imu.gyro_frd_radps[0] - self.gyro_bias_frd_radps[0],
+            imu.gyro_frd_radps[1] - self.gyro_bias_frd_radps[1],
+            imu.gyro_frd_radps[2] - self.gyro_bias_frd_radps[2],
+        ];
+        let f_tilt = self.tilt_specific_force_frd_mps2(imu.accel_frd_mps2);
+        self.att.mag_realign_allowed = on_ground_disarmed;
+        let euler = if self.calibrated {
+            self.att.update(gyro, Some(f_tilt), mag_frd_ut, dt_s)
         } else {
-            0
+            self.att.euler()
         };
-        let gps_ok = match self.last_gps_us {
+        self.monitor_tilt(f_tilt, &euler, innov);
+        let a_ned = linear_accel_ned_mps2(&euler, imu.accel_frd_mps2);
+        if self.calibrated {
+            self.horiz.update([a_ned[0], a_ned[1]], dt_s);
+            self.vert.update(a_ned[2], dt_s);
+        }
+        self.state.euler = euler;
+        self.state.rate_frd_radps = gyro;
+        self.state.accel_ned_mps2 = a_ned;
+        dt_s
+    }
+
+    /// Time since the previous IMU sample, s (2 ms for the first or an out-of-order one,
+    /// at most 20 ms).
+    #[inline]
+    fn imu_interval_s(&mut self, imu_t_us: u64) -> f32 {
+        let dt_s = match self.last_imu_us {
+            Some(t) if imu_t_us > t => ((imu_t_us - t) as f32 * 1e-6).min(0.02),
+            _ => 0.002,
+        };
+        self.last_imu_us = Some(imu_t_us);
+        dt_s
+    }
+
+    /// The low-passed specific force with the manoeuvre acceleration (GPS-derived, NED → body)
+    /// removed, before it is read as a gravity direction, body FRD, m/s².
+    #[inline]
+    fn tilt_specific_force_frd_mps2(&mut self, accel_frd_mps2: [f32; 3]) -> [f32; 3] {
+        let f = accel_frd_mps2;
+        let f_lp = [
+            self.tilt_accel_lpf[0].update(f[0]),
+            self.tilt_accel_lpf[1].update(f[1]),
+            self.tilt_accel_lpf[2].update(f[2]),
+        ];
+        let r = rot_body_to_ned(&self.att.euler());
+        let a = if self.state.gps_ok {
+            self.gps_accel_ned_mps2
+        } else {
+            [0.0; 3]
+        };
+        let mut f_tilt = f_lp;
+        for (i, ft) in f_tilt.iter_mut().enumerate() {
+            *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
+        }
+        f_tilt
+    }
+
+    /// The tilt innovation (accelerometer tilt against the estimate) when the specific force
+    /// is close to g. The monitor samples at 50 Hz (its hold time is seconds; asin/atan2 at
+    /// 500 Hz would cost the MCU ~10 % of a step).
+    #[inline]
+    fn monitor_tilt(&mut self, f_tilt: [f32; 3], euler: &Euler, innov: &mut Innovations) {
+        self.tilt_check_tick = (self.tilt_check_tick + 1) % TILT_CHECK_EVERY;
+        let n_f = fcc_nav::math::sqrtf(
+            f_tilt[0] * f_tilt[0] + f_tilt[1] * f_tilt[1] + f_tilt[2] * f_tilt[2],
+        );
+        if self.calibrated
+            && self.tilt_check_tick == 0
+            && fcc_nav::math::fabsf(n_f - fcc_nav::GRAVITY_MPS2) <= self.params.accel_gate_mps2
+        {
+            let (r_a, p_a) = accel_tilt_rad(f_tilt);
+            let d = fcc_nav::math::hypotf(r_a - euler.roll_rad, p_a - euler.pitch_rad);
+            innov.tilt_rad = Some(d);
+        }
+    }
+
+    /// Barometer sample: air temperature for the sonar, barometric altitude, and (once
+    /// calibrated) the range-aided height measurement of the vertical filter.
+    #[inline]
+    fn fuse_baro(&mut self, b: &BaroSample, innov: &mut Innovations) {
+        if b.temperature_c.is_finite() {
+            self.air_temp_c = b.temperature_c;
+        }
+        let alt = pressure_to_alt_m(b.pressure_pa, self.p0_pa);
+        self.state.baro_alt_m = alt;
+        let dt_s = self
+            .last_baro_us
+            .map_or(0.0, |t| b.t_us.saturating_sub(t) as f32 * 1e-6);
+        self.last_baro_us = Some(b.t_us);
+        if self.calibrated {
+            let z = self.range_aid.measurement(
+                dt_s,
+                self.vert.alt_m(),
+                alt,
+                self.aid_height_m(),
+                self.ground.reinit_count(),
+            );
+            self.vert.baro_alt(z);
+            self.set_vert_aided(self.range_aid.aiding());
+            let baro_corr = alt - self.range_aid.baro_offset_m();
+            innov.baro_alt_m = Some(fcc_nav::math::fabsf(baro_corr - self.vert.alt_m()));
+        }
+    }
+
+    /// GPS fix: the first valid one (once calibrated) becomes home; every valid one updates
+    /// the manoeuvre acceleration and, with a home, is gated and fused.
+    #[inline]
+    fn fuse_gps(&mut self, now_us: u64, g: &GpsFix, innov: &mut Innovations) {
+        if !(g.fix_ok && g.lat_deg.is_finite() && g.lon_deg.is_finite()) {
+            return;
+        }
+        let lla = Lla {
+            lat_deg: g.lat_deg,
+            lon_deg: g.lon_deg,
+            alt_m: g.alt_m as f64,
+        };
+        if self.home.is_none() && self.calibrated {
+            self.set_home(lla);
+        }
+        self.update_gps_accel_ned_mps2(now_us, g.vel_ned_mps);
+        let ned_m = match &self.home {
+            Some(home) => home.lla_to_ned(&lla),
+            None => return,
+        };
+        self.fuse_gps_ned(now_us, ned_m, g.vel_ned_mps, innov);
+    }
+
+    /// Make `lla` the NED origin; the horizontal filter restarts there, the height is kept.
+    #[inline]
+    fn set_home(&mut self, lla: Lla) {
+        self.home = Some(LocalNed::new(lla));
+        let p = self.state.pos_ned_m;
+        self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
+        self.state.pos_ned_m = [0.0, 0.0, p[2]];
+    }
+
+    /// Vehicle acceleration from successive GPS velocities: first-order smoothing (~0.5 s) of
+    /// the differenced velocity, for fixes 50 ms to 1 s apart.
+    #[inline]
+    fn update_gps_accel_ned_mps2(&mut self, now_us: u64, vel_ned_mps: [f32; 3]) {
+        if let Some((t0, v0)) = self.last_gps_vel {
+            let dt = now_us.saturating_sub(t0) as f32 * 1e-6;
+            if dt > 0.05 && dt < 1.0 {
+                let k = (dt / 0.5).min(1.0);
+                for i in 0..3 {
+                    let a = (vel_ned_mps[i] - v0[i]) / dt;
+                    self.gps_accel_ned_mps2[i] += k * (a - self.gps_accel_ned_mps2[i]);
+                }
+            }
+        }
+        self.last_gps_vel = Some((now_us, vel_ned_mps));
+    }
+
+    /// A fix relative to home (NED, m): its innovation recorded; fused (position, and the
+    /// velocity when finite) with the receiver latency unless it jumped away from the estimate.
+    #[inline]
+    fn fuse_gps_ned(
+        &mut self,
+        now_us: u64,
+        ned_m: [f64; 3],
+        vel_ned_mps: [f32; 3],
+        innov: &mut Innovations,
+    ) {
+        let delay_steps = (self.params.gps_latency_s / 0.002 + 0.5) as usize;
+        let p = self.horiz.pos_ne_m();
+        let d = fcc_nav::math::hypotf(ned_m[0] as f32 - p[0], ned_m[1] as f32 - p[1]);
+        innov.gps_m = Some(d);
+        self.last_gps_us = Some(now_us);
+        if !NavHealth::gps_acceptable(d) {
+            // A jump (multipath, spoofing): not fused; the monitor times it.
+            self.horiz.clear_gps();
+        } else {
+            self.horiz
+                .gps([ned_m[0] as f32, ned_m[1] as f32], delay_steps);
+            if vel_ned_mps.iter().all(|v| v.is_finite()) {
+                self.horiz.gps_velocity(
+                    [vel_ned_mps[0], vel_ned_mps[1]],
+                    delay_steps,
+                    self.params.gps_vel_gain,
+                );
+            }
+        }
+    }
+
+    /// GPS fused within `gps_timeout_s` and the horizontal filter not faulted.
+    #[inline]
+    fn gps_fresh_and_healthy(&self, now_us: u64, faults: u8) -> bool {
+        (match self.last_gps_us {
             Some(t) => now_us.saturating_sub(t) as f32 * 1e-6 < self.params.gps_timeout_s,
             None => false,
-        } && faults & crate::nav_health::FAULT_HORIZONTAL == 0;
-        if !gps_ok && self.last_gps_us.is_some() {
-            self.horiz.clear_gps();
+        }) && faults & crate::nav_health::FAULT_HORIZONTAL == 0
+    }
+
+    /// Ground altitude (paper B): predict with the vertical velocity, fuse the rangefinders.
+    #[inline]
+    fn update_ground(&mut self, imu_dt_s: f32, s: &SensorInputs) {
+        let e = self.state.euler;
+        self.ground.predict(imu_dt_s, self.vert.vel_down_mps());
+        if let Some(l) = s.laser {
+            self.state.laser_m = Some(l.range_m);
+            self.ground.update_laser(l.range_m, e.roll_rad, e.pitch_rad);
         }
-        // Ground altitude (paper B): predict with the vertical velocity, fuse the rangefinders.
-        if self.calibrated {
-            let e = self.state.euler;
-            self.ground.predict(imu_dt_s, self.vert.vel_down_mps());
-            if let Some(l) = s.laser {
-                self.state.laser_m = Some(l.range_m);
-                self.ground.update_laser(l.range_m, e.roll_rad, e.pitch_rad);
-            }
-            if let Some(r) = s.sonar {
-                self.state.sonar_m = Some(r.range_m);
-                self.ground
-                    .update_sonar(r.range_m, e.roll_rad, e.pitch_rad, self.air_temp_c);
-            }
-            self.state.ground = self.ground.output();
-            self.state.ground_rate_up_mps =
-                -self.vert.vel_down_mps() + self.ground.rate_residual_mps();
+        if let Some(r) = s.sonar {
+            self.state.sonar_m = Some(r.range_m);
+            self.ground
+                .update_sonar(r.range_m, e.roll_rad, e.pitch_rad, self.air_temp_c);
         }
+        self.state.ground = self.ground.output();
+        self.state.ground_rate_up_mps = -self.vert.vel_down_mps() + self.ground.rate_residual_mps();
+    }
+
+    /// Copy the filters' outputs and the flags into the published state.
+    #[inline]
+    fn publish_state(&mut self, now_us: u64, gps_ok: bool, faults: u8) -> &NavState {
         let pn = self.horiz.pos_ne_m();
         let vn = self.horiz.vel_ne_mps();
         self.state.t_us = now_us;

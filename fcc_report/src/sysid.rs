@@ -59,7 +59,9 @@
 //! passes [`judge`]; otherwise the report prints `no suggestion: <reasons>`.
 
 use crate::figures::Series;
-use fcc_nav::sysid::{ar1_inflation, PlaneFit, WindIvFit, WindPlaneFit, WindowMeans};
+use fcc_nav::sysid::{
+    ar1_inflation, PlaneFit, WindFitResult, WindIvFit, WindPlaneFit, WindowMeans,
+};
 use serde::Serialize;
 
 /// Length of a wind window (s). Long enough that each window holds manoeuvres (accelerating
@@ -360,122 +362,32 @@ pub fn ci95(r: &fcc_nav::sysid::WindFitResult, inflation: f32) -> [f64; 8] {
 /// closed loop the tilt answers the gusts left in the residual, and least squares comes out
 /// low (on the main job's windy bag k1 = 7.8 against the calm-air 9.17, where IV gives 9.2).
 pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysId, String> {
-    let mut wf = WindPlaneFit::new();
-    let mut ivf = WindIvFit::new();
     let use_iv = !samples.is_empty()
         && samples
             .iter()
             .all(|x| x.instr_ne.iter().flatten().all(|z| z.is_finite()));
-    let mut plain = PlaneFit::new();
-    let mut windows: Vec<Window> = Vec::new();
-    // Window of each sample (index into `windows`, filled as they close).
-    let mut win_of = Vec::with_capacity(samples.len());
-    let mut start: Option<(f64, f64)> = None; // (t0 of the window, t of the last sample)
-    let f32x2 = |x: [f64; 2]| [x[0] as f32, x[1] as f32];
-    for x in samples {
-        if let Some((t0, last)) = start {
-            if x.t_s - t0 >= window_s || x.t_s - last > MAX_GAP_S {
-                // Always pushed (`win_of` counts on it), even if every sample was non-finite.
-                windows.push(Window {
-                    t0_s: t0,
-                    t1_s: last,
-                    means: wf.end_window().unwrap_or_default(),
-                });
-                ivf.end_window();
-                start = None;
-            }
-        }
-        let t0 = start.map_or(x.t_s, |s| s.0);
-        start = Some((t0, x.t_s));
-        wf.add(
-            f32x2(x.tilt_ne_rad),
-            f32x2(x.vel_ne_mps),
-            f32x2(x.accel_ne_mps2),
-        );
-        if use_iv {
-            ivf.add(
-                [f32x2(x.instr_ne[0]), f32x2(x.instr_ne[1])],
-                f32x2(x.tilt_ne_rad),
-                f32x2(x.vel_ne_mps),
-                f32x2(x.accel_ne_mps2),
-            );
-        }
-        win_of.push(windows.len());
-        // Paper A's plain fit (k1, k2 are rotation-invariant, so N/E is the heading-frame
-        // plane).
-        for j in 0..2 {
-            plain.add(
-                x.tilt_ne_rad[j] as f32,
-                x.vel_ne_mps[j] as f32,
-                x.accel_ne_mps2[j] as f32,
-            );
-        }
-    }
-    let ls = wf.solve();
-    let iv = if use_iv { ivf.solve() } else { None };
-    let (r, estimator) = match (iv, ls) {
-        (Some(r), _) => (
-            r,
-            format!("instrumental variables (velocity setpoints now and {IV_LAG_S} s earlier)"),
-        ),
-        (None, Some(r)) => (
-            r,
-            if use_iv {
-                "least squares (the setpoints are constant within the windows: no instruments)"
-            } else {
-                "least squares (no velocity setpoints in the bag for instruments)"
-            }
-            .to_string(),
-        ),
-        (None, None) => {
-            return Err(format!(
-                "no fit: {} airborne samples, tilt and velocity constant or collinear within the windows",
-                samples.len()
-            ))
-        }
-    };
+    let mut acc = WindowedFits::accumulate(samples, window_s, use_iv);
+    let ls = acc.wind.solve();
+    let iv = if use_iv { acc.iv.solve() } else { None };
+    let (r, estimator) = pick_estimator(iv, ls, use_iv, samples.len())?;
     let is_iv = r.instrument_strength.is_finite();
-    if let Some((t0, last)) = start {
-        windows.push(Window {
-            t0_s: t0,
-            t1_s: last,
-            means: wf.end_window().unwrap_or_default(),
-        });
+    if let Some((t0, last)) = acc.open {
+        acc.push_window(t0, last);
     }
     let (k1, k2) = (r.k1_mps2_per_rad, r.k2_per_s);
-    let rho = residual_lag1(samples, &win_of, &windows, (k1, k2));
+    let rho = residual_lag1(samples, &acc.win_of, &acc.windows, (k1, k2));
     let infl = ar1_inflation(rho as f32);
     let ci = ci95(&r, infl);
-    let least_squares = ls.filter(|_| is_iv).map(|l| {
-        let rho = residual_lag1(samples, &win_of, &windows, (l.k1_mps2_per_rad, l.k2_per_s));
-        let c = ci95(&l, ar1_inflation(rho as f32));
-        [l.k1_mps2_per_rad as f64, c[0], l.k2_per_s as f64, c[1]]
-    });
-    // Wind per window.
-    let (mut wsum, mut n) = ([0.0f64; 2], 0.0f64);
-    let winds: Vec<([f32; 2], f64)> = windows
-        .iter()
-        .map(|w| (w.means.wind_ne_mps(k1, k2), w.means.samples as f64))
-        .filter(|(w, _)| w[0].is_finite() && w[1].is_finite())
-        .collect();
-    for (w, m) in &winds {
-        wsum[0] += w[0] as f64 * m;
-        wsum[1] += w[1] as f64 * m;
-        n += m;
-    }
-    let wmean = [wsum[0] / n, wsum[1] / n];
-    let spread = (winds
-        .iter()
-        .map(|(w, m)| m * ((w[0] as f64 - wmean[0]).powi(2) + (w[1] as f64 - wmean[1]).powi(2)))
-        .sum::<f64>()
-        / n)
-        .sqrt();
+    let least_squares = ls
+        .filter(|_| is_iv)
+        .map(|l| least_squares_row(samples, &acc.win_of, &acc.windows, &l));
+    let (wmean, spread) = wind_mean_and_spread_ne_mps(&acc.windows, k1, k2);
     let mut out = SysId {
         accel_source: accel_source.to_string(),
         estimator,
         samples: samples.len(),
         window_s,
-        windows: windows.len() as u32,
+        windows: acc.windows.len() as u32,
         dof: r.dof,
         k1_mps2_per_rad: k1 as f64,
         k2_per_s: k2 as f64,
@@ -498,7 +410,7 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
         wind_mean_ne_mps: wmean,
         wind_spread_mps: spread,
         least_squares,
-        no_wind_fit: plain.solve().map(|p| {
+        no_wind_fit: acc.plain.solve().map(|p| {
             [
                 p.k1_mps2_per_rad as f64,
                 p.k2_per_s as f64,
@@ -507,13 +419,161 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
         }),
         suggested: None,
         no_suggestion: None,
-        window_list: windows,
+        window_list: acc.windows,
     };
     match judge(&out) {
         Ok(()) => out.suggested = Some([out.k1_mps2_per_rad, out.k2_per_s]),
         Err(why) => out.no_suggestion = Some(why),
     }
     Ok(out)
+}
+
+fn f32x2(x: [f64; 2]) -> [f32; 2] {
+    [x[0] as f32, x[1] as f32]
+}
+
+/// The fits' accumulators over the samples, cut into windows of `window_s` (or at a gap of
+/// more than [`MAX_GAP_S`]).
+struct WindowedFits {
+    /// The model with the wind, least squares.
+    wind: WindPlaneFit,
+    /// The model with the wind, instrumental variables (fed only when every sample has its
+    /// instruments).
+    iv: WindIvFit,
+    /// Paper A's plain fit without the wind.
+    plain: PlaneFit,
+    windows: Vec<Window>,
+    /// Window of each sample (index into `windows`, filled as they close).
+    win_of: Vec<usize>,
+    /// The open window: (t0 of the window, t of its last sample).
+    open: Option<(f64, f64)>,
+}
+
+impl WindowedFits {
+    /// Every sample added; the last window is left open (`open`).
+    fn accumulate(samples: &[Sample], window_s: f64, use_iv: bool) -> Self {
+        let mut acc = WindowedFits {
+            wind: WindPlaneFit::new(),
+            iv: WindIvFit::new(),
+            plain: PlaneFit::new(),
+            windows: Vec::new(),
+            win_of: Vec::with_capacity(samples.len()),
+            open: None,
+        };
+        for x in samples {
+            if let Some((t0, last)) = acc.open {
+                if x.t_s - t0 >= window_s || x.t_s - last > MAX_GAP_S {
+                    acc.push_window(t0, last);
+                    acc.iv.end_window();
+                    acc.open = None;
+                }
+            }
+            let t0 = acc.open.map_or(x.t_s, |s| s.0);
+            acc.open = Some((t0, x.t_s));
+            acc.add(x, use_iv);
+        }
+        acc
+    }
+
+    /// Close the least-squares window [t0_s, t1_s]. Always pushed (`win_of` counts on it),
+    /// even if every sample was non-finite.
+    fn push_window(&mut self, t0_s: f64, t1_s: f64) {
+        self.windows.push(Window {
+            t0_s,
+            t1_s,
+            means: self.wind.end_window().unwrap_or_default(),
+        });
+    }
+
+    fn add(&mut self, x: &Sample, use_iv: bool) {
+        self.wind.add(
+            f32x2(x.tilt_ne_rad),
+            f32x2(x.vel_ne_mps),
+            f32x2(x.accel_ne_mps2),
+        );
+        if use_iv {
+            self.iv.add(
+                [f32x2(x.instr_ne[0]), f32x2(x.instr_ne[1])],
+                f32x2(x.tilt_ne_rad),
+                f32x2(x.vel_ne_mps),
+                f32x2(x.accel_ne_mps2),
+            );
+        }
+        self.win_of.push(self.windows.len());
+        // Paper A's plain fit (k1, k2 are rotation-invariant, so N/E is the heading-frame
+        // plane).
+        for j in 0..2 {
+            self.plain.add(
+                x.tilt_ne_rad[j] as f32,
+                x.vel_ne_mps[j] as f32,
+                x.accel_ne_mps2[j] as f32,
+            );
+        }
+    }
+}
+
+/// The fit to report and the estimator's description: IV when it solved, else least squares
+/// (saying why there were no instruments); an error when neither solved.
+fn pick_estimator(
+    iv: Option<WindFitResult>,
+    ls: Option<WindFitResult>,
+    use_iv: bool,
+    n_samples: usize,
+) -> Result<(WindFitResult, String), String> {
+    match (iv, ls) {
+        (Some(r), _) => Ok((
+            r,
+            format!("instrumental variables (velocity setpoints now and {IV_LAG_S} s earlier)"),
+        )),
+        (None, Some(r)) => Ok((
+            r,
+            if use_iv {
+                "least squares (the setpoints are constant within the windows: no instruments)"
+            } else {
+                "least squares (no velocity setpoints in the bag for instruments)"
+            }
+            .to_string(),
+        )),
+        (None, None) => Err(format!(
+            "no fit: {n_samples} airborne samples, tilt and velocity constant or collinear within the windows"
+        )),
+    }
+}
+
+/// The least-squares fit shown beside an IV one: `[k1, k1 95 %, k2, k2 95 %]`.
+fn least_squares_row(
+    samples: &[Sample],
+    win_of: &[usize],
+    windows: &[Window],
+    l: &WindFitResult,
+) -> [f64; 4] {
+    let rho = residual_lag1(samples, win_of, windows, (l.k1_mps2_per_rad, l.k2_per_s));
+    let c = ci95(l, ar1_inflation(rho as f32));
+    [l.k1_mps2_per_rad as f64, c[0], l.k2_per_s as f64, c[1]]
+}
+
+/// Wind per window from (k1, k2): the sample-weighted mean N, E (m/s) and the weighted RMS
+/// spread about it (m/s); windows with a non-finite wind are left out.
+fn wind_mean_and_spread_ne_mps(windows: &[Window], k1: f32, k2: f32) -> ([f64; 2], f64) {
+    let (mut wsum, mut n) = ([0.0f64; 2], 0.0f64);
+    let winds: Vec<([f32; 2], f64)> = windows
+        .iter()
+        .map(|w| (w.means.wind_ne_mps(k1, k2), w.means.samples as f64))
+        .filter(|(w, _)| w[0].is_finite() && w[1].is_finite())
+        .collect();
+    for (w, m) in &winds {
+        wsum[0] += w[0] as f64 * m;
+        wsum[1] += w[1] as f64 * m;
+        n += m;
+    }
+    let wmean = [wsum[0] / n, wsum[1] / n];
+    let spread = (winds
+        .iter()
+        .map(|(w, m)| m * ((w[0] as f64 - wmean[0]).powi(2) + (w[1] as f64 - wmean[1]).powi(2)))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    (wmean, spread)
 }
 
 /// Whether the fit may be suggested as parameters: every reason it may not, joined by "; ".

@@ -231,11 +231,39 @@ impl Octorotor {
         if dt_s.is_nan() || dt_s <= 0.0 {
             return;
         }
-        let p = &self.params;
-        let m = p.mass_kg;
-        let g = p.gravity_mps2;
+        let (thrust_n, speed_sum) = self.advance_rotors(motor_cmd, dt_s);
+        let omega = self.state.omega_frd_radps;
+        let total_thrust_n: f64 = thrust_n.iter().sum();
+        let torque_frd_nm = self.body_torque_frd_nm(&thrust_n, &omega);
+        let f_air_ned_n = self.air_force_ned_n(total_thrust_n, speed_sum, wind_ned_mps);
+        let gravity = Vector3::new(0.0, 0.0, self.params.gravity_mps2);
+        let mut accel_ned_mps2 = f_air_ned_n / self.params.mass_kg + gravity;
+        let mut omega_dot_frd_radps2 = self.free_angular_accel_frd_radps2(&torque_frd_nm);
+        let contact = self.apply_ground_reaction(
+            &f_air_ned_n,
+            &torque_frd_nm,
+            ground_down_m,
+            dt_s,
+            &mut accel_ned_mps2,
+            &mut omega_dot_frd_radps2,
+        );
+        self.integrate(
+            accel_ned_mps2,
+            omega_dot_frd_radps2,
+            contact,
+            ground_down_m,
+            dt_s,
+        );
+    }
 
-        // --- rotors: first-order lag on speed (exact discretisation), thrust ∝ speed² ---
+    /// Rotors: first-order lag on speed (exact discretisation) towards the clamped command,
+    /// thrust ∝ speed². Returns each rotor's thrust (N) and the sum of the speed fractions.
+    fn advance_rotors(
+        &mut self,
+        motor_cmd: &[f32; MOTOR_COUNT],
+        dt_s: f64,
+    ) -> ([f64; MOTOR_COUNT], f64) {
+        let p = &self.params;
         let alpha = if p.motor_time_constant_s > 0.0 {
             1.0 - (-dt_s / p.motor_time_constant_s).exp()
         } else {
@@ -256,23 +284,40 @@ impl Octorotor {
             thrust[i] = p.max_thrust_per_motor_n * *w * *w;
             speed_sum += *w;
         }
+        (thrust, speed_sum)
+    }
 
-        // --- body-frame forces and torques ---
-        let q = self.state.q_body_to_ned;
-        let omega = self.state.omega_frd_radps;
-        let total_thrust: f64 = thrust.iter().sum();
+    /// Rotor torques (thrust lever arms and reaction torque) less the angular damping,
+    /// body FRD, N·m.
+    fn body_torque_frd_nm(
+        &self,
+        thrust_n: &[f64; MOTOR_COUNT],
+        omega_frd_radps: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        let p = &self.params;
         let mut torque = Vector3::zeros();
         #[allow(clippy::needless_range_loop)]
         for i in 0..MOTOR_COUNT {
             let (x, y) = self.motor_xy_m[i];
-            torque.x += -y * thrust[i];
-            torque.y += x * thrust[i];
-            torque.z += -self.motor_spin[i] * p.torque_to_thrust_m * thrust[i];
+            torque.x += -y * thrust_n[i];
+            torque.y += x * thrust_n[i];
+            torque.z += -self.motor_spin[i] * p.torque_to_thrust_m * thrust_n[i];
         }
-        let inertia = Vector3::from(p.inertia_diag_kgm2);
         let damping = Vector3::from(p.angular_damping_nms);
-        torque -= damping.component_mul(&omega);
+        torque -= damping.component_mul(omega_frd_radps);
+        torque
+    }
 
+    /// Thrust, rotor drag (∝ airspeed and mean rotor speed) and body drag (∝ airspeed²),
+    /// NED, N.
+    fn air_force_ned_n(
+        &self,
+        total_thrust_n: f64,
+        speed_sum: f64,
+        wind_ned_mps: Vector3<f64>,
+    ) -> Vector3<f64> {
+        let p = &self.params;
+        let q = self.state.q_body_to_ned;
         let v_air_b = q.inverse_transform_vector(&(self.state.vel_ned_mps - wind_ned_mps));
         let hover_w = p.hover_rotor_speed_frac().max(1e-6);
         let rotor_drag_scale =
@@ -282,60 +327,114 @@ impl Octorotor {
         let f_body = Vector3::new(
             -rotor_drag_scale * v_air_b.x - half_rho * p.body_cda_horizontal_m2 * v_h * v_air_b.x,
             -rotor_drag_scale * v_air_b.y - half_rho * p.body_cda_horizontal_m2 * v_h * v_air_b.y,
-            -total_thrust - half_rho * p.body_cda_vertical_m2 * v_air_b.z.abs() * v_air_b.z,
+            -total_thrust_n - half_rho * p.body_cda_vertical_m2 * v_air_b.z.abs() * v_air_b.z,
         );
-        let f_air_ned = q.transform_vector(&f_body);
-        let gravity = Vector3::new(0.0, 0.0, g);
+        q.transform_vector(&f_body)
+    }
 
-        // Free angular acceleration: I·ω̇ = τ − ω × (I·ω).
+    /// The gyroscopic term `ω × (I·ω)`, body FRD, N·m.
+    fn gyroscopic_torque_frd_nm(&self) -> Vector3<f64> {
+        let omega = self.state.omega_frd_radps;
+        let inertia = Vector3::from(self.params.inertia_diag_kgm2);
         let i_omega = inertia.component_mul(&omega);
-        let mut omega_dot = (torque - omega.cross(&i_omega)).component_div(&inertia);
+        omega.cross(&i_omega)
+    }
 
-        // --- ground contact ---
-        let vel = self.state.vel_ned_mps;
-        let mut accel = f_air_ned / m + gravity;
+    /// Free angular acceleration: I·ω̇ = τ − ω × (I·ω), body FRD, rad/s².
+    fn free_angular_accel_frd_radps2(&self, torque_frd_nm: &Vector3<f64>) -> Vector3<f64> {
+        let inertia = Vector3::from(self.params.inertia_diag_kgm2);
+        (torque_frd_nm - self.gyroscopic_torque_frd_nm()).component_div(&inertia)
+    }
+
+    /// Ground contact: at the plane, the normal force that brings the vertical velocity to 0
+    /// (no harder than the landing gear's stroke allows, [`GEAR_MAX_DECEL_MPS2`]: a touchdown
+    /// decelerates over tens of milliseconds, as the accelerometer then sees) and the friction
+    /// that stops sliding and yaw spinning. Returns whether the ground pushed; then the
+    /// accelerations include its reaction.
+    fn apply_ground_reaction(
+        &self,
+        f_air_ned_n: &Vector3<f64>,
+        torque_frd_nm: &Vector3<f64>,
+        ground_down_m: f64,
+        dt_s: f64,
+        accel_ned_mps2: &mut Vector3<f64>,
+        omega_dot_frd_radps2: &mut Vector3<f64>,
+    ) -> bool {
         let at_ground = self.state.pos_ned_m.z >= ground_down_m - 1e-9;
-        let mut contact = false;
-        if at_ground {
-            // Normal force (NED z, negative = pushing up) that brings the vertical velocity to 0,
-            // but no harder than the landing gear's stroke allows (GEAR_MAX_DECEL_MPS2): a
-            // touchdown decelerates over tens of milliseconds, as the accelerometer then sees.
-            let a_stop = (-vel.z / dt_s).max(-GEAR_MAX_DECEL_MPS2);
-            let n_z = m * a_stop - f_air_ned.z - m * g;
-            if n_z < 0.0 {
-                contact = true;
-                let n = -n_z;
-                accel.z = a_stop;
-                // Friction: whatever stops the horizontal sliding, limited by μ·N.
-                let want = Vector3::new(
-                    -m * vel.x / dt_s - f_air_ned.x,
-                    -m * vel.y / dt_s - f_air_ned.y,
-                    0.0,
-                );
-                let lim = p.ground_friction_coeff * n;
-                let fr = if want.norm() <= lim {
-                    want
-                } else {
-                    want * (lim / want.norm())
-                };
-                accel.x = (f_air_ned.x + fr.x) / m;
-                accel.y = (f_air_ned.y + fr.y) / m;
-                // Yaw friction torque, limited by μ·N·r.
-                let want_tz = -inertia.z * omega.z / dt_s - (torque.z - (omega.cross(&i_omega)).z);
-                let lim_tz = p.ground_friction_coeff * n * p.ground_yaw_friction_radius_m;
-                let tz = want_tz.clamp(-lim_tz, lim_tz);
-                omega_dot.z += tz / inertia.z;
-            }
+        if !at_ground {
+            return false;
         }
+        let m = self.params.mass_kg;
+        let vel = self.state.vel_ned_mps;
+        // Normal force (NED z, negative = pushing up).
+        let a_stop = (-vel.z / dt_s).max(-GEAR_MAX_DECEL_MPS2);
+        let n_z = m * a_stop - f_air_ned_n.z - m * self.params.gravity_mps2;
+        if n_z < 0.0 {
+            let n = -n_z;
+            accel_ned_mps2.z = a_stop;
+            let fr = self.ground_friction_ned_n(f_air_ned_n, n, dt_s);
+            accel_ned_mps2.x = (f_air_ned_n.x + fr.x) / m;
+            accel_ned_mps2.y = (f_air_ned_n.y + fr.y) / m;
+            omega_dot_frd_radps2.z += self.ground_yaw_torque_nm(torque_frd_nm, n, dt_s)
+                / self.params.inertia_diag_kgm2[2];
+            true
+        } else {
+            false
+        }
+    }
 
-        // --- integrate (semi-implicit Euler) ---
-        let mut new_vel = vel + accel * dt_s;
+    /// Friction: whatever stops the horizontal sliding, limited by μ·N (`normal_n`), NED, N.
+    fn ground_friction_ned_n(
+        &self,
+        f_air_ned_n: &Vector3<f64>,
+        normal_n: f64,
+        dt_s: f64,
+    ) -> Vector3<f64> {
+        let m = self.params.mass_kg;
+        let vel = self.state.vel_ned_mps;
+        let want = Vector3::new(
+            -m * vel.x / dt_s - f_air_ned_n.x,
+            -m * vel.y / dt_s - f_air_ned_n.y,
+            0.0,
+        );
+        let lim = self.params.ground_friction_coeff * normal_n;
+        if want.norm() <= lim {
+            want
+        } else {
+            want * (lim / want.norm())
+        }
+    }
+
+    /// Yaw friction torque that stops the yaw spin, limited by μ·N·r, N·m.
+    fn ground_yaw_torque_nm(&self, torque_frd_nm: &Vector3<f64>, normal_n: f64, dt_s: f64) -> f64 {
+        let p = &self.params;
+        let inertia_z = p.inertia_diag_kgm2[2];
+        let omega_z = self.state.omega_frd_radps.z;
+        let want_tz =
+            -inertia_z * omega_z / dt_s - (torque_frd_nm.z - self.gyroscopic_torque_frd_nm().z);
+        let lim_tz = p.ground_friction_coeff * normal_n * p.ground_yaw_friction_radius_m;
+        want_tz.clamp(-lim_tz, lim_tz)
+    }
+
+    /// Integrate (semi-implicit Euler), with the gear's hard stop and, in contact, the
+    /// attitude returning to level; stores the new state and the step's acceleration.
+    fn integrate(
+        &mut self,
+        accel_ned_mps2: Vector3<f64>,
+        omega_dot_frd_radps2: Vector3<f64>,
+        mut contact: bool,
+        ground_down_m: f64,
+        dt_s: f64,
+    ) {
+        let q = self.state.q_body_to_ned;
+        let vel = self.state.vel_ned_mps;
+        let mut new_vel = vel + accel_ned_mps2 * dt_s;
         let mut new_pos = self.state.pos_ned_m + new_vel * dt_s;
-        let mut new_omega = omega + omega_dot * dt_s;
+        let mut new_omega = self.state.omega_frd_radps + omega_dot_frd_radps2 * dt_s;
         if contact {
             // No tipping: roll/pitch rates chosen to return to level.
             let (roll, pitch, _) = q.euler_angles();
-            let tc = p.ground_level_time_constant_s.max(dt_s);
+            let tc = self.params.ground_level_time_constant_s.max(dt_s);
             new_omega.x = -roll / tc;
             new_omega.y = -pitch / tc;
         }
@@ -354,20 +453,25 @@ impl Octorotor {
         let mut new_q = q * rot;
         new_q.renormalize();
         if contact && new_pos.z >= ground_down_m {
-            // Remove any residual roll/pitch below numerical noise so the resting attitude is
-            // exactly level.
-            let (r, pt, y) = new_q.euler_angles();
-            if r.abs() < 1e-12 && pt.abs() < 1e-12 {
-                new_q = UnitQuaternion::from_euler_angles(0.0, 0.0, y);
-            }
+            new_q = Self::level_if_nearly_level(new_q);
         }
-
         self.last_accel_ned_mps2 = (new_vel - vel) / dt_s;
         self.state.vel_ned_mps = new_vel;
         self.state.pos_ned_m = new_pos;
         self.state.omega_frd_radps = new_omega;
         self.state.q_body_to_ned = new_q;
         self.in_contact = contact;
+    }
+
+    /// Remove any residual roll/pitch below numerical noise so that the resting attitude is
+    /// exactly level.
+    fn level_if_nearly_level(q: UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+        let (r, pt, y) = q.euler_angles();
+        if r.abs() < 1e-12 && pt.abs() < 1e-12 {
+            UnitQuaternion::from_euler_angles(0.0, 0.0, y)
+        } else {
+            q
+        }
     }
 
     /// True kinematic acceleration over the last step, NED, m/s².
