@@ -203,7 +203,6 @@ pub fn fly_logged(f: &Flight) -> (Outcome, FlightLog) {
 
 /// Score a flown flight against the checks of its family (module doc).
 fn score(f: &Flight, log: &FlightLog, still_armed: bool) -> Outcome {
-    let limits = f.scenario.params.limits;
     let mut o = Outcome {
         family: f.family,
         seed: f.seed,
@@ -211,41 +210,62 @@ fn score(f: &Flight, log: &FlightLog, still_armed: bool) -> Outcome {
         figures: BTreeMap::new(),
         failures: Vec::new(),
     };
-    let fig = |o: &mut Outcome, name: &'static str, v: f64, limit: Option<f64>| {
-        o.figures.insert(name, v);
-        if let Some(l) = limit {
-            if !(v <= l) {
-                o.failures.push((name, format!("{name} {v:.3} > {l}")));
-            }
-        }
-    };
     if f.family == "rig" {
-        let g = metrics::ground_comparison(&log);
-        let ours = g.last().map(|x| x.1).unwrap_or_default();
-        fig(&mut o, "ground_rms_m", ours.rms_m, Some(0.03));
-        fig(&mut o, "ground_max_m", ours.max_m, Some(0.10));
+        score_rig(&mut o, log);
         return o;
     }
-    let t: TruthReport = truth::report(&log);
-    fig(&mut o, "crashes", t.crashed as u8 as f64, Some(0.0));
-    fig(
-        &mut o,
+    let t: TruthReport = truth::report(log);
+    score_safety(&mut o, log, &t, still_armed);
+    match f.family {
+        "hover" | "hover_gale" => score_hover(&mut o, log, &t, f.family == "hover_gale"),
+        "mission" | "landing" | "mag" => score_mission(&mut o, log, &t, f.family == "mag"),
+        "velocity" => score_velocity(&mut o, log, f),
+        _ => {}
+    }
+    o
+}
+
+/// Record figure `name` = `v`, and a failure when a `limit` is given and `v` is not within it
+/// (NaN fails).
+fn figure(o: &mut Outcome, name: &'static str, v: f64, limit: Option<f64>) {
+    o.figures.insert(name, v);
+    if let Some(l) = limit {
+        if !(v <= l) {
+            o.failures.push((name, format!("{name} {v:.3} > {l}")));
+        }
+    }
+}
+
+/// The ground rig: the fused height above ground against truth.
+fn score_rig(o: &mut Outcome, log: &FlightLog) {
+    let g = metrics::ground_comparison(log);
+    let ours = g.last().map(|x| x.1).unwrap_or_default();
+    figure(o, "ground_rms_m", ours.rms_m, Some(0.03));
+    figure(o, "ground_max_m", ours.max_m, Some(0.10));
+}
+
+/// The checks of every flying family: no crash, unplanned contact or flyaway, attitude loops
+/// on while airborne, a gentle touchdown, disarmed at the end, no estimator fault.
+fn score_safety(o: &mut Outcome, log: &FlightLog, t: &TruthReport, still_armed: bool) {
+    figure(o, "crashes", t.crashed as u8 as f64, Some(0.0));
+    figure(
+        o,
         "unplanned_contacts",
         t.unplanned_contacts as f64,
         Some(0.0),
     );
-    fig(&mut o, "flyaways", t.flyaway as u8 as f64, Some(0.0));
-    fig(
-        &mut o,
+    figure(o, "flyaways", t.flyaway as u8 as f64, Some(0.0));
+    figure(
+        o,
         "attitude_off_airborne_s",
         t.attitude_off_airborne_s,
         Some(0.0),
     );
     match t.worst_touchdown() {
         Some(w) => {
-            fig(&mut o, "touchdown_down_mps", w[0], Some(0.5));
-            fig(&mut o, "touchdown_horiz_mps", w[1], Some(0.3));
-            fig(&mut o, "touchdown_tilt_deg", w[2], Some(5.0));
+            figure(o, "touchdown_down_mps", w[0], Some(0.5));
+            figure(o, "touchdown_horiz_mps", w[1], Some(0.3));
+            figure(o, "touchdown_tilt_deg", w[2], Some(5.0));
         }
         None => o.failures.push(("landed", "never landed".into())),
     }
@@ -256,96 +276,100 @@ fn score(f: &Flight, log: &FlightLog, still_armed: bool) -> Outcome {
     let failsafe = |c: fcc_firmware::commands::FailsafeCause| {
         log.samples.iter().any(|s| s.failsafe == c) as u8 as f64
     };
-    fig(
-        &mut o,
+    figure(
+        o,
         "wind_limit_landings",
         failsafe(fcc_firmware::commands::FailsafeCause::WindLimit),
         None,
     );
-    fig(
-        &mut o,
+    figure(
+        o,
         "estimator_faults",
         failsafe(fcc_firmware::commands::FailsafeCause::EstimatorFault),
         Some(0.0),
     );
-    fig(&mut o, "max_tilt_deg", t.max_tilt_deg, None);
-    fig(&mut o, "max_speed_mps", t.max_speed_mps, None);
-    match f.family {
-        "hover" | "hover_gale" => {
-            let Some(h) = metrics::hover_box(&log) else {
-                o.failures.push(("hold", "never reached the hold".into()));
-                return o;
-            };
-            let gale = f.family == "hover_gale";
-            fig(
-                &mut o,
-                "hold_alt_err_m",
-                t.hold_alt_err_m.unwrap_or(f64::NAN),
-                (!gale).then_some(0.3),
-            );
-            fig(
-                &mut o,
-                "hold_excursion_m",
-                t.hold_excursion_m.unwrap_or(f64::NAN),
-                gale.then_some(2.0),
-            );
-            let (bn, be, ba) = if gale {
-                (None, None, None)
-            } else {
-                (Some(0.35), Some(0.55), Some(0.15))
-            };
-            fig(&mut o, "est_box_n_m", h.est_max_m[0], bn);
-            fig(&mut o, "est_box_e_m", h.est_max_m[1], be);
-            fig(&mut o, "est_box_alt_m", h.est_max_m[2], ba);
-            fig(&mut o, "true_box_n_m", h.true_max_m[0], None);
-            fig(&mut o, "true_box_e_m", h.true_max_m[1], None);
-        }
-        "mission" | "landing" | "mag" => {
-            let legs = metrics::leg_tracks(&log);
-            let s = metrics::track_summary(&legs);
-            if legs.is_empty() {
-                o.failures.push(("legs", "no leg flown".into()));
-            } else {
-                fig(&mut o, "xtrack_est_rms_m", s.est_rms_m, Some(0.3));
-                fig(&mut o, "xtrack_est_max_m", s.est_max_m, Some(0.8));
-                fig(
-                    &mut o,
-                    "line_true_max_m",
-                    t.leg_line_max_m.unwrap_or(f64::NAN),
-                    None,
-                );
-                fig(
-                    &mut o,
-                    "leg_alt_err_m",
-                    t.leg_alt_err_m.unwrap_or(f64::NAN),
-                    None,
-                );
-            }
-            if f.family == "mag" {
-                let a = metrics::attitude_error(&log, true);
-                fig(&mut o, "yaw_rms_deg", a.rms_deg[2], Some(3.0));
-                fig(&mut o, "yaw_max_deg", a.max_deg[2], Some(8.0));
-            }
-        }
-        "velocity" => {
-            let c = velocity_truth(&log);
-            fig(&mut o, "cruise_alt_err_m", c[0], Some(0.5));
-            fig(
-                &mut o,
-                "cruise_speed_over_limit",
-                c[1] / limits.max_horiz_speed_mps as f64,
-                Some(1.05),
-            );
-            fig(
-                &mut o,
-                "cruise_tilt_over_limit_deg",
-                c[2] - limits.max_tilt_deg as f64,
-                Some(2.0),
-            );
-        }
-        _ => {}
+    figure(o, "max_tilt_deg", t.max_tilt_deg, None);
+    figure(o, "max_speed_mps", t.max_speed_mps, None);
+}
+
+/// Hover: the hold's true altitude error and excursion, and the estimate's box (the gale's
+/// box and altitude error are measured, not checked).
+fn score_hover(o: &mut Outcome, log: &FlightLog, t: &TruthReport, gale: bool) {
+    let Some(h) = metrics::hover_box(log) else {
+        o.failures.push(("hold", "never reached the hold".into()));
+        return;
+    };
+    figure(
+        o,
+        "hold_alt_err_m",
+        t.hold_alt_err_m.unwrap_or(f64::NAN),
+        (!gale).then_some(0.3),
+    );
+    figure(
+        o,
+        "hold_excursion_m",
+        t.hold_excursion_m.unwrap_or(f64::NAN),
+        gale.then_some(2.0),
+    );
+    let (bn, be, ba) = if gale {
+        (None, None, None)
+    } else {
+        (Some(0.35), Some(0.55), Some(0.15))
+    };
+    figure(o, "est_box_n_m", h.est_max_m[0], bn);
+    figure(o, "est_box_e_m", h.est_max_m[1], be);
+    figure(o, "est_box_alt_m", h.est_max_m[2], ba);
+    figure(o, "true_box_n_m", h.true_max_m[0], None);
+    figure(o, "true_box_e_m", h.true_max_m[1], None);
+}
+
+/// Missions (and the landing and magnetometer families): cross-track of the estimate, the true
+/// line and altitude on the legs; with `mag`, the yaw error.
+fn score_mission(o: &mut Outcome, log: &FlightLog, t: &TruthReport, mag: bool) {
+    let legs = metrics::leg_tracks(log);
+    let s = metrics::track_summary(&legs);
+    if legs.is_empty() {
+        o.failures.push(("legs", "no leg flown".into()));
+    } else {
+        figure(o, "xtrack_est_rms_m", s.est_rms_m, Some(0.3));
+        figure(o, "xtrack_est_max_m", s.est_max_m, Some(0.8));
+        figure(
+            o,
+            "line_true_max_m",
+            t.leg_line_max_m.unwrap_or(f64::NAN),
+            None,
+        );
+        figure(
+            o,
+            "leg_alt_err_m",
+            t.leg_alt_err_m.unwrap_or(f64::NAN),
+            None,
+        );
     }
-    o
+    if mag {
+        let a = metrics::attitude_error(log, true);
+        figure(o, "yaw_rms_deg", a.rms_deg[2], Some(3.0));
+        figure(o, "yaw_max_deg", a.max_deg[2], Some(8.0));
+    }
+}
+
+/// Velocity cruise: true altitude error, speed and tilt against the MCU's limits.
+fn score_velocity(o: &mut Outcome, log: &FlightLog, f: &Flight) {
+    let limits = f.scenario.params.limits;
+    let c = velocity_truth(log);
+    figure(o, "cruise_alt_err_m", c[0], Some(0.5));
+    figure(
+        o,
+        "cruise_speed_over_limit",
+        c[1] / limits.max_horiz_speed_mps as f64,
+        Some(1.05),
+    );
+    figure(
+        o,
+        "cruise_tilt_over_limit_deg",
+        c[2] - limits.max_tilt_deg as f64,
+        Some(2.0),
+    );
 }
 
 /// Velocity cruise, truth: max |alt − commanded|, max horizontal speed, max tilt (deg).

@@ -7,7 +7,7 @@ use super::log::PlanPhase;
 use super::scenario::{FlightPlan, Scenario};
 use fcc_firmware::commands::{Command, Mode, VelocitySetpoint};
 use fcc_firmware::flight::FlightCore;
-use fcc_mission::{Mission, Phase, Request, WaypointFollower};
+use fcc_mission::{Guidance, Mission, Phase, Request, WaypointFollower};
 
 /// Setpoint time-to-live sent with every velocity setpoint (ms): several 20 Hz periods.
 pub const SETPOINT_TTL_MS: u16 = 300;
@@ -145,13 +145,9 @@ impl LinuxSide {
             self.event(t_s, format!("disarmed ({:?})", core.failsafe()));
             return;
         }
-        let nav = *core.nav();
-        let sp = |v: [f32; 3], yaw: Option<f32>| VelocitySetpoint {
-            vel_ned_mps: v,
-            yaw_rad: yaw,
-            ttl_ms: SETPOINT_TTL_MS,
-        };
-        match &mut self.plan {
+        // The plan is taken out while it runs so that its step may use the rest of `self`.
+        let mut plan = std::mem::replace(&mut self.plan, Plan::Carried);
+        match &mut plan {
             Plan::Carried => {}
             Plan::Hover {
                 alt_m,
@@ -159,42 +155,14 @@ impl LinuxSide {
                 hold_start_s,
                 settle_s,
                 landing,
-            } => {
-                let (alt_m, hold_s) = (*alt_m, *hold_s);
-                if *landing {
-                    return;
-                }
-                if let Some(start) = *hold_start_s {
-                    if t_s - start >= hold_s as f64 {
-                        *landing = true;
-                        let _ = core.command(t_us, Command::Land);
-                        self.phase = PlanPhase::Landing;
-                        self.events.push((t_s, "hold done, landing".into()));
-                    }
-                    return;
-                }
-                if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
-                    return;
-                }
-                let alt = -nav.pos_ned_m[2];
-                let err = alt_m - alt;
-                let vz_up = (0.8 * err).clamp(-1.0, 1.5);
-                let r = core.setpoint(t_us, sp([0.0, 0.0, -vz_up], None));
-                count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
-                self.phase = PlanPhase::Climbing;
-                if err.abs() < 0.3 && nav.vel_ned_mps[2].abs() < 0.3 {
-                    *settle_s += 0.05;
-                } else {
-                    *settle_s = 0.0;
-                }
-                if *settle_s >= 2.0 && core.command(t_us, Command::Hold).is_ok() {
-                    *hold_start_s = Some(t_s);
-                    let hold = [nav.pos_ned_m[0], nav.pos_ned_m[1], nav.pos_ned_m[2]];
-                    self.phase = PlanPhase::Holding { hold_ned_m: hold };
-                    self.events
-                        .push((t_s, format!("holding at {:.2?} for {hold_s} s", hold)));
-                }
-            }
+            } => self.update_hover(
+                t_us,
+                core,
+                (*alt_m, *hold_s),
+                hold_start_s,
+                settle_s,
+                landing,
+            ),
             Plan::Velocity {
                 alt_m,
                 speed_mps,
@@ -202,96 +170,187 @@ impl LinuxSide {
                 cruise_s,
                 cruise_start_s,
                 landing,
-            } => {
-                if *landing {
-                    return;
-                }
-                if let Some(start) = *cruise_start_s {
-                    if t_s - start >= *cruise_s as f64 {
-                        *landing = true;
-                        let _ = core.command(t_us, Command::Land);
-                        self.phase = PlanPhase::Landing;
-                        self.events.push((t_s, "cruise done, landing".into()));
-                        return;
-                    }
-                    // Tangent to the circle through the start point (counter-clockwise seen
-                    // from above), zero climb: the MCU holds the height.
-                    let w = *speed_mps / *radius_m;
-                    let a = w * (t_s - start) as f32;
-                    let (s_a, c_a) = (a.sin(), a.cos());
-                    let v = [-*speed_mps * s_a, *speed_mps * c_a, 0.0];
-                    let r = core.setpoint(t_us, sp(v, None));
-                    count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
-                    return;
-                }
-                if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
-                    return;
-                }
-                let err = *alt_m + nav.pos_ned_m[2];
-                let vz_up = (0.8 * err).clamp(-1.0, 1.5);
-                let r = core.setpoint(t_us, sp([0.0, 0.0, -vz_up], None));
-                count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
-                self.phase = PlanPhase::Climbing;
-                if err.abs() < 0.1 && nav.vel_ned_mps[2].abs() < 0.2 {
-                    *cruise_start_s = Some(t_s);
-                    self.phase = PlanPhase::Cruise {
-                        speed_mps: *speed_mps,
-                    };
-                    self.events
-                        .push((t_s, format!("cruise at {speed_mps} m/s for {cruise_s} s")));
-                }
-            }
+            } => self.update_velocity(
+                t_us,
+                core,
+                (*alt_m, *speed_mps, *radius_m, *cruise_s),
+                cruise_start_s,
+                landing,
+            ),
             Plan::Mission {
                 follower,
                 land_sent,
-            } => {
-                if core.mode() == Mode::Disarmed
-                    && !self.armed_once
-                    && core.navigator().ready().is_err()
-                {
-                    return; // wait for calibration and a GPS home before starting the mission
-                }
-                let g = follower.update(t_s, nav.pos_ned_m, nav.vel_ned_mps);
-                match g.request {
-                    Some(Request::Arm) => {
-                        if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
-                            return;
-                        }
-                    }
-                    Some(Request::Land) if !*land_sent => {
-                        *land_sent = true;
-                        let _ = core.command(t_us, Command::Land);
-                        self.phase = PlanPhase::Landing;
-                        self.events.push((t_s, "mission done, landing".into()));
-                        return;
-                    }
-                    _ => {}
-                }
-                if *land_sent {
+            } => self.update_mission(t_us, core, follower, land_sent),
+        }
+        self.plan = plan;
+    }
+
+    /// A velocity setpoint with the link's time-to-live.
+    fn setpoint(vel_ned_mps: [f32; 3], yaw_rad: Option<f32>) -> VelocitySetpoint {
+        VelocitySetpoint {
+            vel_ned_mps,
+            yaw_rad,
+            ttl_ms: SETPOINT_TTL_MS,
+        }
+    }
+
+    /// Send a setpoint, counting a refusal.
+    fn send_setpoint(&mut self, t_us: u64, core: &mut FlightCore, sp: VelocitySetpoint) {
+        let r = core.setpoint(t_us, sp);
+        count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
+    }
+
+    /// Hover plan: arm, climb to `alt_m` (`(alt_m, hold_s)`), settle 2 s, HOLD for `hold_s`,
+    /// then LAND.
+    fn update_hover(
+        &mut self,
+        t_us: u64,
+        core: &mut FlightCore,
+        (alt_m, hold_s): (f32, f32),
+        hold_start_s: &mut Option<f64>,
+        settle_s: &mut f64,
+        landing: &mut bool,
+    ) {
+        let t_s = t_us as f64 * 1e-6;
+        if *landing {
+            return;
+        }
+        if let Some(start) = *hold_start_s {
+            if t_s - start >= hold_s as f64 {
+                *landing = true;
+                let _ = core.command(t_us, Command::Land);
+                self.phase = PlanPhase::Landing;
+                self.events.push((t_s, "hold done, landing".into()));
+            }
+            return;
+        }
+        if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
+            return;
+        }
+        let nav = *core.nav();
+        let alt = -nav.pos_ned_m[2];
+        let err = alt_m - alt;
+        let vz_up = (0.8 * err).clamp(-1.0, 1.5);
+        self.send_setpoint(t_us, core, Self::setpoint([0.0, 0.0, -vz_up], None));
+        self.phase = PlanPhase::Climbing;
+        if err.abs() < 0.3 && nav.vel_ned_mps[2].abs() < 0.3 {
+            *settle_s += 0.05;
+        } else {
+            *settle_s = 0.0;
+        }
+        if *settle_s >= 2.0 && core.command(t_us, Command::Hold).is_ok() {
+            *hold_start_s = Some(t_s);
+            let hold = [nav.pos_ned_m[0], nav.pos_ned_m[1], nav.pos_ned_m[2]];
+            self.phase = PlanPhase::Holding { hold_ned_m: hold };
+            self.events
+                .push((t_s, format!("holding at {:.2?} for {hold_s} s", hold)));
+        }
+    }
+
+    /// Velocity plan: arm, climb to `alt_m`, cruise on a circle of `radius_m` at `speed_mps`
+    /// for `cruise_s` (`(alt_m, speed_mps, radius_m, cruise_s)`), then LAND.
+    fn update_velocity(
+        &mut self,
+        t_us: u64,
+        core: &mut FlightCore,
+        (alt_m, speed_mps, radius_m, cruise_s): (f32, f32, f32, f32),
+        cruise_start_s: &mut Option<f64>,
+        landing: &mut bool,
+    ) {
+        let t_s = t_us as f64 * 1e-6;
+        if *landing {
+            return;
+        }
+        if let Some(start) = *cruise_start_s {
+            if t_s - start >= cruise_s as f64 {
+                *landing = true;
+                let _ = core.command(t_us, Command::Land);
+                self.phase = PlanPhase::Landing;
+                self.events.push((t_s, "cruise done, landing".into()));
+                return;
+            }
+            // Tangent to the circle through the start point (counter-clockwise seen
+            // from above), zero climb: the MCU holds the height.
+            let w = speed_mps / radius_m;
+            let a = w * (t_s - start) as f32;
+            let (s_a, c_a) = (a.sin(), a.cos());
+            let v = [-speed_mps * s_a, speed_mps * c_a, 0.0];
+            self.send_setpoint(t_us, core, Self::setpoint(v, None));
+            return;
+        }
+        if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
+            return;
+        }
+        let nav = *core.nav();
+        let err = alt_m + nav.pos_ned_m[2];
+        let vz_up = (0.8 * err).clamp(-1.0, 1.5);
+        self.send_setpoint(t_us, core, Self::setpoint([0.0, 0.0, -vz_up], None));
+        self.phase = PlanPhase::Climbing;
+        if err.abs() < 0.1 && nav.vel_ned_mps[2].abs() < 0.2 {
+            *cruise_start_s = Some(t_s);
+            self.phase = PlanPhase::Cruise { speed_mps };
+            self.events
+                .push((t_s, format!("cruise at {speed_mps} m/s for {cruise_s} s")));
+        }
+    }
+
+    /// Mission plan: once the MCU is ready, follow `fcc_mission`'s guidance (arm, legs,
+    /// holds), LAND when it asks to, and report its phase.
+    fn update_mission(
+        &mut self,
+        t_us: u64,
+        core: &mut FlightCore,
+        follower: &mut WaypointFollower,
+        land_sent: &mut bool,
+    ) {
+        let t_s = t_us as f64 * 1e-6;
+        if core.mode() == Mode::Disarmed && !self.armed_once && core.navigator().ready().is_err() {
+            return; // wait for calibration and a GPS home before starting the mission
+        }
+        let nav = *core.nav();
+        let g = follower.update(t_s, nav.pos_ned_m, nav.vel_ned_mps);
+        match g.request {
+            Some(Request::Arm) => {
+                if !Self::try_arm(&mut self.armed_once, &mut self.events, t_us, core) {
                     return;
                 }
-                let phase = match (g.phase, g.leg) {
-                    (Phase::Leg(i), Some(leg)) => PlanPhase::Leg {
-                        index: i,
-                        from_ned_m: leg.from_ned_m,
-                        to_ned_m: leg.to_ned_m,
-                    },
-                    (Phase::Hold(i), _) => PlanPhase::HoldAtWaypoint(i),
-                    (Phase::Takeoff, _) => PlanPhase::Climbing,
-                    (Phase::Landing, _) => PlanPhase::Landing,
-                    (Phase::Done, _) => PlanPhase::Done,
-                    _ => PlanPhase::Waiting,
-                };
-                if phase != self.phase {
-                    let what = format!("{phase:?}");
-                    self.phase = phase;
-                    self.events.push((t_s, what));
-                }
-                if core.armed() {
-                    let r = core.setpoint(t_us, sp(g.vel_ned_mps, g.yaw_rad));
-                    count(&mut self.setpoint_rejects, &mut self.pilot_rejects, r);
-                }
             }
+            Some(Request::Land) if !*land_sent => {
+                *land_sent = true;
+                let _ = core.command(t_us, Command::Land);
+                self.phase = PlanPhase::Landing;
+                self.events.push((t_s, "mission done, landing".into()));
+                return;
+            }
+            _ => {}
+        }
+        if *land_sent {
+            return;
+        }
+        let phase = Self::mission_plan_phase(&g);
+        if phase != self.phase {
+            let what = format!("{phase:?}");
+            self.phase = phase;
+            self.events.push((t_s, what));
+        }
+        if core.armed() {
+            self.send_setpoint(t_us, core, Self::setpoint(g.vel_ned_mps, g.yaw_rad));
+        }
+    }
+
+    /// The logged plan phase of the mission follower's guidance.
+    fn mission_plan_phase(g: &Guidance) -> PlanPhase {
+        match (g.phase, g.leg) {
+            (Phase::Leg(i), Some(leg)) => PlanPhase::Leg {
+                index: i,
+                from_ned_m: leg.from_ned_m,
+                to_ned_m: leg.to_ned_m,
+            },
+            (Phase::Hold(i), _) => PlanPhase::HoldAtWaypoint(i),
+            (Phase::Takeoff, _) => PlanPhase::Climbing,
+            (Phase::Landing, _) => PlanPhase::Landing,
+            (Phase::Done, _) => PlanPhase::Done,
+            _ => PlanPhase::Waiting,
         }
     }
 }
