@@ -16,6 +16,9 @@
 //!    [`SCHEMA_HASH`] (FNV-1a of [`SCHEMA`]) and yields a readable [`HandshakeError`];
 //!    time sync by [`TimeSyncPing`]/[`TimeSyncPong`]; telemetry rates in [`StreamRates`].
 //!
+//! Vocabulary tables both ends read: [`params`] (the MCU parameters settable over the link: id,
+//! name, unit, default, range, doc — one table, [`for_each_mcu_param!`]).
+//!
 //! ## Frame layout
 //! ```text
 //! wire:  COBS( raw ) | 0x00
@@ -53,6 +56,7 @@
 pub mod frame;
 pub mod handshake;
 pub mod messages;
+pub mod params;
 pub mod rates;
 
 #[cfg(test)]
@@ -66,6 +70,7 @@ pub use frame::{
 };
 pub use handshake::{check_peer, HandshakeError};
 pub use messages::*;
+pub use params::{param_default, param_id, ParamSpec};
 pub use rates::{max_frame_len, period_us, StreamRates, BAUD_921600_BYTES_PER_S};
 
 /// Version of the frame layout and message set. Bump it for any incompatible change

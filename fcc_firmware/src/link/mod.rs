@@ -19,6 +19,7 @@
 
 use crate::commands::{self, CommandError, Mode, VelocitySetpoint as CoreSetpoint};
 use crate::flight::FlightCore;
+use crate::params::ParamFault;
 use crate::sensors::{
     BaroSample, BatterySample, GpsFix, ImuSample, MagSample, RangeSample, SensorInputs,
 };
@@ -321,7 +322,7 @@ impl LinkEndpoint {
                 } else {
                     match core.set_param(ps.id, ps.value) {
                         Ok(()) => ParamResult::Accepted,
-                        Err(e) if e.reason == "not finite" => ParamResult::NotFinite,
+                        Err(e) if e.reason == ParamFault::NotFinite => ParamResult::NotFinite,
                         Err(_) => ParamResult::OutOfRange,
                     }
                 };
