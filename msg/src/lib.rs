@@ -17,7 +17,8 @@
 //!    time sync by [`TimeSyncPing`]/[`TimeSyncPong`]; telemetry rates in [`StreamRates`].
 //!
 //! Vocabulary tables both ends read: [`params`] (the MCU parameters settable over the link: id,
-//! name, unit, default, range, doc — one table, [`for_each_mcu_param!`]).
+//! name, unit, default, range, doc — one table, [`for_each_mcu_param!`]); [`vocab`] (flight modes,
+//! failsafe causes, altitude sources: ROS constant values and names, checked against `msg/*.msg`).
 //!
 //! ## Frame layout
 //! ```text
@@ -58,6 +59,7 @@ pub mod handshake;
 pub mod messages;
 pub mod params;
 pub mod rates;
+pub mod vocab;
 
 #[cfg(test)]
 mod fuzz;

@@ -41,7 +41,8 @@ pub enum AltitudeSource {
     Predicted,
 }
 
-/// Flight mode of the MCU core (mirror of `fcc_firmware::commands::Mode`).
+/// Flight mode of the MCU core (`fcc_firmware::commands::Mode` is this type; ROS codes and
+/// names in [`crate::vocab`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub enum FlightMode {
     #[default]
@@ -53,7 +54,8 @@ pub enum FlightMode {
     Pilot,
 }
 
-/// Why the core left the operator's mode (mirror of `fcc_firmware::commands::FailsafeCause`).
+/// Why the core left the operator's mode (`fcc_firmware::commands::FailsafeCause` is this type;
+/// ROS codes and names in [`crate::vocab`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub enum FailsafeCause {
     #[default]

@@ -17,7 +17,7 @@
 //!   tick. Raw sensor streams send the newest sample (never the same one twice) with the
 //!   sample's own time in the header.
 
-use crate::commands::{self, CommandError, Mode, VelocitySetpoint as CoreSetpoint};
+use crate::commands::{self, CommandError, VelocitySetpoint as CoreSetpoint};
 use crate::flight::FlightCore;
 use crate::params::ParamFault;
 use crate::sensors::{
@@ -25,9 +25,9 @@ use crate::sensors::{
 };
 use fcc_msgs::{
     period_us, AltitudeFusion, AltitudeSource, BaroRaw, Battery, CommandAck, CommandKind,
-    CommandResult, EncodeError, Encoder, FailsafeCause, FlightMode, FrameDecoder, GpsRaw,
-    HandshakeError, Hello, ImuRaw, LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult,
-    RangeRaw, RangeSensor, SensorHealth, Status, StreamRates, TimeSyncPong,
+    CommandResult, EncodeError, Encoder, FrameDecoder, GpsRaw, HandshakeError, Hello, ImuRaw,
+    LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult, RangeRaw, RangeSensor,
+    SensorHealth, Status, StreamRates, TimeSyncPong,
 };
 use fcc_nav::ground_altitude::GroundSource;
 
@@ -595,13 +595,7 @@ impl LinkEndpoint {
 
 /// The core's part of `Status`.
 fn core_status(core: &FlightCore, mut s: Status) -> Status {
-    s.mode = match core.mode() {
-        Mode::Disarmed => FlightMode::Disarmed,
-        Mode::Hold => FlightMode::Hold,
-        Mode::Velocity => FlightMode::Velocity,
-        Mode::Land => FlightMode::Land,
-        Mode::Pilot => FlightMode::Pilot,
-    };
+    s.mode = core.mode();
     s.armed = core.armed();
     s.landed = core.landed();
     let n = core.nav();
@@ -615,16 +609,7 @@ fn core_status(core: &FlightCore, mut s: Status) -> Status {
         mag_disturbed_ds: (n.mag_disturbed_s * 10.0).min(u16::MAX as f32) as u16,
         nav_faults: n.nav_faults,
     };
-    s.failsafe = match core.failsafe() {
-        commands::FailsafeCause::None => FailsafeCause::None,
-        commands::FailsafeCause::SetpointStale => FailsafeCause::SetpointStale,
-        commands::FailsafeCause::SetpointLost => FailsafeCause::SetpointLost,
-        commands::FailsafeCause::Geofence => FailsafeCause::Geofence,
-        commands::FailsafeCause::GpsLost => FailsafeCause::GpsLost,
-        commands::FailsafeCause::WindLimit => FailsafeCause::WindLimit,
-        commands::FailsafeCause::EstimatorFault => FailsafeCause::EstimatorFault,
-        commands::FailsafeCause::EmergencyKill => FailsafeCause::EmergencyKill,
-    };
+    s.failsafe = core.failsafe();
     s
 }
 

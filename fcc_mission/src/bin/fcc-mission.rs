@@ -275,12 +275,7 @@ struct PilotPause {
 
 /// The MCU's mode and whether a failsafe is active, from `status`.
 fn mcu_mode(st: &Status) -> (McuMode, bool) {
-    let mode = match st.mode {
-        Status::MODE_HOLD => McuMode::Hold,
-        Status::MODE_VELOCITY => McuMode::Velocity,
-        Status::MODE_LAND => McuMode::Land,
-        _ => McuMode::Disarmed,
-    };
+    let mode = McuMode::from_code(st.mode).unwrap_or(McuMode::Disarmed);
     (mode, st.failsafe != Status::FAILSAFE_NONE)
 }
 
