@@ -73,7 +73,7 @@ pub use frame::{
 pub use handshake::{check_peer, HandshakeError};
 pub use messages::*;
 pub use params::{param_default, param_id, ParamSpec};
-pub use rates::{max_frame_len, period_us, StreamRates, BAUD_921600_BYTES_PER_S};
+pub use rates::{max_frame_len, period_us, Stream, StreamRates, BAUD_921600_BYTES_PER_S};
 
 /// Version of the frame layout and message set. Bump it for any incompatible change
 /// (the schema hash catches changes that were not bumped).

@@ -27,7 +27,7 @@ use fcc_msgs::{
     period_us, AltitudeFusion, AltitudeSource, BaroRaw, Battery, CommandAck, CommandKind,
     CommandResult, EncodeError, Encoder, FrameDecoder, GpsRaw, HandshakeError, Hello, ImuRaw,
     LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult, RangeRaw, RangeSensor,
-    SensorHealth, Status, StreamRates, TimeSyncPong,
+    SensorHealth, Status, Stream, StreamRates, TimeSyncPong,
 };
 use fcc_nav::ground_altitude::GroundSource;
 
@@ -58,13 +58,24 @@ const fn parse_u8(s: &str) -> u8 {
 
 /// Pending command acknowledgements kept when the transmit buffer is full.
 const ACK_QUEUE: usize = 4;
-/// Number of telemetry streams (see [`StreamRates::streams`]).
-const STREAMS: usize = 10;
-/// First-due offset of each stream after start (µs), in [`StreamRates::streams`] order, so the
-/// streams' frames spread over different 2 ms ticks.
-const PHASE_US: [u64; STREAMS] = [
-    0, 2_000, 4_000, 0, 7_000, 9_000, 11_000, 13_000, 15_000, 17_000,
-];
+/// Number of telemetry streams ([`Stream::ALL`]).
+const STREAMS: usize = Stream::COUNT;
+/// First-due offset of a stream after start (µs), so the streams' frames spread over different
+/// 2 ms ticks.
+const fn phase_us(s: Stream) -> u64 {
+    match s {
+        Stream::Status => 0,
+        Stream::NavState => 2_000,
+        Stream::Altitude => 4_000,
+        Stream::ImuRaw => 0,
+        Stream::MagRaw => 7_000,
+        Stream::BaroRaw => 9_000,
+        Stream::GpsRaw => 11_000,
+        Stream::LaserRaw => 13_000,
+        Stream::SonarRaw => 15_000,
+        Stream::Battery => 17_000,
+    }
+}
 
 /// What the peer said in its last `HelloRequest`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -414,20 +425,20 @@ impl LinkEndpoint {
             self.param_acks[ACK_QUEUE - 1] = None;
         }
 
-        let streams = self.rates.streams();
-        for (i, (&(_, hz), &phase_us)) in streams.iter().zip(PHASE_US.iter()).enumerate() {
-            let Some(period) = period_us(hz) else {
+        for stream in Stream::ALL {
+            let i = stream.index();
+            let Some(period) = period_us(self.rates.hz(stream)) else {
                 continue;
             };
             // `get`, not indexing: no panic path in the MCU image (STREAMS entries each).
             let Some(slot) = self.next_due_us.get_mut(i) else {
                 continue;
             };
-            let due = *slot.get_or_insert(now_us + phase_us % period);
+            let due = *slot.get_or_insert(now_us + phase_us(stream) % period);
             if now_us < due {
                 continue;
             }
-            let Some((msg, t_us)) = self.stream_message(i, now_us, core) else {
+            let Some((msg, t_us)) = self.stream_message(stream, now_us, core) else {
                 // Raw stream without a new sample: send as soon as one arrives.
                 continue;
             };
@@ -460,19 +471,19 @@ impl LinkEndpoint {
         Ok(())
     }
 
-    /// The message of stream `i` (in [`StreamRates::streams`] order) and its header time.
+    /// The message of a stream and its header time.
     fn stream_message(
         &mut self,
-        i: usize,
+        stream: Stream,
         now_us: u64,
         core: &FlightCore,
     ) -> Option<(Message, u64)> {
         let nav = core.nav();
         let l = &mut self.latest;
-        Some(match i {
-            0 => (Message::Status(core_status(core, self.status())), now_us),
-            1 => (Message::NavState(nav_state(core)), nav.t_us),
-            2 => {
+        Some(match stream {
+            Stream::Status => (Message::Status(core_status(core, self.status())), now_us),
+            Stream::NavState => (Message::NavState(nav_state(core)), nav.t_us),
+            Stream::Altitude => {
                 let range = |s: &Latest<RangeSample>| s.sample.map_or(f32::NAN, |r| r.range_m);
                 let m = AltitudeFusion {
                     baro_alt_m: nav.baro_alt_m,
@@ -492,7 +503,7 @@ impl LinkEndpoint {
                 };
                 (Message::AltitudeFusion(m), nav.t_us)
             }
-            3 => {
+            Stream::ImuRaw => {
                 let s = l.imu.take_fresh()?;
                 (
                     Message::ImuRaw(ImuRaw {
@@ -502,7 +513,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            4 => {
+            Stream::MagRaw => {
                 let s = l.mag.take_fresh()?;
                 (
                     Message::MagRaw(MagRaw {
@@ -511,7 +522,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            5 => {
+            Stream::BaroRaw => {
                 let s = l.baro.take_fresh()?;
                 (
                     Message::BaroRaw(BaroRaw {
@@ -521,7 +532,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            6 => {
+            Stream::GpsRaw => {
                 let g = l.gps.take_fresh()?;
                 let m = GpsRaw {
                     lat_deg: g.lat_deg,
@@ -534,7 +545,7 @@ impl LinkEndpoint {
                 };
                 (Message::GpsRaw(m), g.t_us)
             }
-            7 => {
+            Stream::LaserRaw => {
                 let s = l.laser.take_fresh()?;
                 (
                     Message::RangeRaw(RangeRaw {
@@ -544,7 +555,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            8 => {
+            Stream::SonarRaw => {
                 let s = l.sonar.take_fresh()?;
                 (
                     Message::RangeRaw(RangeRaw {
@@ -554,7 +565,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            9 => {
+            Stream::Battery => {
                 let s = l.battery.take_fresh()?;
                 (
                     Message::Battery(Battery {
@@ -564,7 +575,6 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            _ => return None,
         })
     }
 
