@@ -8,7 +8,7 @@ use crate::ros_types::*;
 use fcc_msgs as link;
 
 /// Laser sentinel for "no return" (passed through by the MCU).
-pub const LASER_NO_RETURN_M: f32 = 99_999.0;
+pub use fcc_nav::ground_altitude::LASER_NO_RETURN_M;
 
 /// Frame ids and sensor figures used in the published messages.
 #[derive(Clone, Debug)]

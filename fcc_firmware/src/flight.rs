@@ -16,6 +16,7 @@ use crate::nav::{NavNotReady, NavState, Navigator};
 use crate::params::{ParamError, ParamFault, Params};
 use crate::pilot::{PilotInput, PilotReceiver};
 use crate::sensors::SensorInputs;
+use fcc_nav::complementary::wrap_pi;
 use fcc_nav::ground_altitude::GroundSource;
 use fcc_nav::observer::AccelObserver;
 use fcc_nav::GRAVITY_MPS2;
@@ -993,10 +994,6 @@ fn clamp_norm(v: [f32; 2], max: f32) -> [f32; 2] {
     } else {
         v
     }
-}
-
-fn wrap_pi(a: f32) -> f32 {
-    fcc_nav::complementary::wrap_pi(a)
 }
 
 fn sign_or_zero(x: f32) -> f32 {

@@ -269,14 +269,7 @@ impl SensorBoard for ReplayBoard {
 }
 
 /// Latches the last motor command (what the ESC outputs would get).
-#[derive(Default)]
-pub struct MotorLatch(pub [f32; MOTOR_COUNT]);
-
-impl MotorOutputs for MotorLatch {
-    fn write(&mut self, _now_us: u64, cmd: &[f32; MOTOR_COUNT]) {
-        self.0 = *cmd;
-    }
-}
+pub use fcc_firmware::sensors::MotorLatch;
 
 /// Replays a whole recording on a fresh core, calling `each(tick_index, motors)` after every
 /// step. Returns the number of ticks stepped.

@@ -17,7 +17,7 @@ use crate::commands::Mode;
 use crate::flight::FlightCore;
 use crate::geometry::MOTOR_COUNT;
 use crate::scheduler::{self, TICK_US};
-use crate::sensors::{MotorOutputs, SensorBoard, SensorInputs};
+use crate::sensors::{SensorBoard, SensorInputs};
 use nalgebra::{UnitQuaternion, Vector3};
 
 const PHYSICS_SUBSTEPS: u32 = 4;
@@ -95,13 +95,7 @@ impl SensorBoard for SimBoard {
     }
 }
 
-struct MotorLatch([f32; MOTOR_COUNT]);
-
-impl MotorOutputs for MotorLatch {
-    fn write(&mut self, _now_us: u64, cmd: &[f32; MOTOR_COUNT]) {
-        self.0 = *cmd;
-    }
-}
+use crate::sensors::MotorLatch;
 
 /// Kinematic truth for scenarios where the vehicle is carried (elevator).
 struct Carried {
