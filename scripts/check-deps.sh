@@ -2,13 +2,13 @@
 # The house's dependency rules (issue 15), checked on the tree as it is:
 #   1. Crate graph (from `cargo metadata`): no package but fcc_bridge itself depends on the
 #      bridge application (fcc_bridge); fcc_mission's workspace dependencies are fcc_msgs and the
-#      ROS library fcc_ros only; fcc_ros depends on fcc_msgs only; fcc_msgs on no workspace crate.
+#      ROS library fcc_ros only (plus fcc_nav, the no_std math floor under every crate: angle
+#      wrapping); fcc_ros depends on fcc_msgs (and fcc_nav) only; fcc_msgs on no workspace crate.
 #   2. The MCU crate's default build (`cargo build -p fcc_firmware`) pulls in no simulator
-#      dependency. While fcc_firmware's default features still include the simulator (`sitl`,
-#      being moved into a crate of its own), a violation is reported as PENDING, not a failure.
+#      dependency.
 #   3. No import circles between the modules of fcc_bridge and of fcc_ros: each source file is a
 #      module; `crate::a::b` and `super::x` paths in code (comments left out) are its edges.
-# Prints one PASS/FAIL/PENDING line per rule; exits 1 on any FAIL.
+# Prints one PASS/FAIL line per rule; exits 1 on any FAIL.
 #   usage: scripts/check-deps.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -41,7 +41,7 @@ def ws_deps(name):
 users = [n for n in pkgs if n != "fcc_bridge" and "fcc_bridge" in ws_deps(n)]
 report(not users, "no crate but fcc_bridge's own targets depends on fcc_bridge",
        f"{users} do" if users else "")
-for name, allowed in [("fcc_mission", {"fcc_msgs", "fcc_ros"}), ("fcc_ros", {"fcc_msgs"}),
+for name, allowed in [("fcc_mission", {"fcc_msgs", "fcc_ros", "fcc_nav"}), ("fcc_ros", {"fcc_msgs", "fcc_nav"}),
                       ("fcc_msgs", set())]:
     if name not in pkgs:
         report(False, f"{name} exists")
@@ -52,17 +52,11 @@ for name, allowed in [("fcc_mission", {"fcc_msgs", "fcc_ros"}), ("fcc_ros", {"fc
            f"also on {extra}" if extra else "")
 
 # 2. fcc_firmware's default build has no simulator dependency.
-sim = {"fcc_mission", "serde_yaml", "serde_path_to_error", "rand", "rand_chacha", "rand_distr",
-       "clap", "nix", "signal-hook"}
+sim = {"fcc_sim", "fcc_mission", "serde_yaml", "serde_norway", "serde_path_to_error", "rand",
+       "rand_chacha", "rand_distr", "clap", "nix", "signal-hook"}
 found = sorted({t for t in tree if t in sim})
-default = pkgs["fcc_firmware"]["features"].get("default", [])
-if not found:
-    report(True, "cargo build -p fcc_firmware pulls in no simulator dependency")
-elif "sitl" in default:
-    print(f"PENDING cargo build -p fcc_firmware pulls in the simulator's {found} "
-          "(default feature sitl; the simulator is moving to a crate of its own)")
-else:
-    report(False, "cargo build -p fcc_firmware pulls in no simulator dependency", f"it pulls {found}")
+report(not found, "cargo build -p fcc_firmware pulls in no simulator dependency",
+       f"it pulls {found}" if found else "")
 
 # 3. Module import circles.
 def modules(src):

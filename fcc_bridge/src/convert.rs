@@ -8,7 +8,7 @@ use fcc_msgs::ros::*;
 use fcc_ros::frames::{self, f64x3, frd_to_flu, ned_to_enu};
 
 /// Laser sentinel for "no return" (passed through by the MCU).
-pub const LASER_NO_RETURN_M: f32 = 99_999.0;
+pub use fcc_nav::ground_altitude::LASER_NO_RETURN_M;
 
 /// Frame ids and sensor figures used in the published messages.
 #[derive(Clone, Debug)]
@@ -327,13 +327,7 @@ pub fn static_transforms(stamp: Time, cfg: &Config) -> TFMessage {
 }
 
 pub fn altitude_source(s: link::AltitudeSource) -> u8 {
-    match s {
-        link::AltitudeSource::None => Altitude::SOURCE_NONE,
-        link::AltitudeSource::Laser => Altitude::SOURCE_LASER,
-        link::AltitudeSource::Sonar => Altitude::SOURCE_SONAR,
-        link::AltitudeSource::Both => Altitude::SOURCE_BOTH,
-        link::AltitudeSource::Predicted => Altitude::SOURCE_PREDICTED,
-    }
+    s.code() // `Altitude.SOURCE_*`: fcc_msgs::vocab, tested against the .msg file
 }
 
 /// Altitude fusion → (`fcc_msgs/Altitude`, `altitude/ground` Range).
@@ -375,28 +369,11 @@ pub fn altitude(m: &link::AltitudeFusion, stamp: Time, cfg: &Config) -> (Altitud
 }
 
 pub fn mode_code(m: link::FlightMode) -> (u8, &'static str) {
-    match m {
-        link::FlightMode::Disarmed => (Status::MODE_DISARMED, "disarmed"),
-        link::FlightMode::Hold => (Status::MODE_HOLD, "hold"),
-        link::FlightMode::Velocity => (Status::MODE_VELOCITY, "velocity"),
-        link::FlightMode::Land => (Status::MODE_LAND, "land"),
-        link::FlightMode::Pilot => (Status::MODE_PILOT, "pilot"),
-    }
+    (m.code(), m.name()) // `Status.MODE_*`: fcc_msgs::vocab
 }
 
 pub fn failsafe_code(f: link::FailsafeCause) -> (u8, &'static str) {
-    match f {
-        link::FailsafeCause::None => (Status::FAILSAFE_NONE, "none"),
-        link::FailsafeCause::SetpointStale => (Status::FAILSAFE_SETPOINT_STALE, "setpoint_stale"),
-        link::FailsafeCause::SetpointLost => (Status::FAILSAFE_SETPOINT_LOST, "setpoint_lost"),
-        link::FailsafeCause::Geofence => (Status::FAILSAFE_GEOFENCE, "geofence"),
-        link::FailsafeCause::GpsLost => (Status::FAILSAFE_GPS_LOST, "gps_lost"),
-        link::FailsafeCause::WindLimit => (Status::FAILSAFE_WIND_LIMIT, "wind_limit"),
-        link::FailsafeCause::EstimatorFault => {
-            (Status::FAILSAFE_ESTIMATOR_FAULT, "estimator_fault")
-        }
-        link::FailsafeCause::EmergencyKill => (Status::FAILSAFE_EMERGENCY_KILL, "emergency_kill"),
-    }
+    (f.code(), f.name()) // `Status.FAILSAFE_*`: fcc_msgs::vocab
 }
 
 pub fn reject_name(r: link::CommandResult) -> &'static str {

@@ -276,7 +276,7 @@ pub fn validate(shared: &ParamShared, name: &str, v: &ParameterValue) -> Result<
         return check_bridge_param(name, v, live);
     };
     let x = as_f64(v).ok_or_else(|| format!("{name}: expected a number"))?;
-    p.check(x)?;
+    p.check(x).map_err(|e| e.to_string())?;
     if !live {
         return Ok(());
     }

@@ -65,33 +65,10 @@ impl core::fmt::Display for CommandError {
     }
 }
 
-/// Flight mode of the core.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Mode {
-    Disarmed,
-    Hold,
-    Velocity,
-    Land,
-    /// The R/C pilot flies (override switch on): sticks → velocity, limits enforced.
-    Pilot,
-}
-
-/// Why the core left the mode the operator asked for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum FailsafeCause {
-    None,
-    /// Velocity setpoint older than its time-to-live → hold.
-    SetpointStale,
-    /// No fresh setpoint for `setpoint_lost_land_s` → land.
-    SetpointLost,
-    /// Outside the geofence → hold at the fence.
-    Geofence,
-    /// GPS lost in flight → altitude hold, then land.
-    GpsLost,
-    /// Wind beyond the vehicle's authority (tilt at its limit, blown off) → land where it is.
-    WindLimit,
-    /// A navigation filter diverged ([`crate::nav_health`]) → hold, then land.
-    EstimatorFault,
-    /// Motors stopped by the emergency kill command.
-    EmergencyKill,
-}
+/// Flight mode of the core and why it left the operator's mode: the link's vocabulary
+/// (`fcc_msgs::vocab`, one definition with the ROS codes and names), not a mirror.
+/// Failsafes: `SetpointStale` (setpoint older than its time-to-live → hold), `SetpointLost` (no
+/// fresh setpoint for `setpoint_lost_land_s` → land), `Geofence` (→ hold at the fence),
+/// `GpsLost` (→ altitude hold, then land), `WindLimit` (tilt at its limit, blown off → land
+/// where it is), `EstimatorFault` ([`crate::nav_health`] → hold, then land), `EmergencyKill`.
+pub use fcc_msgs::{FailsafeCause, FlightMode as Mode};

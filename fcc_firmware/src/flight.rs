@@ -14,10 +14,11 @@ use crate::control::vertical::VerticalController;
 use crate::geometry::MOTOR_COUNT;
 use crate::land_detector::{LandDetector, LandInputs, LandState};
 use crate::nav::{NavNotReady, NavState, Navigator};
-use crate::params::{ParamError, Params};
+use crate::params::{ParamError, ParamFault, Params};
 use crate::pilot::{PilotInput, PilotReceiver};
 use crate::sensors::SensorInputs;
 use crate::touchdown_gate::{GateAction, TouchdownGate, GATE_CLEARANCE_M};
+use fcc_nav::complementary::wrap_pi;
 use fcc_nav::ground_altitude::GroundSource;
 use fcc_nav::observer::AccelObserver;
 use fcc_nav::GRAVITY_MPS2;
@@ -234,47 +235,18 @@ impl FlightCore {
         &self.params
     }
 
-    /// Change one tunable parameter (ids: `fcc_msgs::param_id`) in flight: checked on a copy
-    /// with [`Params::validate`] (plus a range for gains it does not cover), then applied, and
-    /// the controllers that depend on it rebuilt (their integrators restart).
+    /// Change one tunable parameter (ids: `fcc_msgs::param_id`, the one table in
+    /// `fcc_msgs::params`) in flight: set on a copy, checked with [`Params::validate`] (the
+    /// table's range and the cross-checks), then applied, and the controllers that depend on it
+    /// rebuilt (their integrators restart).
     pub fn set_param(&mut self, id: u16, value: f32) -> Result<(), ParamError> {
         use fcc_msgs::param_id as pid;
-        let range = |field: &'static str, lo: f32, hi: f32| -> Result<(), ParamError> {
-            if !value.is_finite() {
-                Err(ParamError {
-                    field,
-                    reason: "not finite",
-                })
-            } else if value < lo || value > hi {
-                Err(ParamError {
-                    field,
-                    reason: "out of range",
-                })
-            } else {
-                Ok(())
-            }
-        };
         let mut p = self.params;
-        match id {
-            pid::MAX_HORIZ_SPEED_MPS => p.limits.max_horiz_speed_mps = value,
-            pid::MAX_TILT_DEG => p.limits.max_tilt_deg = value,
-            pid::CROSS_TRACK_K_PER_S => {
-                range("control.cross_track_k_per_s", 0.0, 5.0)?;
-                p.control.cross_track_k_per_s = value;
-            }
-            pid::VEL_P_PER_S => {
-                range("control.vel_p_per_s", 0.05, 10.0)?;
-                p.control.vel_p_per_s = value;
-            }
-            pid::MAX_CLIMB_MPS => p.limits.max_climb_mps = value,
-            pid::MAX_DESCENT_MPS => p.limits.max_descent_mps = value,
-            _ => {
-                return Err(ParamError {
-                    field: "id",
-                    reason: "unknown parameter",
-                })
-            }
-        }
+        let field = p.link_param_mut(id).ok_or(ParamError {
+            field: "id",
+            reason: ParamFault::UnknownId,
+        })?;
+        *field = value;
         p.validate()?;
         self.params = p;
         let c = p.control;
@@ -306,17 +278,7 @@ impl FlightCore {
 
     /// Current value of a tunable parameter (ids: `fcc_msgs::param_id`).
     pub fn param(&self, id: u16) -> Option<f32> {
-        use fcc_msgs::param_id as pid;
-        let p = &self.params;
-        Some(match id {
-            pid::MAX_HORIZ_SPEED_MPS => p.limits.max_horiz_speed_mps,
-            pid::MAX_TILT_DEG => p.limits.max_tilt_deg,
-            pid::CROSS_TRACK_K_PER_S => p.control.cross_track_k_per_s,
-            pid::VEL_P_PER_S => p.control.vel_p_per_s,
-            pid::MAX_CLIMB_MPS => p.limits.max_climb_mps,
-            pid::MAX_DESCENT_MPS => p.limits.max_descent_mps,
-            _ => return None,
-        })
+        self.params.link_param(id)
     }
     pub fn mode(&self) -> Mode {
         self.mode
@@ -1106,10 +1068,6 @@ fn clamp_norm(v: [f32; 2], max: f32) -> [f32; 2] {
     } else {
         v
     }
-}
-
-fn wrap_pi(a: f32) -> f32 {
-    fcc_nav::complementary::wrap_pi(a)
 }
 
 fn sign_or_zero(x: f32) -> f32 {

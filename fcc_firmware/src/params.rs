@@ -4,6 +4,7 @@
 //! Units are in the field names. Defaults were tuned in the SITL against noisy sensor models
 //! (see `fcc_sim::sensor_models`), not against perfect sensors.
 
+use fcc_msgs::param_default;
 use fcc_nav::complementary::CfGains;
 use fcc_nav::observer::AccelObserverParams;
 
@@ -181,8 +182,8 @@ impl Default for ControlParams {
     fn default() -> Self {
         Self {
             pos_p_per_s: 2.0,
-            cross_track_k_per_s: 2.0,
-            vel_p_per_s: 3.0,
+            cross_track_k_per_s: param_default::CROSS_TRACK_K_PER_S,
+            vel_p_per_s: param_default::VEL_P_PER_S,
             vel_i_per_s2: 1.0,
             vel_i_limit_mps2: 1.5,
             accel_cmd_limit_mps2: 4.0,
@@ -254,11 +255,11 @@ pub struct LimitParams {
 impl Default for LimitParams {
     fn default() -> Self {
         Self {
-            max_horiz_speed_mps: 8.0,
+            max_horiz_speed_mps: param_default::MAX_HORIZ_SPEED_MPS,
             hold_max_speed_mps: 1.5,
-            max_climb_mps: 2.5,
-            max_descent_mps: 1.5,
-            max_tilt_deg: 35.0,
+            max_climb_mps: param_default::MAX_CLIMB_MPS,
+            max_descent_mps: param_default::MAX_DESCENT_MPS,
+            max_tilt_deg: param_default::MAX_TILT_DEG,
             fence_radius_m: 200.0,
             fence_alt_m: 100.0,
             setpoint_lost_land_s: 3.0,
@@ -281,11 +282,39 @@ pub struct Params {
     pub limits: LimitParams,
 }
 
-/// Why a parameter set was refused.
+/// Why a parameter set was refused: the field and a typed reason.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ParamError {
     pub field: &'static str,
-    pub reason: &'static str,
+    pub reason: ParamFault,
+}
+
+/// The reason of a [`ParamError`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamFault {
+    NotFinite,
+    OutOfRange,
+    /// No link-settable parameter with this id (`fcc_msgs::param_id`).
+    UnknownId,
+}
+
+impl core::fmt::Display for ParamFault {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            ParamFault::NotFinite => "not finite",
+            ParamFault::OutOfRange => "out of range",
+            ParamFault::UnknownId => "unknown parameter",
+        })
+    }
+}
+
+impl From<fcc_msgs::params::ParamRangeError> for ParamFault {
+    fn from(e: fcc_msgs::params::ParamRangeError) -> Self {
+        match e {
+            fcc_msgs::params::ParamRangeError::NotFinite => ParamFault::NotFinite,
+            fcc_msgs::params::ParamRangeError::OutOfRange => ParamFault::OutOfRange,
+        }
+    }
 }
 
 impl core::fmt::Display for ParamError {
@@ -294,23 +323,51 @@ impl core::fmt::Display for ParamError {
     }
 }
 
+/// The `Params` field of each link-settable parameter, generated from the one table
+/// (`fcc_msgs::for_each_mcu_param!`): a compile-time `match`, no search, no heap.
+macro_rules! impl_link_fields {
+    ($($id:literal, $konst:ident, $sec:ident . $field:ident, $unit:literal, $def:literal,
+       $min:literal, $max:literal, $doc:literal;)*) => {
+        impl Params {
+            /// Value of a link-settable parameter (`fcc_msgs::param_id`).
+            pub fn link_param(&self, id: u16) -> Option<f32> {
+                match id {
+                    $(fcc_msgs::param_id::$konst => Some(self.$sec.$field),)*
+                    _ => None,
+                }
+            }
+            /// The field of a link-settable parameter (`fcc_msgs::param_id`).
+            pub fn link_param_mut(&mut self, id: u16) -> Option<&mut f32> {
+                match id {
+                    $(fcc_msgs::param_id::$konst => Some(&mut self.$sec.$field),)*
+                    _ => None,
+                }
+            }
+        }
+    };
+}
+fcc_msgs::for_each_mcu_param!(impl_link_fields);
+
 impl Params {
     /// Range checks, so a bad parameter file or a bad set over the link is refused with a reason.
     pub fn validate(&self) -> Result<(), ParamError> {
         fn check(field: &'static str, v: f32, lo: f32, hi: f32) -> Result<(), ParamError> {
-            if !v.is_finite() {
-                return Err(ParamError {
-                    field,
-                    reason: "not finite",
-                });
-            }
-            if v < lo || v > hi {
-                return Err(ParamError {
-                    field,
-                    reason: "out of range",
-                });
-            }
-            Ok(())
+            let reason = if !v.is_finite() {
+                ParamFault::NotFinite
+            } else if v < lo || v > hi {
+                ParamFault::OutOfRange
+            } else {
+                return Ok(());
+            };
+            Err(ParamError { field, reason })
+        }
+        // The link-settable parameters: ranges from the one table.
+        for spec in fcc_msgs::params::PARAMS {
+            let v = self.link_param(spec.id).unwrap_or(f32::NAN);
+            spec.check_f32(v).map_err(|e| ParamError {
+                field: spec.name,
+                reason: e.into(),
+            })?;
         }
         let a = &self.airframe;
         check("airframe.mass_kg", a.mass_kg, 0.2, 50.0)?;
@@ -364,20 +421,11 @@ impl Params {
         }
         let l = &self.limits;
         check(
-            "limits.max_horiz_speed_mps",
-            l.max_horiz_speed_mps,
-            0.1,
-            30.0,
-        )?;
-        check(
             "limits.hold_max_speed_mps",
             l.hold_max_speed_mps,
             0.1,
             l.max_horiz_speed_mps,
         )?;
-        check("limits.max_climb_mps", l.max_climb_mps, 0.1, 10.0)?;
-        check("limits.max_descent_mps", l.max_descent_mps, 0.1, 10.0)?;
-        check("limits.max_tilt_deg", l.max_tilt_deg, 5.0, 60.0)?;
         check("limits.fence_radius_m", l.fence_radius_m, 5.0, 10_000.0)?;
         check("limits.fence_alt_m", l.fence_alt_m, 2.0, 1_000.0)?;
         check(
@@ -411,5 +459,35 @@ impl Params {
         )?;
         check("control.model_k2_per_s", c.model_k2_per_s, 0.0, 5.0)?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every row of the one table (`fcc_msgs::params`) is a `Params` field with the table's
+    /// default, and `validate` applies the table's range to it.
+    #[test]
+    fn link_parameters_follow_the_table() {
+        let d = Params::default();
+        assert_eq!(d.validate(), Ok(()));
+        for spec in fcc_msgs::params::PARAMS {
+            assert_eq!(d.link_param(spec.id), Some(spec.default), "{}", spec.name);
+            let mut p = d;
+            *p.link_param_mut(spec.id).unwrap() = spec.max;
+            assert_eq!(p.validate(), Ok(()), "{}", spec.name);
+            for (v, reason) in [
+                (spec.max + 1.0, ParamFault::OutOfRange),
+                (spec.min - 1.0, ParamFault::OutOfRange),
+                (f32::NAN, ParamFault::NotFinite),
+            ] {
+                *p.link_param_mut(spec.id).unwrap() = v;
+                let e = p.validate().unwrap_err();
+                assert_eq!((e.field, e.reason), (spec.name, reason));
+            }
+        }
+        assert_eq!(d.link_param(0), None);
+        assert!(Params::default().link_param_mut(999).is_none());
     }
 }

@@ -53,7 +53,7 @@ pub struct RangeSample {
 }
 
 /// What the ILM-150-R laser altimeter outputs when it receives no return (paper B).
-pub const LASER_NO_RETURN_M: f32 = 99_999.0;
+pub use fcc_nav::ground_altitude::LASER_NO_RETURN_M;
 
 /// Battery monitor sample (ADC on the board).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -89,4 +89,15 @@ pub trait SensorBoard {
 /// ESC outputs: one normalised command per motor, 0 = stopped, 1 = full throttle.
 pub trait MotorOutputs {
     fn write(&mut self, now_us: u64, cmd: &[f32; crate::geometry::MOTOR_COUNT]);
+}
+
+/// Motor outputs that keep the last command (what the ESCs would get): the simulator's, the
+/// QEMU replay's and the recorder's.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MotorLatch(pub [f32; crate::geometry::MOTOR_COUNT]);
+
+impl MotorOutputs for MotorLatch {
+    fn write(&mut self, _now_us: u64, cmd: &[f32; crate::geometry::MOTOR_COUNT]) {
+        self.0 = *cmd;
+    }
 }

@@ -32,27 +32,9 @@ pub fn parse_hover_s(v: &str) -> Result<f64, String> {
     }
 }
 
-/// The MCU's flight mode as reported on `status`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum McuMode {
-    Disarmed,
-    Hold,
-    Velocity,
-    Land,
-}
-
-impl McuMode {
-    /// From `fcc_msgs/Status.mode_name` (`disarmed`, `hold`, `velocity`, `land`).
-    pub fn from_name(name: &str) -> Option<McuMode> {
-        match name {
-            "disarmed" => Some(McuMode::Disarmed),
-            "hold" => Some(McuMode::Hold),
-            "velocity" => Some(McuMode::Velocity),
-            "land" => Some(McuMode::Land),
-            _ => None,
-        }
-    }
-}
+/// The MCU's flight mode as reported on `status`: the link's vocabulary (`fcc_msgs::vocab`:
+/// `McuMode::from_code(Status.mode)`, `McuMode::from_name(Status.mode_name)`), not a mirror.
+pub use fcc_msgs::FlightMode as McuMode;
 
 /// A mode command for the MCU (`cmd/mode`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -132,16 +132,7 @@ fn finite3(a: [f32; 3]) -> bool {
     a.iter().all(|v| v.is_finite())
 }
 
-fn wrap_pi(a: f32) -> f32 {
-    let two_pi = 2.0 * core::f32::consts::PI;
-    let mut w = a % two_pi;
-    if w > core::f32::consts::PI {
-        w -= two_pi;
-    } else if w <= -core::f32::consts::PI {
-        w += two_pi;
-    }
-    w
-}
+use fcc_nav::complementary::wrap_pi;
 
 /// Runs a [`Mission`]: call [`update`](Self::update) at ≥ 20 Hz.
 ///

@@ -435,7 +435,7 @@ mod tests {
 
         fn mode_name(&self) -> &'static str {
             match (self.pilot, self.mode) {
-                (true, _) => "pilot",
+                (true, _) | (_, McuMode::Pilot) => "pilot",
                 (_, McuMode::Disarmed) => "disarmed",
                 (_, McuMode::Hold) => "hold",
                 (_, McuMode::Velocity) => "velocity",

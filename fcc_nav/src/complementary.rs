@@ -151,6 +151,19 @@ pub fn wrap_pi(a_rad: f32) -> f32 {
     r
 }
 
+/// Wrap an angle to (−π, π], f64: the one copy for the Linux side (the bridge's frames, the
+/// simulator's metrics).
+pub fn wrap_pi_f64(a_rad: f64) -> f64 {
+    use core::f64::consts::PI;
+    let mut a = a_rad % (2.0 * PI);
+    if a > PI {
+        a -= 2.0 * PI;
+    } else if a <= -PI {
+        a += 2.0 * PI;
+    }
+    a
+}
+
 /// Angle complementary filter with rate-bias estimation:
 /// `θ̂ = F_L·meas + F_H·(1/s)·rate`.
 #[derive(Clone, Copy, Debug)]

@@ -54,8 +54,8 @@
 
 use crate::math::{acosf, cosf, expf, sinf, sqrtf};
 
-/// What the ILM-150-R outputs when it receives no return (paper B): 99 999 m.
-/// (Same value as `fcc_firmware::sensors::LASER_NO_RETURN_M`.)
+/// What the ILM-150-R outputs when it receives no return (paper B): 99 999 m. The one copy:
+/// the firmware's sensors, the link (`RangeRaw`, `AltitudeFusion::laser_m`) and the bridge use it.
 pub const LASER_NO_RETURN_M: f32 = 99_999.0;
 
 /// Speed of sound at 0 °C \[m/s] (paper B eq. 1).

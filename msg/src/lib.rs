@@ -19,7 +19,11 @@
 //! Beside the link, with feature `ros` (std): `ros`, the ROS 2 (Jazzy) message structs for
 //! ros2-client — the standard ones the nodes use and the custom `msg/*.msg` of this ROS 2
 //! interface package, whose constants and field lists `build.rs` generates from the files.
-//! Modules: [`frame`], [`handshake`], [`messages`], [`rates`], `ros` (feature `ros`).
+//! Vocabulary tables both ends read: [`params`] (the MCU parameters settable over the link: id,
+//! name, unit, default, range, doc — one table, [`for_each_mcu_param!`]); [`vocab`] (flight modes,
+//! failsafe causes, altitude sources: ROS constant values and names, checked against `msg/*.msg`).
+//! Modules: [`frame`], [`handshake`], [`messages`], [`params`], [`rates`], [`vocab`], `ros`
+//! (feature `ros`).
 //!
 //! ## Frame layout
 //! ```text
@@ -58,9 +62,11 @@
 pub mod frame;
 pub mod handshake;
 pub mod messages;
+pub mod params;
 pub mod rates;
 #[cfg(feature = "ros")]
 pub mod ros;
+pub mod vocab;
 
 #[cfg(test)]
 mod fuzz;
@@ -73,7 +79,8 @@ pub use frame::{
 };
 pub use handshake::{check_peer, HandshakeError};
 pub use messages::*;
-pub use rates::{max_frame_len, period_us, StreamRates, BAUD_921600_BYTES_PER_S};
+pub use params::{param_default, param_id, ParamSpec};
+pub use rates::{max_frame_len, period_us, Stream, StreamRates, BAUD_921600_BYTES_PER_S};
 
 /// Version of the frame layout and message set. Bump it for any incompatible change
 /// (the schema hash catches changes that were not bumped).

@@ -41,7 +41,8 @@ pub enum AltitudeSource {
     Predicted,
 }
 
-/// Flight mode of the MCU core (mirror of `fcc_firmware::commands::Mode`).
+/// Flight mode of the MCU core (`fcc_firmware::commands::Mode` is this type; ROS codes and
+/// names in [`crate::vocab`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub enum FlightMode {
     #[default]
@@ -53,7 +54,8 @@ pub enum FlightMode {
     Pilot,
 }
 
-/// Why the core left the operator's mode (mirror of `fcc_firmware::commands::FailsafeCause`).
+/// Why the core left the operator's mode (`fcc_firmware::commands::FailsafeCause` is this type;
+/// ROS codes and names in [`crate::vocab`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, MaxSize)]
 pub enum FailsafeCause {
     #[default]
@@ -121,7 +123,7 @@ pub enum CommandResult {
 pub enum ParamResult {
     #[default]
     Accepted,
-    /// No parameter with this id (see [`param_id`]).
+    /// No parameter with this id (see [`crate::param_id`]).
     UnknownId,
     /// NaN or infinite (a NaN set is also how the Linux side reads the current value).
     NotFinite,
@@ -385,40 +387,12 @@ pub struct TimeSyncPing {
     pub linux_time_ns: u64,
 }
 
-/// Set one tunable MCU parameter (ids in [`param_id`]); answered by [`ParamAck`]. A NaN value
+/// Set one tunable MCU parameter (ids in [`crate::param_id`]); answered by [`ParamAck`]. A NaN value
 /// changes nothing and reads the current value.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, MaxSize)]
 pub struct ParamSet {
     pub id: u16,
     pub value: f32,
-}
-
-/// Ids of the MCU parameters settable over the link, with their names (as in the firmware's
-/// `Params`, `section.field`). Part of [`SCHEMA`].
-pub mod param_id {
-    pub const MAX_HORIZ_SPEED_MPS: u16 = 1;
-    pub const MAX_TILT_DEG: u16 = 2;
-    pub const CROSS_TRACK_K_PER_S: u16 = 3;
-    pub const VEL_P_PER_S: u16 = 4;
-    pub const MAX_CLIMB_MPS: u16 = 5;
-    pub const MAX_DESCENT_MPS: u16 = 6;
-    /// (id, name) of every settable parameter.
-    pub const ALL: &[(u16, &str)] = &[
-        (MAX_HORIZ_SPEED_MPS, "limits.max_horiz_speed_mps"),
-        (MAX_TILT_DEG, "limits.max_tilt_deg"),
-        (CROSS_TRACK_K_PER_S, "control.cross_track_k_per_s"),
-        (VEL_P_PER_S, "control.vel_p_per_s"),
-        (MAX_CLIMB_MPS, "limits.max_climb_mps"),
-        (MAX_DESCENT_MPS, "limits.max_descent_mps"),
-    ];
-    /// Name of a parameter id.
-    pub fn name(id: u16) -> Option<&'static str> {
-        ALL.iter().find(|(i, _)| *i == id).map(|(_, n)| *n)
-    }
-    /// Id of a parameter name.
-    pub fn by_name(name: &str) -> Option<u16> {
-        ALL.iter().find(|(_, n)| *n == name).map(|(i, _)| *i)
-    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -721,6 +695,7 @@ mod tests {
     /// The parameter table and the `params` line of [`SCHEMA`] agree.
     #[test]
     fn param_ids_in_schema() {
+        use crate::param_id;
         let line = SCHEMA.lines().find(|l| l.starts_with("params ")).unwrap();
         let listed: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
         let table: Vec<String> = param_id::ALL

@@ -58,21 +58,32 @@ impl StreamRates {
         status_hz: 0,
     };
 
-    /// (message id, rate) per stream, in the order an endpoint should send them when several
-    /// are due at once (state first).
-    pub const fn streams(&self) -> [(u8, u16); 10] {
-        [
-            (id::STATUS, self.status_hz),
-            (id::NAV_STATE, self.nav_state_hz),
-            (id::ALTITUDE_FUSION, self.altitude_hz),
-            (id::IMU_RAW, self.imu_raw_hz),
-            (id::MAG_RAW, self.mag_raw_hz),
-            (id::BARO_RAW, self.baro_raw_hz),
-            (id::GPS_RAW, self.gps_raw_hz),
-            (id::RANGE_RAW, self.laser_raw_hz),
-            (id::RANGE_RAW, self.sonar_raw_hz),
-            (id::BATTERY, self.battery_hz),
-        ]
+    /// The rate of one stream.
+    pub const fn hz(&self, s: Stream) -> u16 {
+        match s {
+            Stream::Status => self.status_hz,
+            Stream::NavState => self.nav_state_hz,
+            Stream::Altitude => self.altitude_hz,
+            Stream::ImuRaw => self.imu_raw_hz,
+            Stream::MagRaw => self.mag_raw_hz,
+            Stream::BaroRaw => self.baro_raw_hz,
+            Stream::GpsRaw => self.gps_raw_hz,
+            Stream::LaserRaw => self.laser_raw_hz,
+            Stream::SonarRaw => self.sonar_raw_hz,
+            Stream::Battery => self.battery_hz,
+        }
+    }
+
+    /// (message id, rate) per stream, in [`Stream::ALL`] order.
+    pub const fn streams(&self) -> [(u8, u16); Stream::COUNT] {
+        let mut out = [(0u8, 0u16); Stream::COUNT];
+        let mut i = 0;
+        while i < Stream::COUNT {
+            let s = Stream::ALL[i];
+            out[i] = (s.msg_id(), self.hz(s));
+            i += 1;
+        }
+        out
     }
 
     /// Upper bound of the telemetry bytes/s at these rates (every frame at its largest size).
@@ -102,5 +113,78 @@ pub const fn period_us(hz: u16) -> Option<u64> {
         None
     } else {
         Some(1_000_000 / hz as u64)
+    }
+}
+
+/// One telemetry stream of the MCU, in the order an endpoint sends them when several are due at
+/// once (state first). `Stream as usize` indexes per-stream arrays ([`Stream::index`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stream {
+    Status,
+    NavState,
+    Altitude,
+    ImuRaw,
+    MagRaw,
+    BaroRaw,
+    GpsRaw,
+    /// `RangeRaw` from the laser.
+    LaserRaw,
+    /// `RangeRaw` from the sonar.
+    SonarRaw,
+    Battery,
+}
+
+impl Stream {
+    pub const COUNT: usize = 10;
+    /// Every stream, in send order.
+    pub const ALL: [Stream; Stream::COUNT] = [
+        Stream::Status,
+        Stream::NavState,
+        Stream::Altitude,
+        Stream::ImuRaw,
+        Stream::MagRaw,
+        Stream::BaroRaw,
+        Stream::GpsRaw,
+        Stream::LaserRaw,
+        Stream::SonarRaw,
+        Stream::Battery,
+    ];
+
+    /// Position in [`Stream::ALL`] (for per-stream arrays).
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The message id the stream sends.
+    pub const fn msg_id(self) -> u8 {
+        match self {
+            Stream::Status => id::STATUS,
+            Stream::NavState => id::NAV_STATE,
+            Stream::Altitude => id::ALTITUDE_FUSION,
+            Stream::ImuRaw => id::IMU_RAW,
+            Stream::MagRaw => id::MAG_RAW,
+            Stream::BaroRaw => id::BARO_RAW,
+            Stream::GpsRaw => id::GPS_RAW,
+            Stream::LaserRaw | Stream::SonarRaw => id::RANGE_RAW,
+            Stream::Battery => id::BATTERY,
+        }
+    }
+}
+
+#[cfg(test)]
+mod stream_tests {
+    use super::*;
+
+    #[test]
+    fn all_is_in_index_order() {
+        for (i, s) in Stream::ALL.iter().enumerate() {
+            assert_eq!(s.index(), i);
+        }
+        let r = StreamRates::DEFAULT;
+        assert_eq!(
+            r.streams()[Stream::LaserRaw.index()],
+            (id::RANGE_RAW, r.laser_raw_hz)
+        );
+        assert_eq!(r.streams()[0], (id::STATUS, r.status_hz));
     }
 }

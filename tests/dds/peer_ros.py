@@ -140,8 +140,8 @@ def main():
     v = get("ttl_ms", "limits.max_tilt_deg", "limits.max_horiz_speed_mps", "use_sim_time")
     c.check("get_parameters: ttl_ms integer 300", v and v[0].type == P_INT and v[0].integer_value == 300,
             v and v[0])
-    c.check("get_parameters: MCU's max_tilt_deg 25 (read from the MCU)",
-            v and v[1].type == P_DOUBLE and abs(v[1].double_value - 25.0) < 1e-6, v and v[1])
+    c.check("get_parameters: MCU's max_tilt_deg 35 (the firmware default, read from the MCU)",
+            v and v[1].type == P_DOUBLE and abs(v[1].double_value - 35.0) < 1e-6, v and v[1])
     c.check("--params-file value for the MCU (max_horiz_speed_mps 6)",
             v and abs(v[2].double_value - 6.0) < 1e-6, v and v[2])
     c.check("use_sim_time true", v and v[3].type == P_BOOL and v[3].bool_value, v and v[3])

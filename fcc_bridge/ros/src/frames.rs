@@ -12,7 +12,7 @@
 //!
 //! Quaternions are `[w, x, y, z]`, Hamilton convention, f64.
 
-use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
+use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2};
 
 pub type Vec3 = [f64; 3];
 /// `[w, x, y, z]`.
@@ -123,15 +123,8 @@ pub fn yaw_enu_to_ned(yaw_enu: f64) -> f64 {
     wrap_pi(FRAC_PI_2 - yaw_enu)
 }
 
-pub fn wrap_pi(a: f64) -> f64 {
-    let mut a = a % (2.0 * PI);
-    if a > PI {
-        a -= 2.0 * PI;
-    } else if a <= -PI {
-        a += 2.0 * PI;
-    }
-    a
-}
+/// Wrap to (−π, π]: the one f64 copy, in `fcc_nav`.
+pub use fcc_nav::complementary::wrap_pi_f64 as wrap_pi;
 
 /// A velocity in the vehicle's body FLU frame, levelled (rotated by the heading only), → NED.
 /// Used for `base_link` velocity setpoints: the tilt of the airframe does not leak into the
@@ -155,6 +148,7 @@ pub fn diag3(v: f64) -> [f64; 9] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     const EPS: f64 = 1e-9;
 

@@ -273,14 +273,7 @@ impl SensorBoard for ReplayBoard {
 }
 
 /// Latches the last motor command (what the ESC outputs would get).
-#[derive(Default)]
-pub struct MotorLatch(pub [f32; MOTOR_COUNT]);
-
-impl MotorOutputs for MotorLatch {
-    fn write(&mut self, _now_us: u64, cmd: &[f32; MOTOR_COUNT]) {
-        self.0 = *cmd;
-    }
-}
+pub use fcc_firmware::sensors::MotorLatch;
 
 /// Replays a whole recording on a fresh flight computer (its tick, as the QEMU image runs it:
 /// no received bytes, telemetry at the default rates), calling `each(tick_index, motors)` after

@@ -24,13 +24,7 @@ fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
 
-fn wrap_pi(a: f64) -> f64 {
-    let mut x = (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI);
-    if x < 0.0 {
-        x += 2.0 * std::f64::consts::PI;
-    }
-    x - std::f64::consts::PI
-}
+use fcc_nav::complementary::wrap_pi_f64 as wrap_pi;
 
 /// Hover: largest deviation from the hold point per axis, estimated and true.
 #[derive(Clone, Copy, Debug, Default)]

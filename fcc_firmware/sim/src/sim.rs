@@ -18,7 +18,7 @@ use fcc_firmware::commands::Mode;
 use fcc_firmware::geometry::MOTOR_COUNT;
 use fcc_firmware::link::LinkEndpoint;
 use fcc_firmware::scheduler::{FlightComputer, TICK_US};
-use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
+use fcc_firmware::sensors::{SensorBoard, SensorInputs};
 use nalgebra::{UnitQuaternion, Vector3};
 
 const PHYSICS_SUBSTEPS: u32 = 4;
@@ -96,13 +96,7 @@ impl SensorBoard for SimBoard {
     }
 }
 
-struct MotorLatch([f32; MOTOR_COUNT]);
-
-impl MotorOutputs for MotorLatch {
-    fn write(&mut self, _now_us: u64, cmd: &[f32; MOTOR_COUNT]) {
-        self.0 = *cmd;
-    }
-}
+use fcc_firmware::sensors::MotorLatch;
 
 /// Kinematic truth for scenarios where the vehicle is carried (elevator).
 struct Carried {

@@ -5,6 +5,9 @@
 
 use super::pi::ForgettingPi;
 
+/// Heading error wrap. Not `fcc_nav::complementary::wrap_pi`: that one returns an in-range angle
+/// unchanged, this one rounds through `fmod(a + π)`, and swapping them moves the campaign's
+/// figures in the third decimal (issue 15: left for a deliberate, measured change).
 fn wrap_pi(a: f32) -> f32 {
     let two_pi = 2.0 * core::f32::consts::PI;
     let mut x = fcc_nav::math::fmodf(a + core::f32::consts::PI, two_pi);

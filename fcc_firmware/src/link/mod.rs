@@ -17,16 +17,17 @@
 //!   tick. Raw sensor streams send the newest sample (never the same one twice) with the
 //!   sample's own time in the header.
 
-use crate::commands::{self, CommandError, Mode, VelocitySetpoint as CoreSetpoint};
+use crate::commands::{self, CommandError, VelocitySetpoint as CoreSetpoint};
 use crate::flight::FlightCore;
+use crate::params::ParamFault;
 use crate::sensors::{
     BaroSample, BatterySample, GpsFix, ImuSample, MagSample, RangeSample, SensorInputs,
 };
 use fcc_msgs::{
     period_us, AltitudeFusion, AltitudeSource, BaroRaw, Battery, CommandAck, CommandKind,
-    CommandResult, EncodeError, Encoder, FailsafeCause, FlightMode, FrameDecoder, GpsRaw,
-    HandshakeError, Hello, ImuRaw, LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult,
-    RangeRaw, RangeSensor, SensorHealth, Status, StreamRates, TimeSyncPong,
+    CommandResult, EncodeError, Encoder, FrameDecoder, GpsRaw, HandshakeError, Hello, ImuRaw,
+    LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult, RangeRaw, RangeSensor,
+    SensorHealth, Status, Stream, StreamRates, TimeSyncPong,
 };
 use fcc_nav::ground_altitude::GroundSource;
 
@@ -57,13 +58,24 @@ const fn parse_u8(s: &str) -> u8 {
 
 /// Pending command acknowledgements kept when the transmit buffer is full.
 const ACK_QUEUE: usize = 4;
-/// Number of telemetry streams (see [`StreamRates::streams`]).
-const STREAMS: usize = 10;
-/// First-due offset of each stream after start (µs), in [`StreamRates::streams`] order, so the
-/// streams' frames spread over different 2 ms ticks.
-const PHASE_US: [u64; STREAMS] = [
-    0, 2_000, 4_000, 0, 7_000, 9_000, 11_000, 13_000, 15_000, 17_000,
-];
+/// Number of telemetry streams ([`Stream::ALL`]).
+const STREAMS: usize = Stream::COUNT;
+/// First-due offset of a stream after start (µs), so the streams' frames spread over different
+/// 2 ms ticks.
+const fn phase_us(s: Stream) -> u64 {
+    match s {
+        Stream::Status => 0,
+        Stream::NavState => 2_000,
+        Stream::Altitude => 4_000,
+        Stream::ImuRaw => 0,
+        Stream::MagRaw => 7_000,
+        Stream::BaroRaw => 9_000,
+        Stream::GpsRaw => 11_000,
+        Stream::LaserRaw => 13_000,
+        Stream::SonarRaw => 15_000,
+        Stream::Battery => 17_000,
+    }
+}
 
 /// What the peer said in its last `HelloRequest`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -321,7 +333,7 @@ impl LinkEndpoint {
                 } else {
                     match core.set_param(ps.id, ps.value) {
                         Ok(()) => ParamResult::Accepted,
-                        Err(e) if e.reason == "not finite" => ParamResult::NotFinite,
+                        Err(e) if e.reason == ParamFault::NotFinite => ParamResult::NotFinite,
                         Err(_) => ParamResult::OutOfRange,
                     }
                 };
@@ -413,20 +425,20 @@ impl LinkEndpoint {
             self.param_acks[ACK_QUEUE - 1] = None;
         }
 
-        let streams = self.rates.streams();
-        for (i, (&(_, hz), &phase_us)) in streams.iter().zip(PHASE_US.iter()).enumerate() {
-            let Some(period) = period_us(hz) else {
+        for stream in Stream::ALL {
+            let i = stream.index();
+            let Some(period) = period_us(self.rates.hz(stream)) else {
                 continue;
             };
             // `get`, not indexing: no panic path in the MCU image (STREAMS entries each).
             let Some(slot) = self.next_due_us.get_mut(i) else {
                 continue;
             };
-            let due = *slot.get_or_insert(now_us + phase_us % period);
+            let due = *slot.get_or_insert(now_us + phase_us(stream) % period);
             if now_us < due {
                 continue;
             }
-            let Some((msg, t_us)) = self.stream_message(i, now_us, core) else {
+            let Some((msg, t_us)) = self.stream_message(stream, now_us, core) else {
                 // Raw stream without a new sample: send as soon as one arrives.
                 continue;
             };
@@ -459,19 +471,19 @@ impl LinkEndpoint {
         Ok(())
     }
 
-    /// The message of stream `i` (in [`StreamRates::streams`] order) and its header time.
+    /// The message of a stream and its header time.
     fn stream_message(
         &mut self,
-        i: usize,
+        stream: Stream,
         now_us: u64,
         core: &FlightCore,
     ) -> Option<(Message, u64)> {
         let nav = core.nav();
         let l = &mut self.latest;
-        Some(match i {
-            0 => (Message::Status(core_status(core, self.status())), now_us),
-            1 => (Message::NavState(nav_state(core)), nav.t_us),
-            2 => {
+        Some(match stream {
+            Stream::Status => (Message::Status(core_status(core, self.status())), now_us),
+            Stream::NavState => (Message::NavState(nav_state(core)), nav.t_us),
+            Stream::Altitude => {
                 let range = |s: &Latest<RangeSample>| s.sample.map_or(f32::NAN, |r| r.range_m);
                 let m = AltitudeFusion {
                     baro_alt_m: nav.baro_alt_m,
@@ -491,7 +503,7 @@ impl LinkEndpoint {
                 };
                 (Message::AltitudeFusion(m), nav.t_us)
             }
-            3 => {
+            Stream::ImuRaw => {
                 let s = l.imu.take_fresh()?;
                 (
                     Message::ImuRaw(ImuRaw {
@@ -501,7 +513,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            4 => {
+            Stream::MagRaw => {
                 let s = l.mag.take_fresh()?;
                 (
                     Message::MagRaw(MagRaw {
@@ -510,7 +522,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            5 => {
+            Stream::BaroRaw => {
                 let s = l.baro.take_fresh()?;
                 (
                     Message::BaroRaw(BaroRaw {
@@ -520,7 +532,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            6 => {
+            Stream::GpsRaw => {
                 let g = l.gps.take_fresh()?;
                 let m = GpsRaw {
                     lat_deg: g.lat_deg,
@@ -533,7 +545,7 @@ impl LinkEndpoint {
                 };
                 (Message::GpsRaw(m), g.t_us)
             }
-            7 => {
+            Stream::LaserRaw => {
                 let s = l.laser.take_fresh()?;
                 (
                     Message::RangeRaw(RangeRaw {
@@ -543,7 +555,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            8 => {
+            Stream::SonarRaw => {
                 let s = l.sonar.take_fresh()?;
                 (
                     Message::RangeRaw(RangeRaw {
@@ -553,7 +565,7 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            9 => {
+            Stream::Battery => {
                 let s = l.battery.take_fresh()?;
                 (
                     Message::Battery(Battery {
@@ -563,7 +575,6 @@ impl LinkEndpoint {
                     s.t_us,
                 )
             }
-            _ => return None,
         })
     }
 
@@ -594,13 +605,7 @@ impl LinkEndpoint {
 
 /// The core's part of `Status`.
 fn core_status(core: &FlightCore, mut s: Status) -> Status {
-    s.mode = match core.mode() {
-        Mode::Disarmed => FlightMode::Disarmed,
-        Mode::Hold => FlightMode::Hold,
-        Mode::Velocity => FlightMode::Velocity,
-        Mode::Land => FlightMode::Land,
-        Mode::Pilot => FlightMode::Pilot,
-    };
+    s.mode = core.mode();
     s.armed = core.armed();
     s.landed = core.landed();
     let n = core.nav();
@@ -614,16 +619,7 @@ fn core_status(core: &FlightCore, mut s: Status) -> Status {
         mag_disturbed_ds: (n.mag_disturbed_s * 10.0).min(u16::MAX as f32) as u16,
         nav_faults: n.nav_faults,
     };
-    s.failsafe = match core.failsafe() {
-        commands::FailsafeCause::None => FailsafeCause::None,
-        commands::FailsafeCause::SetpointStale => FailsafeCause::SetpointStale,
-        commands::FailsafeCause::SetpointLost => FailsafeCause::SetpointLost,
-        commands::FailsafeCause::Geofence => FailsafeCause::Geofence,
-        commands::FailsafeCause::GpsLost => FailsafeCause::GpsLost,
-        commands::FailsafeCause::WindLimit => FailsafeCause::WindLimit,
-        commands::FailsafeCause::EstimatorFault => FailsafeCause::EstimatorFault,
-        commands::FailsafeCause::EmergencyKill => FailsafeCause::EmergencyKill,
-    };
+    s.failsafe = core.failsafe();
     s
 }
 

@@ -174,7 +174,7 @@ fn setpoint_while_disarmed_reaches_core_and_is_counted_as_rejected() {
         (9, CommandResult::InvalidSetpoint)
     );
     assert_eq!(status.link_rx.rx_frames, 9);
-    assert_eq!(status.mode, FlightMode::Disarmed);
+    assert_eq!(status.mode, Mode::Disarmed);
 }
 
 #[test]

@@ -230,11 +230,10 @@ impl Log {
 /// The MCU's status as the mission logic reads it: the ONE place where `fcc_msgs/Status`
 /// modes become [`McuMode`] (Pilot is a flag of its own; other modes read as disarmed).
 fn mcu_status(st: &Status) -> McuStatus<'_> {
-    let mode = match st.mode {
-        Status::MODE_HOLD => McuMode::Hold,
-        Status::MODE_VELOCITY => McuMode::Velocity,
-        Status::MODE_LAND => McuMode::Land,
-        _ => McuMode::Disarmed,
+    // Pilot is a flag of its own; an unknown code reads as disarmed.
+    let mode = match McuMode::from_code(st.mode) {
+        Some(McuMode::Pilot) | None => McuMode::Disarmed,
+        Some(m) => m,
     };
     McuStatus {
         armed: st.armed,

@@ -28,12 +28,7 @@ flight:
   hold_s: 1.0
 ";
 
-struct Latch([f32; MOTOR_COUNT]);
-impl MotorOutputs for Latch {
-    fn write(&mut self, _t: u64, c: &[f32; MOTOR_COUNT]) {
-        self.0 = *c;
-    }
-}
+use fcc_firmware::sensors::MotorLatch as Latch;
 
 /// The sensors sampled from the physics' true state (what `Sim::tick` does, minus wind).
 struct Board<'a> {
