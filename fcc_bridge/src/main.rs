@@ -109,24 +109,8 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
 /// The command line before `--ros-args`; on a bad one, one line and exit 2 (`--help` and
 /// `--version`: printed, exit 0).
 fn parse_cli(prog: Vec<String>) -> Cli {
-    Cli::try_parse_from(prog).unwrap_or_else(|e| {
-        if !e.use_stderr() {
-            let _ = e.print();
-            std::process::exit(0);
-        }
-        // One line and exit 2, as for every other bad input (clap's own text spans several).
-        let text = e.to_string();
-        eprintln!(
-            "fcc-bridge: {} (see --help)",
-            text.split("\n\nUsage")
-                .next()
-                .unwrap_or("")
-                .split_whitespace()
-                .collect::<Vec<_>>()
-                .join(" ")
-                .trim_start_matches("error: ")
-        );
-        std::process::exit(2);
+    fcc_mission::cli::parse("fcc-bridge", prog).unwrap_or_else(|code| {
+        std::process::exit(code.into());
     })
 }
 

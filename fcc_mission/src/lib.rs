@@ -62,6 +62,7 @@
 //! Not yet supported: lat/lon waypoints (rejected as unknown fields).
 
 pub mod arming;
+pub mod cli;
 pub mod ending;
 pub mod follower;
 pub mod launch;

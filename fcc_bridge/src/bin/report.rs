@@ -135,28 +135,20 @@ fn path_plot(v: &View, plots: &mut Vec<Plot>) {
     let View { s, f, .. } = *v;
     let p = |name: &str| v.out.join(name);
     // Fig. 17: path, with the mission's legs.
-    let mut lines = vec![Line {
-        name: "estimated path",
-        // From the arm command on: before it the estimate may still be settling on home.
-        pts: s
-            .odom
-            .iter()
-            .filter(|o| s.first_arm_cmd.is_none_or(|t| o.0 >= t))
-            .map(|o| (o.1[1], o.1[0]))
-            .collect(),
-        color: BLUE,
-        dots: false,
-    }];
+    // From the arm command on: before it the estimate may still be settling on home.
+    let path_en = s
+        .odom
+        .iter()
+        .filter(|o| s.first_arm_cmd.is_none_or(|t| o.0 >= t))
+        .map(|o| (o.1[1], o.1[0]))
+        .collect();
+    let mut lines = vec![line("estimated path", path_en, BLUE)];
     for l in &f.legs {
-        lines.push(Line {
-            name: if l.index == 0 { "legs" } else { "" },
-            pts: vec![
-                (l.from_ned_m[1], l.from_ned_m[0]),
-                (l.to_ned_m[1], l.to_ned_m[0]),
-            ],
-            color: RED,
-            dots: false,
-        });
+        let leg_en = vec![
+            (l.from_ned_m[1], l.from_ned_m[0]),
+            (l.to_ned_m[1], l.to_ned_m[0]),
+        ];
+        lines.push(line(if l.index == 0 { "legs" } else { "" }, leg_en, RED));
     }
     plots.push((
         "path.png",
@@ -205,12 +197,7 @@ fn hover_plot(v: &View, plots: &mut Vec<Plot>) {
                 });
                 let b = h.box_m[k];
                 for y in [b, -b] {
-                    lines.push(Line {
-                        name: "",
-                        pts: vec![(0.0, y), (span, y)],
-                        color: col,
-                        dots: false,
-                    });
+                    lines.push(line("", vec![(0.0, y), (span, y)], col));
                 }
             }
             plots.push((
@@ -238,24 +225,21 @@ fn hover_plot(v: &View, plots: &mut Vec<Plot>) {
                 "t s",
                 "m",
                 vec![
-                    Line {
-                        name: "north",
-                        pts: s.odom.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
-                        color: BLUE,
-                        dots: false,
-                    },
-                    Line {
-                        name: "east",
-                        pts: s.odom.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
-                        color: RED,
-                        dots: false,
-                    },
-                    Line {
-                        name: "altitude",
-                        pts: s.odom.iter().map(|o| (o.0 - t0, -o.1[2])).collect(),
-                        color: GREEN,
-                        dots: false,
-                    },
+                    line(
+                        "north",
+                        s.odom.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
+                        BLUE,
+                    ),
+                    line(
+                        "east",
+                        s.odom.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
+                        RED,
+                    ),
+                    line(
+                        "altitude",
+                        s.odom.iter().map(|o| (o.0 - t0, -o.1[2])).collect(),
+                        GREEN,
+                    ),
                 ],
                 false,
             ),
@@ -278,30 +262,26 @@ fn velocity_plot(v: &View, plots: &mut Vec<Plot>) {
             "t s",
             "m/s",
             vec![
-                Line {
-                    name: "v_N est",
-                    pts: s.odom.iter().map(|o| (o.0 - t0, o.2[0])).collect(),
-                    color: BLUE,
-                    dots: false,
-                },
-                Line {
-                    name: "v_N cmd",
-                    pts: s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
-                    color: c(120, 120, 255),
-                    dots: true,
-                },
-                Line {
-                    name: "v_E est",
-                    pts: s.odom.iter().map(|o| (o.0 - t0, o.2[1])).collect(),
-                    color: RED,
-                    dots: false,
-                },
-                Line {
-                    name: "v_E cmd",
-                    pts: s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
-                    color: c(255, 140, 140),
-                    dots: true,
-                },
+                line(
+                    "v_N est",
+                    s.odom.iter().map(|o| (o.0 - t0, o.2[0])).collect(),
+                    BLUE,
+                ),
+                dots(
+                    "v_N cmd",
+                    s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
+                    c(120, 120, 255),
+                ),
+                line(
+                    "v_E est",
+                    s.odom.iter().map(|o| (o.0 - t0, o.2[1])).collect(),
+                    RED,
+                ),
+                dots(
+                    "v_E cmd",
+                    s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
+                    c(255, 140, 140),
+                ),
             ],
             false,
         ),
@@ -323,46 +303,38 @@ fn attitude_plot(v: &View, plots: &mut Vec<Plot>) {
             "t s",
             "deg",
             vec![
-                Line {
-                    name: "roll (accel)",
-                    pts: s
-                        .acc_angles
+                dots(
+                    "roll (accel)",
+                    s.acc_angles
                         .iter()
                         .map(|a| (a.0 - t0, a.1.to_degrees()))
                         .collect(),
-                    color: c(255, 180, 180),
-                    dots: true,
-                },
-                Line {
-                    name: "pitch (accel)",
-                    pts: s
-                        .acc_angles
+                    c(255, 180, 180),
+                ),
+                dots(
+                    "pitch (accel)",
+                    s.acc_angles
                         .iter()
                         .map(|a| (a.0 - t0, a.2.to_degrees()))
                         .collect(),
-                    color: c(180, 180, 255),
-                    dots: true,
-                },
-                Line {
-                    name: "roll (estimate)",
-                    pts: s
-                        .odom
+                    c(180, 180, 255),
+                ),
+                line(
+                    "roll (estimate)",
+                    s.odom
                         .iter()
                         .map(|o| (o.0 - t0, o.3[0].to_degrees()))
                         .collect(),
-                    color: RED,
-                    dots: false,
-                },
-                Line {
-                    name: "pitch (estimate)",
-                    pts: s
-                        .odom
+                    RED,
+                ),
+                line(
+                    "pitch (estimate)",
+                    s.odom
                         .iter()
                         .map(|o| (o.0 - t0, o.3[1].to_degrees()))
                         .collect(),
-                    color: BLUE,
-                    dots: false,
-                },
+                    BLUE,
+                ),
             ],
             false,
         ),
@@ -384,18 +356,16 @@ fn vertical_plot(v: &View, plots: &mut Vec<Plot>) {
             "t s",
             "m",
             vec![
-                Line {
-                    name: "barometer",
-                    pts: s.alt.iter().map(|a| (a.0 - t0, a.1)).collect(),
-                    color: c(160, 160, 160),
-                    dots: false,
-                },
-                Line {
-                    name: "fused",
-                    pts: s.alt.iter().map(|a| (a.0 - t0, a.2)).collect(),
-                    color: BLUE,
-                    dots: false,
-                },
+                line(
+                    "barometer",
+                    s.alt.iter().map(|a| (a.0 - t0, a.1)).collect(),
+                    c(160, 160, 160),
+                ),
+                line(
+                    "fused",
+                    s.alt.iter().map(|a| (a.0 - t0, a.2)).collect(),
+                    BLUE,
+                ),
             ],
             false,
         ),
@@ -416,24 +386,21 @@ fn ground_plot(v: &View, plots: &mut Vec<Plot>) {
             "t s",
             "m",
             vec![
-                Line {
-                    name: "laser",
-                    pts: s.alt.iter().map(|a| (a.0 - t0, a.4)).collect(),
-                    color: RED,
-                    dots: true,
-                },
-                Line {
-                    name: "sonar",
-                    pts: s.alt.iter().map(|a| (a.0 - t0, a.5)).collect(),
-                    color: GREEN,
-                    dots: true,
-                },
-                Line {
-                    name: "fusion",
-                    pts: s.alt.iter().map(|a| (a.0 - t0, a.3)).collect(),
-                    color: BLUE,
-                    dots: false,
-                },
+                dots(
+                    "laser",
+                    s.alt.iter().map(|a| (a.0 - t0, a.4)).collect(),
+                    RED,
+                ),
+                dots(
+                    "sonar",
+                    s.alt.iter().map(|a| (a.0 - t0, a.5)).collect(),
+                    GREEN,
+                ),
+                line(
+                    "fusion",
+                    s.alt.iter().map(|a| (a.0 - t0, a.3)).collect(),
+                    BLUE,
+                ),
             ],
             false,
         ),
@@ -456,18 +423,16 @@ fn observer_plot(v: &View, plots: &mut Vec<Plot>) {
                 ),
                 "m/s²",
                 vec![
-                    Line {
-                        name: "measured (accelerometer, gravity removed)",
-                        pts: s.accel_meas.iter().map(|a| (a.0 - t0, a.1[k])).collect(),
-                        color: c(170, 170, 170),
-                        dots: true,
-                    },
-                    Line {
-                        name: "observer",
-                        pts: s.accel_obs.iter().map(|a| (a.0 - t0, a.1[k])).collect(),
-                        color: BLUE,
-                        dots: false,
-                    },
+                    dots(
+                        "measured (accelerometer, gravity removed)",
+                        s.accel_meas.iter().map(|a| (a.0 - t0, a.1[k])).collect(),
+                        c(170, 170, 170),
+                    ),
+                    line(
+                        "observer",
+                        s.accel_obs.iter().map(|a| (a.0 - t0, a.1[k])).collect(),
+                        BLUE,
+                    ),
                 ],
             ));
         }
@@ -516,18 +481,12 @@ fn k_fit_plot(v: &View, plots: &mut Vec<Plot>) {
                 "t s",
                 "m/s²",
                 vec![
-                    Line {
-                        name: "measured (odometry velocity, differenced)",
-                        pts: meas,
-                        color: c(150, 150, 150),
-                        dots: true,
-                    },
-                    Line {
-                        name: "fit (wind per window)",
-                        pts: model,
-                        color: MAGENTA,
-                        dots: false,
-                    },
+                    dots(
+                        "measured (odometry velocity, differenced)",
+                        meas,
+                        c(150, 150, 150),
+                    ),
+                    line("fit (wind per window)", model, MAGENTA),
                 ],
                 false,
             ),
@@ -536,6 +495,26 @@ fn k_fit_plot(v: &View, plots: &mut Vec<Plot>) {
 }
 
 /// `report.html`: the summary text and every plot (or why it failed).
+/// A line of a chart.
+fn line(name: &str, pts: Vec<(f64, f64)>, color: RGBColor) -> Line<'_> {
+    Line {
+        name,
+        pts,
+        color,
+        dots: false,
+    }
+}
+
+/// Points of a chart.
+fn dots(name: &str, pts: Vec<(f64, f64)>, color: RGBColor) -> Line<'_> {
+    Line {
+        name,
+        pts,
+        color,
+        dots: true,
+    }
+}
+
 fn write_html(out: &Path, bag: &Path, text: &str, plots: &[Plot]) -> std::io::Result<()> {
     let mut html = format!("<html><head><meta charset=\"utf-8\"><title>fcc flight report</title></head><body><h1>Flight report: {}</h1><pre>{}</pre>\n", bag.display(), text);
     for (file, title, r) in plots {

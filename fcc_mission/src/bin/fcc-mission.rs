@@ -18,11 +18,11 @@
 //! `fcc_ros::startup`); 2 on a bad mission file or bad arguments.
 
 use clap::Parser;
+use fcc_mission::run::{Input, Level, McuStatus, MissionRun, Outcome, RunConfig, Sample, Step};
+use fcc_mission::{McuMode, Mission};
 use fcc_msgs::ros::{
     Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
 };
-use fcc_mission::run::{Input, Level, McuStatus, MissionRun, Outcome, RunConfig, Sample, Step};
-use fcc_mission::{McuMode, Mission};
 use fcc_ros::frames;
 use fcc_ros::params::{self, parse_bool};
 use fcc_ros::ros_node::{self, DdsEnv, RosClock};
@@ -83,27 +83,8 @@ fn fail(code: i32, msg: String) -> ! {
 fn options() -> Options {
     let argv: Vec<String> = std::env::args().collect();
     let (prog, ros) = params::split_ros_args(&argv).unwrap_or_else(|e| fail(2, e));
-    let cli = Cli::try_parse_from(prog).unwrap_or_else(|e| {
-        if !e.use_stderr() {
-            let _ = e.print();
-            std::process::exit(0);
-        }
-        // One line, as for every other bad input (clap's own text spans several).
-        let text = e.to_string();
-        fail(
-            2,
-            format!(
-                "{} (see --help)",
-                text.split("\n\nUsage")
-                    .next()
-                    .unwrap_or("")
-                    .split_whitespace()
-                    .collect::<Vec<_>>()
-                    .join(" ")
-                    .trim_start_matches("error: ")
-            ),
-        )
-    });
+    let cli: Cli = fcc_mission::cli::parse("fcc-mission", prog)
+        .unwrap_or_else(|code| std::process::exit(code.into()));
     let p = &ros.params;
     let known = [
         "mission",

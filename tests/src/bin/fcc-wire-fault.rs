@@ -178,26 +178,9 @@ fn corrupt(rng: &mut Rng, a: &Args, input: &[u8], out: &mut Vec<u8>, c: &mut Cou
 }
 
 fn main() -> ExitCode {
-    let a = match Args::try_parse() {
+    let a = match fcc_mission::cli::parse::<Args, _, _>("fcc-wire-fault", std::env::args_os()) {
         Ok(a) => a,
-        Err(e) => {
-            if !e.use_stderr() {
-                let _ = e.print();
-                return ExitCode::SUCCESS;
-            }
-            let text = e.to_string();
-            eprintln!(
-                "fcc-wire-fault: {} (see --help)",
-                text.split("\n\nUsage")
-                    .next()
-                    .unwrap_or("")
-                    .split_whitespace()
-                    .collect::<Vec<_>>()
-                    .join(" ")
-                    .trim_start_matches("error: ")
-            );
-            return ExitCode::from(2);
-        }
+        Err(code) => return ExitCode::from(code),
     };
     for (name, p) in [("--ber", a.ber), ("--drop", a.drop), ("--dup", a.dup)] {
         if !(0.0..=1.0).contains(&p) {

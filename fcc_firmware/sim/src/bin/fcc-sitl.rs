@@ -40,27 +40,9 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = match Args::try_parse() {
+    let args = match fcc_mission::cli::parse::<Args, _, _>("fcc-sitl", std::env::args_os()) {
         Ok(a) => a,
-        Err(e) => {
-            if !e.use_stderr() {
-                let _ = e.print();
-                return ExitCode::SUCCESS;
-            }
-            // One line, as for every other bad input (clap's own text spans several).
-            let text = e.to_string();
-            eprintln!(
-                "fcc-sitl: {} (see --help)",
-                text.split("\n\nUsage")
-                    .next()
-                    .unwrap_or("")
-                    .split_whitespace()
-                    .collect::<Vec<_>>()
-                    .join(" ")
-                    .trim_start_matches("error: ")
-            );
-            return ExitCode::from(2);
-        }
+        Err(code) => return ExitCode::from(code),
     };
     let mut scenario = match Scenario::load(&args.scenario) {
         Ok(s) => s,
