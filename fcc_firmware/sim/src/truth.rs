@@ -103,6 +103,10 @@ pub struct TruthReport {
     /// distance from where the hold started, m.
     pub hold_alt_err_m: Option<f64>,
     pub hold_excursion_m: Option<f64>,
+    /// Hold windows: max drift of the navigation error (true − estimated horizontal position)
+    /// from its value at the hold start, m — the part of the true excursion the vehicle cannot
+    /// see (GPS error wander), however well it holds its estimate.
+    pub hold_nav_drift_m: Option<f64>,
     /// Legs: max true distance from the intended line (m) and max |true alt − leg altitude|.
     pub leg_line_max_m: Option<f64>,
     pub leg_alt_err_m: Option<f64>,
@@ -158,6 +162,7 @@ pub fn report(log: &FlightLog) -> TruthReport {
         ..Default::default()
     };
     let mut hold_start: Option<[f64; 2]> = None;
+    let mut hold_nav_err0: Option<[f64; 2]> = None;
     let max_opt = |o: &mut Option<f64>, v: f64| *o = Some(o.map_or(v, |x: f64| x.max(v)));
     for s in &log.samples {
         let p = [s.true_pos_ned_m[0], s.true_pos_ned_m[1]];
@@ -171,6 +176,11 @@ pub fn report(log: &FlightLog) -> TruthReport {
                 );
                 let d = ((p[0] - start[0]).powi(2) + (p[1] - start[1]).powi(2)).sqrt();
                 max_opt(&mut r.hold_excursion_m, d);
+                let est = [s.nav.pos_ned_m[0] as f64, s.nav.pos_ned_m[1] as f64];
+                let err = [p[0] - est[0], p[1] - est[1]];
+                let e0 = *hold_nav_err0.get_or_insert(err);
+                let drift = ((err[0] - e0[0]).powi(2) + (err[1] - e0[1]).powi(2)).sqrt();
+                max_opt(&mut r.hold_nav_drift_m, drift);
             }
             PlanPhase::Leg {
                 from_ned_m,
@@ -178,6 +188,7 @@ pub fn report(log: &FlightLog) -> TruthReport {
                 ..
             } if s.armed => {
                 hold_start = None;
+                hold_nav_err0 = None;
                 let a = [from_ned_m[0] as f64, from_ned_m[1] as f64];
                 let b = [to_ned_m[0] as f64, to_ned_m[1] as f64];
                 max_opt(&mut r.leg_line_max_m, dist_to_segment(p, a, b));
@@ -233,9 +244,11 @@ impl fmt::Display for TruthReport {
         }
         writeln!(
             f,
-            "  hold: true altitude error max {}, true excursion from hold start max {}",
+            "  hold: true altitude error max {}, true excursion from hold start max {} \
+             (navigation error drift, unseen by the vehicle: max {})",
             opt(self.hold_alt_err_m, "m"),
-            opt(self.hold_excursion_m, "m")
+            opt(self.hold_excursion_m, "m"),
+            opt(self.hold_nav_drift_m, "m")
         )?;
         writeln!(
             f,
