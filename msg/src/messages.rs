@@ -7,7 +7,7 @@
 //! sample's arrival time for raw sensors, the navigation step time for `NavState`.
 //!
 //! **Changing anything here** (a field, its type, its order, a variant, an id) changes the wire
-//! format: update [`SCHEMA`] in the same change (the test `schema_matches_types` fails if a
+//! format: update [`SCHEMA`] / [`SCHEMA_MESSAGES`] in the same change (the test `schema_matches_types` fails if a
 //! type's maximum encoded size no longer matches the size written in [`SCHEMA`]) and, for an
 //! incompatible change, bump [`crate::PROTOCOL_VERSION`].
 
@@ -560,8 +560,10 @@ impl Message {
 /// Wire schema: every message with its id, payload fields in order with their postcard types,
 /// and the payload's maximum encoded size (`max=`, checked against the types by a test).
 /// Integers other than u8 are postcard varints; f32/f64 are little-endian IEEE 754; bool is one
-/// byte 0/1; enums are a varint variant index in the order listed. [`SCHEMA_HASH`] is FNV-1a 32
-/// over this text.
+/// byte 0/1; enums are a varint variant index in the order listed. The full schema is this text,
+/// then the `params` line derived from the parameter table ([`crate::param_id::ALL`]: `params
+/// 1=limits.max_horiz_speed_mps 2=…`), then [`SCHEMA_MESSAGES`]; [`SCHEMA_HASH`] is FNV-1a 32
+/// over the whole (`schema_text()`, with std, writes it out).
 pub const SCHEMA: &str = "\
 enum RangeSensor { Laser, Sonar }
 enum AltitudeSource { None, Laser, Sonar, Both, Predicted }
@@ -570,7 +572,10 @@ enum FailsafeCause { None, SetpointStale, SetpointLost, Geofence, GpsLost, WindL
 enum CommandKind { Arm, Disarm, Hold, Land, Velocity, Kill }
 enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible, PilotOverride, KillNotConfirmed }
 enum ParamResult { Accepted, UnknownId, NotFinite, OutOfRange, Incompatible }
-params 1=limits.max_horiz_speed_mps 2=limits.max_tilt_deg 3=control.cross_track_k_per_s 4=control.vel_p_per_s 5=limits.max_climb_mps 6=limits.max_descent_mps
+";
+
+/// The schema's messages (after the `params` line): see [`SCHEMA`].
+pub const SCHEMA_MESSAGES: &str = "\
 struct LinkCounters max=60 { rx_bytes: u32, rx_frames: u32, crc_errors: u32, framing_errors: u32, overruns: u32, resyncs: u32, decode_errors: u32, unknown_ids: u32, version_errors: u32, seq_gaps: u32, frames_lost: u32, seq_resets: u32 }
 struct SensorHealth max=13 { gps_ok: bool, mag_disturbed: bool, mag_rejects: u32, laser_ok: bool, sonar_ok: bool, mag_disturbed_ds: u16, nav_faults: u8 }
 msg 0x01 Hello max=9 { protocol_version: u8, schema_hash: u32, firmware_version: [u8; 3] }
@@ -605,8 +610,68 @@ pub const fn fnv1a32(bytes: &[u8]) -> u32 {
     h
 }
 
-/// Hash of [`SCHEMA`], exchanged in the handshake.
-pub const SCHEMA_HASH: u32 = fnv1a32(SCHEMA.as_bytes());
+/// FNV-1a 32 continued from the running hash `h` over `bytes`.
+const fn fnv1a32_from(mut h: u32, bytes: &[u8]) -> u32 {
+    let mut i = 0;
+    while i < bytes.len() {
+        h ^= bytes[i] as u32;
+        h = h.wrapping_mul(0x0100_0193);
+        i += 1;
+    }
+    h
+}
+
+/// FNV-1a 32 continued over the decimal digits of `n`.
+const fn fnv1a32_decimal(h: u32, n: u16) -> u32 {
+    let mut digits = [0u8; 5];
+    let (mut n, mut len) = (n, 0);
+    loop {
+        digits[len] = b'0' + (n % 10) as u8;
+        len += 1;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    let mut h = h;
+    while len > 0 {
+        len -= 1;
+        h = fnv1a32_from(h, &[digits[len]]);
+    }
+    h
+}
+
+/// Hash of the full schema ([`SCHEMA`], the `params` line of the parameter table,
+/// [`SCHEMA_MESSAGES`]), exchanged in the handshake: a parameter added to the table changes it.
+pub const SCHEMA_HASH: u32 = {
+    let mut h = fnv1a32_from(0x811c_9dc5, SCHEMA.as_bytes());
+    h = fnv1a32_from(h, b"params");
+    let params = crate::param_id::ALL;
+    let mut i = 0;
+    while i < params.len() {
+        h = fnv1a32_from(h, b" ");
+        h = fnv1a32_decimal(h, params[i].0);
+        h = fnv1a32_from(h, b"=");
+        h = fnv1a32_from(h, params[i].1.as_bytes());
+        i += 1;
+    }
+    h = fnv1a32_from(h, b"\n");
+    fnv1a32_from(h, SCHEMA_MESSAGES.as_bytes())
+};
+
+/// The full schema text that [`SCHEMA_HASH`] hashes.
+#[cfg(any(test, feature = "std"))]
+pub fn schema_text() -> std::string::String {
+    use std::fmt::Write;
+    let mut t = std::string::String::from(SCHEMA);
+    t.push_str("params");
+    for (id, name) in crate::param_id::ALL {
+        let _ = write!(t, " {id}={name}");
+    }
+    t.push('\n');
+    t.push_str(SCHEMA_MESSAGES);
+    t
+}
 
 #[cfg(test)]
 mod tests {
@@ -633,7 +698,7 @@ mod tests {
     #[test]
     fn schema_matches_types() {
         let mut ids: Vec<(u8, String)> = Vec::new();
-        for line in SCHEMA.lines() {
+        for line in schema_text().lines() {
             let words: Vec<&str> = line.split_whitespace().collect();
             let (name, max, id) = match words.first() {
                 Some(&"msg") => (
@@ -679,7 +744,7 @@ mod tests {
     fn schema_hash_is_fnv1a_of_schema() {
         assert_eq!(fnv1a32(b""), 0x811c_9dc5);
         assert_eq!(fnv1a32(b"a"), 0xe40c_292c);
-        assert_eq!(SCHEMA_HASH, fnv1a32(SCHEMA.as_bytes()));
+        assert_eq!(SCHEMA_HASH, fnv1a32(schema_text().as_bytes()));
         std::println!("schema hash 0x{SCHEMA_HASH:08x}, max payload {MAX_PAYLOAD_LEN} B");
     }
 
@@ -692,17 +757,18 @@ mod tests {
         assert!(ALL_IDS.iter().all(|&i| i != 0 && i < 0x80));
     }
 
-    /// The parameter table and the `params` line of [`SCHEMA`] agree.
+    /// The `params` line of the schema text is the parameter table's.
     #[test]
     fn param_ids_in_schema() {
         use crate::param_id;
-        let line = SCHEMA.lines().find(|l| l.starts_with("params ")).unwrap();
+        let text = schema_text();
+        let line = text.lines().find(|l| l.starts_with("params ")).unwrap();
         let listed: Vec<String> = line.split_whitespace().skip(1).map(String::from).collect();
         let table: Vec<String> = param_id::ALL
             .iter()
             .map(|(i, n)| std::format!("{i}={n}"))
             .collect();
-        assert_eq!(listed, table, "update the params line of SCHEMA");
+        assert_eq!(listed, table, "the params line is the table's");
         assert_eq!(
             param_id::by_name("limits.max_tilt_deg"),
             Some(param_id::MAX_TILT_DEG)

@@ -11,8 +11,8 @@
 //!
 //! Adding a parameter is one line in the table (the `Params` field must exist; a parameter
 //! whose change must rebuild a controller also gets a line in `FlightCore::set_param`). The
-//! `params` line of [`crate::SCHEMA`] lists the ids and names, so the schema hash changes with
-//! the table (a test keeps the two equal).
+//! schema hash ([`crate::SCHEMA_HASH`]) is computed over the table's ids and names as well (the
+//! `params` line of `schema_text()`), so it changes with the table.
 
 /// The table. Invokes `$m!` with one `id, CONST, section.field, "unit", default, min, max,
 /// "doc";` row per parameter (each row's `section.field` is the firmware's `Params` field).
