@@ -700,20 +700,19 @@ impl FlightCore {
         }
         let clearance_m =
             self.height_above_ground_m(nav) - self.params.airframe.sensor_height_on_ground_m;
-        let (_, cr) = fcc_nav::math::sincosf(nav.euler.roll_rad);
-        let (_, cp) = fcc_nav::math::sincosf(nav.euler.pitch_rad);
-        let tilt_rad = fcc_nav::math::acosf(fcc_nav::math::clampf(cr * cp, -1.0, 1.0));
+        let tilt_rad =
+            fcc_nav::ground_altitude::tilt_angle_rad(nav.euler.roll_rad, nav.euler.pitch_rad);
         let speed_mps = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
         match self
             .touchdown_gate
             .update(dt_s, clearance_m, tilt_rad, speed_mps)
         {
             GateAction::Descend => l.land_final_speed_mps,
-            GateAction::Hold => fcc_nav::math::clampf(
-                -self.params.control.alt_p_per_s * (GATE_CLEARANCE_M - clearance_m),
-                -l.max_climb_mps,
-                l.land_final_speed_mps,
-            ),
+            // The height loop on the gear's clearance, never descending faster than the final
+            // speed.
+            GateAction::Hold => self
+                .height_loop(0.0, GATE_CLEARANCE_M, clearance_m)
+                .min(l.land_final_speed_mps),
         }
     }
 

@@ -600,14 +600,7 @@ msg 0x44 ParamSet max=7 { id: u16, value: f32 }
 
 /// FNV-1a, 32 bit, usable in `const` context.
 pub const fn fnv1a32(bytes: &[u8]) -> u32 {
-    let mut h: u32 = 0x811c_9dc5;
-    let mut i = 0;
-    while i < bytes.len() {
-        h ^= bytes[i] as u32;
-        h = h.wrapping_mul(0x0100_0193);
-        i += 1;
-    }
-    h
+    fnv1a32_from(0x811c_9dc5, bytes)
 }
 
 /// FNV-1a 32 continued from the running hash `h` over `bytes`.
