@@ -1,8 +1,9 @@
 //! `fcc-launch`'s config and its supervision rules (the launcher binary does the process I/O:
 //! spawning, piping, signals, waiting).
 //!
-//! * [`Config`]: the YAML (`vars`, `stop_timeout_s`, `processes`, `report`), parsed with
+//! * [`Config`]: the YAML (`vars`, `when`, `stop_timeout_s`, `processes`, `report`), parsed with
 //!   [`Config::from_yaml_str`] and checked with [`Config::check`];
+//! * [`resolve_vars`]: the defaults, the `when` rules and the command line's `name:=value`;
 //! * [`expand`]: `${NAME}` variables;
 //! * [`next_after_exit`]: what to do when a process exits (main processes, groups, early exits).
 //!
@@ -17,11 +18,66 @@ use std::collections::BTreeMap;
 pub struct Config {
     #[serde(default)]
     pub vars: BTreeMap<String, String>,
+    /// Defaults that follow another variable (see [`When`]).
+    #[serde(default)]
+    pub when: Vec<When>,
     #[serde(default = "default_stop")]
     pub stop_timeout_s: f64,
     pub processes: Vec<Proc>,
     #[serde(default)]
     pub report: Option<Reports>,
+}
+
+/// A rule on the variables: when `var` is (`is`) or is not (`is_not`) a value, the variables of
+/// `set` take these values unless the command line gives them. Values compare as numbers when
+/// both read as numbers (`speed: "2.0"` is not `"1"`), else as text. E.g. a simulator faster than
+/// real time needs ROS time to be the simulator's:
+/// ```yaml
+/// when:
+///   - {var: speed, is_not: "1", set: {clock_source: mcu, use_sim_time: "true"}}
+/// ```
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct When {
+    pub var: String,
+    #[serde(default)]
+    pub is: Option<String>,
+    #[serde(default)]
+    pub is_not: Option<String>,
+    pub set: BTreeMap<String, String>,
+}
+
+impl When {
+    fn holds(&self, vars: &BTreeMap<String, String>) -> bool {
+        let v = vars.get(&self.var).map(String::as_str).unwrap_or("");
+        let same = |w: &str| match (v.trim().parse::<f64>(), w.trim().parse::<f64>()) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => v == w,
+        };
+        self.is.as_deref().map_or(true, same) && self.is_not.as_deref().map_or(true, |w| !same(w))
+    }
+}
+
+/// The variables of a run: the config's `vars`, then its `when` rules (in order; each sees the
+/// values set so far), then the command line's `name:=value` (which always win). Returns the
+/// variables and, for the log, the names each rule set.
+pub fn resolve_vars(
+    cfg: &Config,
+    cli: &BTreeMap<String, String>,
+) -> (BTreeMap<String, String>, Vec<String>) {
+    let mut vars = cfg.vars.clone();
+    vars.extend(cli.iter().map(|(k, v)| (k.clone(), v.clone())));
+    let mut applied = Vec::new();
+    for w in &cfg.when {
+        if !w.holds(&vars) {
+            continue;
+        }
+        for (k, v) in w.set.iter().filter(|(k, _)| !cli.contains_key(*k)) {
+            vars.insert(k.clone(), v.clone());
+            applied.push(format!("{k}:={v} (because {} is {})", w.var, vars[&w.var]));
+        }
+    }
+    (vars, applied)
 }
 
 /// `report:` is one entry or a list of them.
@@ -112,6 +168,11 @@ impl Config {
         for (i, p) in self.processes.iter().enumerate() {
             secs(format!("processes[{i}].delay_s"), p.delay_s)?;
             secs(format!("processes[{i}].wait_timeout_s"), p.wait_timeout_s)?;
+        }
+        for (i, w) in self.when.iter().enumerate() {
+            if w.is.is_none() == w.is_not.is_none() {
+                return Err(format!("when[{i}]: give exactly one of is / is_not"));
+            }
         }
         if !self.processes.iter().any(|p| p.main) {
             return Err("at least one process must have main: true".into());
@@ -361,6 +422,40 @@ mod tests {
             c("processes: [{name: a, cmd: [x]}]\n"),
             Err("at least one process must have main: true".into())
         );
+    }
+
+    #[test]
+    fn when_rules_set_defaults_the_command_line_overrides() {
+        let cfg = Config::from_yaml_str(
+            "vars: {speed: '1', clock_source: sync, use_sim_time: 'false'}\n\
+             when: [{var: speed, is_not: '1', set: {clock_source: mcu, use_sim_time: 'true'}}]\n\
+             processes: [{name: a, cmd: [x], main: true}]\n",
+        )
+        .unwrap();
+        assert_eq!(cfg.check(), Ok(()));
+        let cli = |kv: &[(&str, &str)]| -> BTreeMap<String, String> {
+            kv.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+        };
+        // Speed 1 (default, or written as 1.0): the defaults stand.
+        for c in [cli(&[]), cli(&[("speed", "1.0")])] {
+            let (v, applied) = resolve_vars(&cfg, &c);
+            assert_eq!((v["clock_source"].as_str(), v["use_sim_time"].as_str()), ("sync", "false"));
+            assert!(applied.is_empty());
+        }
+        // speed:=2 alone: the simulator's clock.
+        let (v, applied) = resolve_vars(&cfg, &cli(&[("speed", "2")]));
+        assert_eq!((v["clock_source"].as_str(), v["use_sim_time"].as_str()), ("mcu", "true"));
+        assert_eq!(applied.len(), 2);
+        assert!(applied[0].contains("because speed is 2"), "{applied:?}");
+        // What the command line gives wins over a rule.
+        let (v, _) = resolve_vars(&cfg, &cli(&[("speed", "2"), ("clock_source", "sync")]));
+        assert_eq!((v["clock_source"].as_str(), v["use_sim_time"].as_str()), ("sync", "true"));
+        // A rule needs exactly one condition.
+        let bad = Config::from_yaml_str(
+            "when: [{var: speed, set: {a: b}}]\nprocesses: [{name: a, cmd: [x], main: true}]\n",
+        )
+        .unwrap();
+        assert_eq!(bad.check(), Err("when[0]: give exactly one of is / is_not".into()));
     }
 
     #[test]

@@ -10,7 +10,8 @@
 # FCC_E2E_KEEP=DIR keeps (a)'s CSV and the received altitude messages (altitude.json) there;
 # `stack_peer.py check-altitude --csv DIR/square_stack.csv --dump DIR/altitude.json` re-checks.
 # Simulated time runs at FCC_E2E_SPEED (default 2) × real time; ROS time is the MCU's
-# (fcc-bridge -p clock_source:=mcu, /clock) so the checks do not depend on the speed.
+# (fcc-bridge -p clock_source:=mcu, /clock) so the checks do not depend on the speed. (a) gives
+# fcc-launch `speed:=2` alone: the launch config's rule must choose that clock.
 #   usage: tests/e2e/run_stack.sh [PYTHON]   (PYTHON must import cyclonedds; default python3)
 # Needs: release builds of fcc-sitl, fcc-bridge, fcc-mission and fcc-launch (FCC_BIN_DIR).
 set -euo pipefail
@@ -33,9 +34,15 @@ t0=$(date +%s)
 peer=$!
 sleep 2   # the peer's readers exist before the nodes start (discovery info is seen from the start)
 set +e
+# At any speed but 1, `speed:=N` alone must do (issue 16): the config's `when` rule makes ROS time
+# the simulator's (clock_source:=mcu, use_sim_time:=true). At speed 1 they are given here.
+clock=(); [ "$speed" = 1 ] && clock=(clock_source:=mcu use_sim_time:=true)
 "$bin/fcc-launch" "$root/launch_configs/square_flight.yaml" BIN:="$bin" out:="$tmp" speed:="$speed" \
-  clock_source:=mcu use_sim_time:=true > "$tmp/launch.log" 2>&1
+  "${clock[@]}" > "$tmp/launch.log" 2>&1
 lrc=$?
+if [ "$speed" != 1 ] && ! grep -q "^fcc-launch: clock_source:=mcu (because speed is $speed)" "$tmp/launch.log"; then
+  echo "(a) FAIL: speed:=$speed alone did not select the simulator's clock"; lrc=1
+fi
 touch "$tmp/done"
 wait $peer
 prc=$?

@@ -21,6 +21,8 @@
 //! Config (see `launch_configs/square_flight.yaml`):
 //! ```yaml
 //! vars: { speed: "1", out: out }        # defaults; override with speed:=2 on the command line
+//! when:                                 # defaults that follow another variable
+//!   - {var: speed, is_not: "1", set: {clock_source: mcu}}
 //! stop_timeout_s: 10
 //! processes:
 //!   - name: sitl
@@ -38,10 +40,12 @@
 //! `report:` may also be a list of such entries (one per vehicle); they are written when every
 //! main process exited with 0.
 //! Variables: `${BIN}` (the directory of this executable), `${CONFIG_DIR}`, `${RUN}` (a fresh
-//! temporary directory, removed at the end), `vars`, command-line `name:=value`, and the
-//! environment. `env:` per process adds environment variables.
+//! temporary directory, removed at the end), `vars`, the `when` rules (each printed when it sets
+//! a variable), command-line `name:=value` (wins over both), and the environment. `env:` per process adds environment variables.
 
-use fcc_mission::launch::{expand, next_after_exit, Config, Next, Proc, Report, Reports, Slot};
+use fcc_mission::launch::{
+    expand, next_after_exit, resolve_vars, Config, Next, Proc, Report, Reports, Slot,
+};
 use nix::sys::signal::{self, SigHandler, Signal};
 use nix::unistd::Pid;
 use std::collections::BTreeMap;
@@ -222,12 +226,16 @@ impl Launch {
     fn load(args: &[String]) -> Launch {
         let cfg_path = PathBuf::from(&args[0]);
         let cfg = read_config(&cfg_path);
-        let mut vars = cfg.vars.clone();
+        let mut cli = BTreeMap::new();
         for a in &args[1..] {
             let (k, v) = a
                 .split_once(":=")
                 .unwrap_or_else(|| die(format!("argument '{a}': expected name:=value")));
-            vars.insert(k.to_string(), v.to_string());
+            cli.insert(k.to_string(), v.to_string());
+        }
+        let (mut vars, applied) = resolve_vars(&cfg, &cli);
+        for a in applied {
+            eprintln!("fcc-launch: {a}");
         }
         let exe_dir = std::env::current_exe()
             .ok()
