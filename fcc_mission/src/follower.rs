@@ -132,8 +132,6 @@ fn finite3(a: [f32; 3]) -> bool {
     a.iter().all(|v| v.is_finite())
 }
 
-use fcc_nav::complementary::wrap_pi;
-
 /// Runs a [`Mission`]: call [`update`](Self::update) at ≥ 20 Hz.
 ///
 /// Phases: `Idle → Takeoff → Leg(0) → Hold(0) → … → Leg(n-1) → Hold(n-1) →
@@ -512,7 +510,7 @@ impl WaypointFollower {
         };
         let yaw_rad = match self.phase {
             Phase::Idle => None,
-            _ => self.mission.yaw_deg.map(|d| wrap_pi(d.to_radians())),
+            _ => self.mission.yaw_rad(),
         };
         Guidance {
             vel_ned_mps: vel,
@@ -867,12 +865,5 @@ mod tests {
         m.speed_mps = -1.0;
         assert!(WaypointFollower::try_new(m).is_err());
         assert!(WaypointFollower::try_new(square()).is_ok());
-    }
-
-    #[test]
-    fn wrap_pi_range() {
-        assert!((wrap_pi(3.5 * core::f32::consts::PI) + 0.5 * core::f32::consts::PI).abs() < 1e-5);
-        assert!((wrap_pi(-core::f32::consts::PI) - core::f32::consts::PI).abs() < 1e-6);
-        assert_eq!(wrap_pi(0.25), 0.25);
     }
 }

@@ -434,28 +434,42 @@ mod tests {
         .unwrap();
         assert_eq!(cfg.check(), Ok(()));
         let cli = |kv: &[(&str, &str)]| -> BTreeMap<String, String> {
-            kv.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+            kv.iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect()
         };
         // Speed 1 (default, or written as 1.0): the defaults stand.
         for c in [cli(&[]), cli(&[("speed", "1.0")])] {
             let (v, applied) = resolve_vars(&cfg, &c);
-            assert_eq!((v["clock_source"].as_str(), v["use_sim_time"].as_str()), ("sync", "false"));
+            assert_eq!(
+                (v["clock_source"].as_str(), v["use_sim_time"].as_str()),
+                ("sync", "false")
+            );
             assert!(applied.is_empty());
         }
         // speed:=2 alone: the simulator's clock.
         let (v, applied) = resolve_vars(&cfg, &cli(&[("speed", "2")]));
-        assert_eq!((v["clock_source"].as_str(), v["use_sim_time"].as_str()), ("mcu", "true"));
+        assert_eq!(
+            (v["clock_source"].as_str(), v["use_sim_time"].as_str()),
+            ("mcu", "true")
+        );
         assert_eq!(applied.len(), 2);
         assert!(applied[0].contains("because speed is 2"), "{applied:?}");
         // What the command line gives wins over a rule.
         let (v, _) = resolve_vars(&cfg, &cli(&[("speed", "2"), ("clock_source", "sync")]));
-        assert_eq!((v["clock_source"].as_str(), v["use_sim_time"].as_str()), ("sync", "true"));
+        assert_eq!(
+            (v["clock_source"].as_str(), v["use_sim_time"].as_str()),
+            ("sync", "true")
+        );
         // A rule needs exactly one condition.
         let bad = Config::from_yaml_str(
             "when: [{var: speed, set: {a: b}}]\nprocesses: [{name: a, cmd: [x], main: true}]\n",
         )
         .unwrap();
-        assert_eq!(bad.check(), Err("when[0]: give exactly one of is / is_not".into()));
+        assert_eq!(
+            bad.check(),
+            Err("when[0]: give exactly one of is / is_not".into())
+        );
     }
 
     #[test]

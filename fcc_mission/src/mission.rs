@@ -140,6 +140,13 @@ fn check_range(
 }
 
 impl Mission {
+    /// The heading to command, rad in (−π, π] (`yaw_deg` may be any finite angle: 270° is
+    /// −90°), or `None` to keep the current one.
+    pub fn yaw_rad(&self) -> Option<f32> {
+        self.yaw_deg
+            .map(|d| (180.0 - (180.0 - d).rem_euclid(360.0)).to_radians())
+    }
+
     /// Parses and validates a mission from YAML. Same as [`from_yaml_str`].
     pub fn from_yaml_str(s: &str) -> Result<Mission, MissionError> {
         from_yaml_str(s)
@@ -277,6 +284,26 @@ waypoints:
         assert_eq!(m.accel_limit_mps2, 0.5);
         assert_eq!(m.hold_s, 3.0);
         assert_eq!(m.yaw_deg, Some(90.0));
+        use core::f32::consts::PI;
+        for (deg, rad) in [
+            (90.0, PI / 2.0),
+            (270.0, -PI / 2.0),
+            (-180.0, PI),
+            (180.0, PI),
+            (-90.0, -PI / 2.0),
+            (720.0, 0.0),
+            (-540.0, PI),
+        ] {
+            let m = Mission {
+                yaw_deg: Some(deg),
+                ..m.clone()
+            };
+            let got = m.yaw_rad().unwrap();
+            assert!(
+                (got - rad).abs() < 1e-6 && got > -PI && got <= PI,
+                "{deg}° → {got} rad"
+            );
+        }
         assert!(!m.land_at_end);
     }
 
