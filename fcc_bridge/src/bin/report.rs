@@ -130,11 +130,39 @@ fn load_mission(path: Option<&Path>) -> anyhow::Result<Option<fcc_mission::Missi
     })
 }
 
+impl View<'_> {
+    /// `(t − t0, y)` of each sample, from `f(sample) = (t, y)`.
+    fn ts<T>(&self, xs: &[T], f: impl Fn(&T) -> (f64, f64)) -> Vec<(f64, f64)> {
+        xs.iter()
+            .map(|x| {
+                let (t, y) = f(x);
+                (t - self.t0, y)
+            })
+            .collect()
+    }
+
+    /// Draws one chart into `file` (`title`, x and y axis labels) and lists it on the page
+    /// under `html`.
+    fn draw(&self, plots: &mut Vec<Plot>, file: &'static str, html: &'static str, c: Chart) {
+        let (title, (xl, yl), lines, equal) = c;
+        plots.push((
+            file,
+            html,
+            chart(&self.out.join(file), &title, xl, yl, lines, equal),
+        ));
+    }
+}
+
+/// A chart: its title, the axis labels (x, y), its lines and whether the axes share a scale.
+type Chart<'a> = (String, (&'a str, &'a str), Vec<Line<'a>>, bool);
+
+fn grey(v: u8) -> RGBColor {
+    RGBColor(v, v, v)
+}
+
 /// Fig. 17: the estimated path, with the mission's legs.
 fn path_plot(v: &View, plots: &mut Vec<Plot>) {
     let View { s, f, .. } = *v;
-    let p = |name: &str| v.out.join(name);
-    // Fig. 17: path, with the mission's legs.
     // From the arm command on: before it the estimate may still be settling on home.
     let path_en = s
         .odom
@@ -150,269 +178,153 @@ fn path_plot(v: &View, plots: &mut Vec<Plot>) {
         ];
         lines.push(line(if l.index == 0 { "legs" } else { "" }, leg_en, RED));
     }
-    plots.push((
-        "path.png",
-        "Waypoint path (paper A Fig. 17)",
-        chart(
-            &p("path.png"),
-            "Waypoint path (N vs E)",
-            "east m",
-            "north m",
-            lines,
-            true,
-        ),
-    ));
+    let title = "Waypoint path (N vs E)".to_string();
+    let chart = (title, ("east m", "north m"), lines, true);
+    v.draw(plots, "path.png", "Waypoint path (paper A Fig. 17)", chart);
 }
 
-/// Fig. 16: hover, or the position over the whole flight without one.
+/// Fig. 16: hover — deviation from the hold point over the HOLD window, with the box; without
+/// a hover, the estimated position over the whole flight.
 fn hover_plot(v: &View, plots: &mut Vec<Plot>) {
-    let View { s, f, t0, .. } = *v;
-    let p = |name: &str| v.out.join(name);
-    // Fig. 16: hover — deviation from the hold point over the HOLD window, with the box;
-    // without a hover, the estimated position over the whole flight.
-    match &f.hover {
-        Some(h) => {
-            let win: Vec<_> = s
-                .odom
-                .iter()
-                .filter(|o| o.0 >= h.t0_s && o.0 < h.t1_s)
-                .collect();
-            let dev = |k: usize, sign: f64| -> Vec<(f64, f64)> {
-                win.iter()
-                    .map(|o| (o.0 - h.t0_s, sign * (o.1[k] - h.hold_ned_m[k])))
-                    .collect()
-            };
-            let span = h.t1_s - h.t0_s;
-            let mut lines = Vec::new();
-            for (k, name, sign, col) in [
-                (0, "north", 1.0, BLUE),
-                (1, "east", 1.0, RED),
-                (2, "altitude", -1.0, GREEN),
-            ] {
-                lines.push(Line {
-                    name,
-                    pts: dev(k, sign),
-                    color: col,
-                    dots: false,
-                });
-                let b = h.box_m[k];
-                for y in [b, -b] {
-                    lines.push(line("", vec![(0.0, y), (span, y)], col));
-                }
-            }
-            plots.push((
-                "hover.png",
-                "Hover in HOLD: deviation from the hold point, with the box (paper A Fig. 16)",
-                chart(
-                    &p("hover.png"),
-                    &format!(
-                        "Hover {:.0} s: box N {:.2} E {:.2} alt {:.2} m",
-                        span, h.box_m[0], h.box_m[1], h.box_m[2]
-                    ),
-                    "t s (from hold start)",
-                    "m",
-                    lines,
-                    false,
-                ),
-            ));
+    let View { s, f, .. } = *v;
+    let Some(h) = &f.hover else {
+        let lines = vec![
+            line("north", v.ts(&s.odom, |o| (o.0, o.1[0])), BLUE),
+            line("east", v.ts(&s.odom, |o| (o.0, o.1[1])), RED),
+            line("altitude", v.ts(&s.odom, |o| (o.0, -o.1[2])), GREEN),
+        ];
+        let chart = ("Estimated position".to_string(), ("t s", "m"), lines, false);
+        let html = "Position over time (no hover in this flight; paper A Fig. 16)";
+        return v.draw(plots, "hover.png", html, chart);
+    };
+    let win: Vec<_> = s
+        .odom
+        .iter()
+        .filter(|o| o.0 >= h.t0_s && o.0 < h.t1_s)
+        .collect();
+    let span = h.t1_s - h.t0_s;
+    let mut lines = Vec::new();
+    for (k, name, sign, col) in [
+        (0, "north", 1.0, BLUE),
+        (1, "east", 1.0, RED),
+        (2, "altitude", -1.0, GREEN),
+    ] {
+        let dev = win
+            .iter()
+            .map(|o| (o.0 - h.t0_s, sign * (o.1[k] - h.hold_ned_m[k])))
+            .collect();
+        lines.push(line(name, dev, col));
+        let b = h.box_m[k];
+        for y in [b, -b] {
+            lines.push(line("", vec![(0.0, y), (span, y)], col));
         }
-        None => plots.push((
-            "hover.png",
-            "Position over time (no hover in this flight; paper A Fig. 16)",
-            chart(
-                &p("hover.png"),
-                "Estimated position",
-                "t s",
-                "m",
-                vec![
-                    line(
-                        "north",
-                        s.odom.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
-                        BLUE,
-                    ),
-                    line(
-                        "east",
-                        s.odom.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
-                        RED,
-                    ),
-                    line(
-                        "altitude",
-                        s.odom.iter().map(|o| (o.0 - t0, -o.1[2])).collect(),
-                        GREEN,
-                    ),
-                ],
-                false,
-            ),
-        )),
     }
+    let title = format!(
+        "Hover {:.0} s: box N {:.2} E {:.2} alt {:.2} m",
+        span, h.box_m[0], h.box_m[1], h.box_m[2]
+    );
+    let chart = (title, ("t s (from hold start)", "m"), lines, false);
+    let html = "Hover in HOLD: deviation from the hold point, with the box (paper A Fig. 16)";
+    v.draw(plots, "hover.png", html, chart);
 }
 
 /// Fig. 18: velocity tracking.
 fn velocity_plot(v: &View, plots: &mut Vec<Plot>) {
-    let View { s, t0, .. } = *v;
-    let p = |name: &str| v.out.join(name);
-    let c = |r, g, b| RGBColor(r, g, b);
-    // Fig. 18: velocity tracking.
-    plots.push((
+    let s = v.s;
+    let lines = vec![
+        line("v_N est", v.ts(&s.odom, |o| (o.0, o.2[0])), BLUE),
+        dots(
+            "v_N cmd",
+            v.ts(&s.vel_cmd, |o| (o.0, o.1[0])),
+            RGBColor(120, 120, 255),
+        ),
+        line("v_E est", v.ts(&s.odom, |o| (o.0, o.2[1])), RED),
+        dots(
+            "v_E cmd",
+            v.ts(&s.vel_cmd, |o| (o.0, o.1[1])),
+            RGBColor(255, 140, 140),
+        ),
+    ];
+    let title = "Velocity: command vs estimate (NED)".to_string();
+    let chart = (title, ("t s", "m/s"), lines, false);
+    v.draw(
+        plots,
         "velocity.png",
         "Velocity tracking (paper A Fig. 18)",
-        chart(
-            &p("velocity.png"),
-            "Velocity: command vs estimate (NED)",
-            "t s",
-            "m/s",
-            vec![
-                line(
-                    "v_N est",
-                    s.odom.iter().map(|o| (o.0 - t0, o.2[0])).collect(),
-                    BLUE,
-                ),
-                dots(
-                    "v_N cmd",
-                    s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[0])).collect(),
-                    c(120, 120, 255),
-                ),
-                line(
-                    "v_E est",
-                    s.odom.iter().map(|o| (o.0 - t0, o.2[1])).collect(),
-                    RED,
-                ),
-                dots(
-                    "v_E cmd",
-                    s.vel_cmd.iter().map(|o| (o.0 - t0, o.1[1])).collect(),
-                    c(255, 140, 140),
-                ),
-            ],
-            false,
-        ),
-    ));
+        chart,
+    );
 }
 
 /// Fig. 5: attitude estimate vs accelerometer angles.
 fn attitude_plot(v: &View, plots: &mut Vec<Plot>) {
-    let View { s, t0, .. } = *v;
-    let p = |name: &str| v.out.join(name);
-    let c = |r, g, b| RGBColor(r, g, b);
-    // Fig. 5: attitude estimate vs accelerometer angles.
-    plots.push((
-        "attitude.png",
-        "Attitude estimate vs accelerometer angles (paper A Fig. 5)",
-        chart(
-            &p("attitude.png"),
-            "Roll/pitch: estimate vs accelerometer",
-            "t s",
-            "deg",
-            vec![
-                dots(
-                    "roll (accel)",
-                    s.acc_angles
-                        .iter()
-                        .map(|a| (a.0 - t0, a.1.to_degrees()))
-                        .collect(),
-                    c(255, 180, 180),
-                ),
-                dots(
-                    "pitch (accel)",
-                    s.acc_angles
-                        .iter()
-                        .map(|a| (a.0 - t0, a.2.to_degrees()))
-                        .collect(),
-                    c(180, 180, 255),
-                ),
-                line(
-                    "roll (estimate)",
-                    s.odom
-                        .iter()
-                        .map(|o| (o.0 - t0, o.3[0].to_degrees()))
-                        .collect(),
-                    RED,
-                ),
-                line(
-                    "pitch (estimate)",
-                    s.odom
-                        .iter()
-                        .map(|o| (o.0 - t0, o.3[1].to_degrees()))
-                        .collect(),
-                    BLUE,
-                ),
-            ],
-            false,
+    let s = v.s;
+    let deg = |x: f64| x.to_degrees();
+    let lines = vec![
+        dots(
+            "roll (accel)",
+            v.ts(&s.acc_angles, |a| (a.0, deg(a.1))),
+            RGBColor(255, 180, 180),
         ),
-    ));
+        dots(
+            "pitch (accel)",
+            v.ts(&s.acc_angles, |a| (a.0, deg(a.2))),
+            RGBColor(180, 180, 255),
+        ),
+        line(
+            "roll (estimate)",
+            v.ts(&s.odom, |o| (o.0, deg(o.3[0]))),
+            RED,
+        ),
+        line(
+            "pitch (estimate)",
+            v.ts(&s.odom, |o| (o.0, deg(o.3[1]))),
+            BLUE,
+        ),
+    ];
+    let title = "Roll/pitch: estimate vs accelerometer".to_string();
+    let chart = (title, ("t s", "deg"), lines, false);
+    let html = "Attitude estimate vs accelerometer angles (paper A Fig. 5)";
+    v.draw(plots, "attitude.png", html, chart);
 }
 
 /// Fig. 9: vertical estimate vs barometer.
 fn vertical_plot(v: &View, plots: &mut Vec<Plot>) {
-    let View { s, t0, .. } = *v;
-    let p = |name: &str| v.out.join(name);
-    let c = |r, g, b| RGBColor(r, g, b);
-    // Fig. 9: vertical estimate vs barometer.
-    plots.push((
-        "vertical.png",
-        "Vertical estimate vs barometer (paper A Fig. 9)",
-        chart(
-            &p("vertical.png"),
-            "Altitude: fused vs barometer",
-            "t s",
-            "m",
-            vec![
-                line(
-                    "barometer",
-                    s.alt.iter().map(|a| (a.0 - t0, a.1)).collect(),
-                    c(160, 160, 160),
-                ),
-                line(
-                    "fused",
-                    s.alt.iter().map(|a| (a.0 - t0, a.2)).collect(),
-                    BLUE,
-                ),
-            ],
-            false,
-        ),
-    ));
+    let s = v.s;
+    let lines = vec![
+        line("barometer", v.ts(&s.alt, |a| (a.0, a.1)), grey(160)),
+        line("fused", v.ts(&s.alt, |a| (a.0, a.2)), BLUE),
+    ];
+    let chart = (
+        "Altitude: fused vs barometer".to_string(),
+        ("t s", "m"),
+        lines,
+        false,
+    );
+    let html = "Vertical estimate vs barometer (paper A Fig. 9)";
+    v.draw(plots, "vertical.png", html, chart);
 }
 
 /// Paper B Fig. 13: ground-altitude fusion vs laser and sonar.
 fn ground_plot(v: &View, plots: &mut Vec<Plot>) {
-    let View { s, t0, .. } = *v;
-    let p = |name: &str| v.out.join(name);
-    // Paper B Fig. 13: ground altitude fusion vs laser and sonar.
-    plots.push((
-        "ground.png",
-        "Ground-altitude fusion vs laser and sonar (paper B Fig. 13)",
-        chart(
-            &p("ground.png"),
-            "Height above ground",
-            "t s",
-            "m",
-            vec![
-                dots(
-                    "laser",
-                    s.alt.iter().map(|a| (a.0 - t0, a.4)).collect(),
-                    RED,
-                ),
-                dots(
-                    "sonar",
-                    s.alt.iter().map(|a| (a.0 - t0, a.5)).collect(),
-                    GREEN,
-                ),
-                line(
-                    "fusion",
-                    s.alt.iter().map(|a| (a.0 - t0, a.3)).collect(),
-                    BLUE,
-                ),
-            ],
-            false,
-        ),
-    ));
+    let s = v.s;
+    let lines = vec![
+        dots("laser", v.ts(&s.alt, |a| (a.0, a.4)), RED),
+        dots("sonar", v.ts(&s.alt, |a| (a.0, a.5)), GREEN),
+        line("fusion", v.ts(&s.alt, |a| (a.0, a.3)), BLUE),
+    ];
+    let chart = (
+        "Height above ground".to_string(),
+        ("t s", "m"),
+        lines,
+        false,
+    );
+    let html = "Ground-altitude fusion vs laser and sonar (paper B Fig. 13)";
+    v.draw(plots, "ground.png", html, chart);
 }
 
 /// Fig. 13: acceleration observer vs measured (skipped on older bags).
 fn observer_plot(v: &View, plots: &mut Vec<Plot>) {
-    let View { s, f, t0, .. } = *v;
-    let p = |name: &str| v.out.join(name);
-    let c = |r, g, b| RGBColor(r, g, b);
-    // Fig. 13: acceleration observer vs measured acceleration (skipped on older bags).
+    let View { s, f, .. } = *v;
     if let Some(o) = &f.observer {
         let mut pan = Vec::new();
         for (k, axis) in [(0, "north"), (1, "east")] {
@@ -425,76 +337,59 @@ fn observer_plot(v: &View, plots: &mut Vec<Plot>) {
                 vec![
                     dots(
                         "measured (accelerometer, gravity removed)",
-                        s.accel_meas.iter().map(|a| (a.0 - t0, a.1[k])).collect(),
-                        c(170, 170, 170),
+                        v.ts(&s.accel_meas, |a| (a.0, a.1[k])),
+                        grey(170),
                     ),
-                    line(
-                        "observer",
-                        s.accel_obs.iter().map(|a| (a.0 - t0, a.1[k])).collect(),
-                        BLUE,
-                    ),
+                    line("observer", v.ts(&s.accel_obs, |a| (a.0, a.1[k])), BLUE),
                 ],
             ));
         }
         plots.push((
             "observer.png",
             "Acceleration observer vs measured acceleration (paper A Fig. 13)",
-            panels(&p("observer.png"), "t s", pan),
+            panels(&v.out.join("observer.png"), "t s", pan),
         ));
     }
 }
 
-/// Fig. 12: the k1/k2 fit along the flight.
+/// Fig. 12: the k1/k2 fit — measured north acceleration vs the fitted model with each window's
+/// wind intercept, along the flight.
 fn k_fit_plot(v: &View, plots: &mut Vec<Plot>) {
     let View { s, f, t0, .. } = *v;
-    let p = |name: &str| v.out.join(name);
-    let c = |r, g, b| RGBColor(r, g, b);
-    // Fig. 12: k1/k2 fit — measured north acceleration vs the fitted model with each window's
-    // wind intercept, along the flight.
-    if let Some(x) = &f.sysid {
-        let (k1, k2) = (x.k1_mps2_per_rad, x.k2_per_s);
-        let samples = fcc_bridge::report::sysid::samples(
-            &s,
-            fcc_bridge::report::sysid::AccelSource::OdomDifferenced,
-        );
-        let mut meas = Vec::new();
-        let mut model = Vec::new();
-        let mut wi = 0;
-        let wl = &x.window_list;
-        for q in &samples {
-            while wi + 1 < wl.len() && q.t_s > wl[wi].t1_s {
-                wi += 1;
-            }
-            let Some(w) = wl.get(wi) else { break };
-            let c = w.means.intercept_ne_mps2(k1 as f32, k2 as f32)[0] as f64;
-            meas.push((q.t_s - t0, q.accel_ne_mps2[0]));
-            model.push((q.t_s - t0, k1 * q.tilt_ne_rad[0] - k2 * q.vel_ne_mps[0] + c));
+    let Some(x) = &f.sysid else { return };
+    let (k1, k2) = (x.k1_mps2_per_rad, x.k2_per_s);
+    let samples = fcc_bridge::report::sysid::samples(
+        s,
+        fcc_bridge::report::sysid::AccelSource::OdomDifferenced,
+    );
+    let mut meas = Vec::new();
+    let mut model = Vec::new();
+    let mut wi = 0;
+    let wl = &x.window_list;
+    for q in &samples {
+        while wi + 1 < wl.len() && q.t_s > wl[wi].t1_s {
+            wi += 1;
         }
-        plots.push((
-            "k_fit.png",
-            "k1/k2 fit with the wind (paper A Fig. 12)",
-            chart(
-                &p("k_fit.png"),
-                &format!(
-                    "North acceleration: measured vs k1·θ − k2·(v − w) (k1 {k1:.2}, k2 {k2:.3})"
-                ),
-                "t s",
-                "m/s²",
-                vec![
-                    dots(
-                        "measured (odometry velocity, differenced)",
-                        meas,
-                        c(150, 150, 150),
-                    ),
-                    line("fit (wind per window)", model, MAGENTA),
-                ],
-                false,
-            ),
-        ));
+        let Some(w) = wl.get(wi) else { break };
+        let c = w.means.intercept_ne_mps2(k1 as f32, k2 as f32)[0] as f64;
+        meas.push((q.t_s - t0, q.accel_ne_mps2[0]));
+        model.push((q.t_s - t0, k1 * q.tilt_ne_rad[0] - k2 * q.vel_ne_mps[0] + c));
     }
+    let lines = vec![
+        dots("measured (odometry velocity, differenced)", meas, grey(150)),
+        line("fit (wind per window)", model, MAGENTA),
+    ];
+    let title =
+        format!("North acceleration: measured vs k1·θ − k2·(v − w) (k1 {k1:.2}, k2 {k2:.3})");
+    let chart = (title, ("t s", "m/s²"), lines, false);
+    v.draw(
+        plots,
+        "k_fit.png",
+        "k1/k2 fit with the wind (paper A Fig. 12)",
+        chart,
+    );
 }
 
-/// `report.html`: the summary text and every plot (or why it failed).
 /// A line of a chart.
 fn line(name: &str, pts: Vec<(f64, f64)>, color: RGBColor) -> Line<'_> {
     Line {
@@ -515,6 +410,7 @@ fn dots(name: &str, pts: Vec<(f64, f64)>, color: RGBColor) -> Line<'_> {
     }
 }
 
+/// `report.html`: the summary text and every plot (or why it failed).
 fn write_html(out: &Path, bag: &Path, text: &str, plots: &[Plot]) -> std::io::Result<()> {
     let mut html = format!("<html><head><meta charset=\"utf-8\"><title>fcc flight report</title></head><body><h1>Flight report: {}</h1><pre>{}</pre>\n", bag.display(), text);
     for (file, title, r) in plots {
