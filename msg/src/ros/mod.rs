@@ -94,7 +94,7 @@ pub fn full_definition<T: RosMsg>() -> String {
 
 /// Implements [`ros2_client::Message`] and [`RosMsg`].
 macro_rules! ros_msg {
-    ($ty:ty, $pkg:literal, $name:literal, $def:expr $(, [$($nested:ty),*])?) => {
+    ($ty:ty, $pkg:literal, $name:expr, $def:expr $(, [$($nested:ty),*])?) => {
         impl ros2_client::Message for $ty {}
         impl $crate::ros::RosMsg for $ty {
             const PACKAGE: &'static str = $pkg;

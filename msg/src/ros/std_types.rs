@@ -182,29 +182,40 @@ ros_msg!(
     [Point, Quaternion]
 );
 
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PoseWithCovariance {
-    pub pose: Pose,
-    /// Row-major 6×6 (x, y, z, rot x, rot y, rot z).
-    #[serde(with = "BigArray")]
-    pub covariance: [f64; 36],
-}
-ros_msg!(
-    PoseWithCovariance,
-    "geometry_msgs",
-    "PoseWithCovariance",
-    "Pose pose\nfloat64[36] covariance\n",
-    [Pose]
-);
-
-impl Default for PoseWithCovariance {
-    fn default() -> Self {
-        PoseWithCovariance {
-            pose: Pose::default(),
-            covariance: [0.0; 36],
+/// `geometry_msgs/<Value>WithCovariance`: a value and its row-major 6×6 covariance
+/// (x, y, z, rot x, rot y, rot z), zero by default.
+macro_rules! with_covariance {
+    ($name:ident, $field:ident: $inner:ident) => {
+        #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+        pub struct $name {
+            pub $field: $inner,
+            /// Row-major 6×6 (x, y, z, rot x, rot y, rot z).
+            #[serde(with = "BigArray")]
+            pub covariance: [f64; 36],
         }
-    }
+        ros_msg!(
+            $name,
+            "geometry_msgs",
+            stringify!($name),
+            concat!(
+                stringify!($inner),
+                " ",
+                stringify!($field),
+                "\nfloat64[36] covariance\n"
+            ),
+            [$inner]
+        );
+        impl Default for $name {
+            fn default() -> Self {
+                $name {
+                    $field: $inner::default(),
+                    covariance: [0.0; 36],
+                }
+            }
+        }
+    };
 }
+with_covariance!(PoseWithCovariance, pose: Pose);
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Twist {
@@ -219,28 +230,7 @@ ros_msg!(
     [Vector3]
 );
 
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TwistWithCovariance {
-    pub twist: Twist,
-    #[serde(with = "BigArray")]
-    pub covariance: [f64; 36],
-}
-ros_msg!(
-    TwistWithCovariance,
-    "geometry_msgs",
-    "TwistWithCovariance",
-    "Twist twist\nfloat64[36] covariance\n",
-    [Twist]
-);
-
-impl Default for TwistWithCovariance {
-    fn default() -> Self {
-        TwistWithCovariance {
-            twist: Twist::default(),
-            covariance: [0.0; 36],
-        }
-    }
-}
+with_covariance!(TwistWithCovariance, twist: Twist);
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TwistStamped {
