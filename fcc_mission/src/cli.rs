@@ -12,14 +12,32 @@ where
     I: IntoIterator<Item = S>,
     S: Into<OsString> + Clone,
 {
-    T::try_parse_from(args).map_err(|e| {
-        if !e.use_stderr() {
-            let _ = e.print();
-            return 0;
-        }
-        eprintln!("{program}: {} (see --help)", one_line(&e));
-        2
-    })
+    T::try_parse_from(args).map_err(|e| report(program, e))
+}
+
+/// As [`parse`], with `after_help` appended to `--help` (text generated at run time, e.g. from a
+/// parameter table).
+pub fn parse_with_help<T, I, S>(program: &str, args: I, after_help: String) -> Result<T, u8>
+where
+    T: clap::Parser,
+    I: IntoIterator<Item = S>,
+    S: Into<OsString> + Clone,
+{
+    T::command()
+        .after_help(after_help)
+        .try_get_matches_from(args)
+        .and_then(|m| T::from_arg_matches(&m))
+        .map_err(|e| report(program, e))
+}
+
+/// Prints clap's error (help/version as clap does, a real error as one line); the exit status.
+fn report(program: &str, e: clap::Error) -> u8 {
+    if !e.use_stderr() {
+        let _ = e.print();
+        return 0;
+    }
+    eprintln!("{program}: {} (see --help)", one_line(&e));
+    2
 }
 
 /// clap's error as one line: its text up to the usage block, whitespace collapsed, without the

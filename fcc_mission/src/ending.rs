@@ -24,14 +24,6 @@ pub const HOLD_CONFIRM_TIMEOUT_S: f64 = 10.0;
 /// Re-send the land command after this long without the MCU in land mode, s.
 pub const LAND_RESEND_S: f64 = 0.5;
 
-/// The `hover_s` parameter: a finite number of seconds ≥ 0 (0 = land right away).
-pub fn parse_hover_s(v: &str) -> Result<f64, String> {
-    match v.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
-        _ => Err(format!("'{v}' is not a number of seconds >= 0")),
-    }
-}
-
 /// The MCU's flight mode as reported on `status`: the link's vocabulary (`fcc_msgs::vocab`:
 /// `McuMode::from_code(Status.mode)`, `McuMode::from_name(Status.mode_name)`), not a mirror.
 pub use fcc_msgs::FlightMode as McuMode;
@@ -573,19 +565,6 @@ mod tests {
             s.update(15.0, true, Hold, false).command,
             Some(ModeCommand::Land)
         );
-    }
-
-    #[test]
-    fn hover_s_parameter_range() {
-        assert_eq!(parse_hover_s("30"), Ok(30.0));
-        assert_eq!(parse_hover_s("0"), Ok(0.0));
-        assert_eq!(parse_hover_s("2.5"), Ok(2.5));
-        for bad in [
-            "-1", "-0.1", "nan", "NaN", "inf", "-inf", "", "ten", "1e400",
-        ] {
-            let e = parse_hover_s(bad).expect_err(bad);
-            assert!(e.contains(">= 0") && !e.contains('\n'), "{e}");
-        }
     }
 
     #[test]

@@ -14,7 +14,9 @@
 //!   and log), built from [`arming`] (arm command re-sends and timeout), [`pilot_pause`]
 //!   (pause and resume around an R/C pilot override), [`progress`] (phase names, distance to
 //!   go, cross-track on the legs), [`ending`] (hover in HOLD, then land; the MCU's modes) and
-//!   [`status_report`] (the `mission/status` JSON and its rate).
+//!   [`status_report`] (the `mission/status` JSON and its rate); [`node_params`] (the node's
+//!   ROS parameters: one table for the `-p` check, `--help`, the declared parameters and their
+//!   descriptors).
 //! * The launcher (`fcc-launch`, feature `ros`, does the process I/O): [`launch`] (its config,
 //!   `${NAME}` variables, the supervision rules) and [`track`] (the cross-track report of a
 //!   full-stack flight from the simulator's CSV).
@@ -67,6 +69,7 @@ pub mod ending;
 pub mod follower;
 pub mod launch;
 pub mod mission;
+pub mod node_params;
 pub mod pilot_pause;
 pub mod progress;
 pub mod run;

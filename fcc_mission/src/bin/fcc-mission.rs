@@ -19,7 +19,7 @@
 
 use clap::Parser;
 use fcc_mission::run::{Input, Level, McuStatus, MissionRun, Outcome, RunConfig, Sample, Step};
-use fcc_mission::{McuMode, Mission};
+use fcc_mission::{node_params, McuMode, Mission};
 use fcc_msgs::ros::{
     Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
 };
@@ -35,16 +35,7 @@ use std::time::{Duration, Instant};
 #[derive(Parser, Debug)]
 #[command(
     name = "fcc-mission",
-    about = "ROS 2 mission node: flies a waypoint mission through fcc-bridge",
-    after_help = "ROS arguments: --ros-args [-r __ns:=/fcc] [-r __node:=fcc_mission] [-r topic:=new_name ...]\n\
-  [-p name:=value ...] (remaps as the bridge's, e.g. -r /clock:=clock for a per-vehicle clock)\n\
-Parameters: mission (file; or --mission), rate_hz (50), use_sim_time (false: stamp with the\n\
-  Linux clock; true: with /clock, e.g. from fcc-bridge -p clock_source:=mcu),\n\
-  timeout_s (600, from start), arm_timeout_s (60), localhost_only (true),\n\
-  hover_s (0: land right after the last waypoint; S > 0: hover S s of ROS time in the MCU's\n\
-  HOLD mode first, then land).\n\
-Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE,\n\
-  FCC_MISSION_DDS_STARTUP_TIMEOUT_MS (5000: restart when the DDS set-up takes longer)."
+    about = "ROS 2 mission node: flies a waypoint mission through fcc-bridge"
 )]
 struct Cli {
     /// Mission YAML (launch_configs/missions/*.yaml).
@@ -80,31 +71,33 @@ fn fail(code: i32, msg: String) -> ! {
     std::process::exit(code)
 }
 
+/// `--help`'s text after the options: ROS arguments, the parameter table, the environment.
+fn after_help() -> String {
+    format!(
+        "ROS arguments: --ros-args [-r __ns:=/fcc] [-r __node:=fcc_mission] [-r topic:=new_name ...]\n  \
+         [-p name:=value ...] (remaps as the bridge's, e.g. -r /clock:=clock for a per-vehicle clock)\n\
+         {}\
+         Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE,\n  \
+         FCC_MISSION_DDS_STARTUP_TIMEOUT_MS (5000: restart when the DDS set-up takes longer).",
+        node_params::help()
+    )
+}
+
 fn options() -> Options {
     let argv: Vec<String> = std::env::args().collect();
     let (prog, ros) = params::split_ros_args(&argv).unwrap_or_else(|e| fail(2, e));
-    let cli: Cli = fcc_mission::cli::parse("fcc-mission", prog)
+    let cli: Cli = fcc_mission::cli::parse_with_help("fcc-mission", prog, after_help())
         .unwrap_or_else(|code| std::process::exit(code.into()));
     let p = &ros.params;
-    let known = [
-        "mission",
-        "rate_hz",
-        "use_sim_time",
-        "timeout_s",
-        "arm_timeout_s",
-        "localhost_only",
-        "hover_s",
-    ];
-    if let Some(k) = p.keys().find(|k| !known.contains(&k.as_str())) {
+    if let Some(k) = p.keys().find(|k| node_params::by_name(k).is_none()) {
         fail(2, format!("unknown parameter '{k}'"));
     }
-    let num = |k: &str, def: f64| -> f64 {
+    // A number parameter: its value, or its default (the table's).
+    let num = |k: &str| -> f64 {
+        let param = node_params::by_name(k).expect("a parameter of the table");
         match p.get(k) {
-            None => def,
-            Some(v) => match v.parse::<f64>() {
-                Ok(x) if x.is_finite() && x > 0.0 => x,
-                _ => fail(2, format!("parameter {k}: '{v}' is not a positive number")),
-            },
+            None => param.default_number(),
+            Some(v) => param.number(v).unwrap_or_else(|e| fail(2, e)),
         }
     };
     let mission_file = cli
@@ -124,14 +117,8 @@ fn options() -> Options {
         .get("use_sim_time")
         .map(|v| parse_bool(v).unwrap_or_else(|e| fail(2, format!("parameter use_sim_time: {e}"))))
         .unwrap_or(false);
-    let hover_s = p.get("hover_s").map_or(0.0, |v| {
-        fcc_mission::ending::parse_hover_s(v)
-            .unwrap_or_else(|e| fail(2, format!("parameter hover_s: {e}")))
-    });
-    let rate_hz = num("rate_hz", 50.0);
-    if rate_hz < 20.0 {
-        fail(2, format!("parameter rate_hz: {rate_hz} is below 20 Hz"));
-    }
+    let hover_s = num("hover_s");
+    let rate_hz = num("rate_hz");
     Options {
         mission_file,
         mission,
@@ -143,8 +130,8 @@ fn options() -> Options {
         dds: DdsEnv::from_env(&ros).unwrap_or_else(|e| fail(2, e)),
         rate_hz,
         use_sim_time,
-        timeout_s: num("timeout_s", 600.0),
-        arm_timeout_s: num("arm_timeout_s", 60.0),
+        timeout_s: num("timeout_s"),
+        arm_timeout_s: num("arm_timeout_s"),
         hover_s,
         remaps: ros.remaps.clone(),
     }
