@@ -1,16 +1,15 @@
 //! The 500 Hz flight step: sensors → navigation → mode logic → control cascade → mixer.
 //!
-//! This is the thin task (PX4's module wrapper) around the plain control structs in
-//! [`crate::control`]: it owns them, feeds them the navigation solution and the Linux computer's
-//! setpoints, and produces motor commands. Time is always an argument (`now_us`, MCU µs).
+//! This is the thin task (PX4's module wrapper) around the control cascade
+//! ([`crate::control::cascade::Cascade`], the math as a plain struct): it owns the modes,
+//! failsafes, guidance, limits, land detection and the touchdown gate, turns the navigation
+//! solution and the Linux computer's setpoints into a [`Demand`] each step, and calls the
+//! cascade for the motor commands. Time is always an argument (`now_us`, MCU µs).
 
 use crate::commands::{Command, CommandError, FailsafeCause, Mode, VelocitySetpoint, KILL_CONFIRM};
-use crate::control::accel::AccelController;
-use crate::control::attitude::{TiltPid, YawController};
+use crate::control::cascade::{Cascade, Demand};
 use crate::control::heading::Heading;
-use crate::control::mixer::{Mixer, MixerSaturation};
-use crate::control::velocity::{CrossTrack, VelocityController};
-use crate::control::vertical::VerticalController;
+use crate::control::vec2::clamp_norm;
 use crate::geometry::MOTOR_COUNT;
 use crate::land_detector::{LandDetector, LandInputs, LandState};
 use crate::nav::{NavNotReady, NavState, Navigator};
@@ -20,7 +19,6 @@ use crate::sensors::SensorInputs;
 use crate::touchdown_gate::{GateAction, TouchdownGate, GATE_CLEARANCE_M};
 use fcc_nav::complementary::wrap_pi;
 use fcc_nav::ground_altitude::GroundSource;
-use fcc_nav::observer::AccelObserver;
 use fcc_nav::GRAVITY_MPS2;
 
 /// A fused ground height with a larger variance than this is not trusted for landing (m²).
@@ -64,43 +62,7 @@ const PILOT_LOCK_SPEED_MPS: f32 = 0.5;
 /// Pilot mode: the heading command leads the heading by at most this much, rad.
 const PILOT_YAW_LEAD_RAD: f32 = 0.5;
 
-/// What the horizontal loops commanded this step.
-struct Horizontal {
-    /// Velocity command after cross-track compensation (NED north, east), m/s.
-    v_cmd_ne: [f32; 2],
-    /// Acceleration command (NED north, east), after the tilt limit, m/s².
-    a_cmd_ne: [f32; 2],
-    /// Observer estimates and the raw accelerometer, heading frame (forward, right), m/s².
-    a_est_fr: [f32; 2],
-    a_meas_fr: [f32; 2],
-    /// Tilt command (forward, right), rad: pitch = −forward, roll = right.
-    tilt_cmd_fr_rad: [f32; 2],
-}
-
-/// What one step did, for telemetry and tests.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct StepTelemetry {
-    pub t_us: u64,
-    /// Horizontal velocity command after cross-track compensation, and vertical command (NED).
-    pub vel_cmd_ned_mps: [f32; 3],
-    /// Acceleration command (NED north, east).
-    pub accel_cmd_ne_mps2: [f32; 2],
-    /// Observer estimates in the heading frame (forward, right), m/s².
-    pub accel_est_fr_mps2: [f32; 2],
-    /// The same observer estimates rotated to NED (north, east), m/s².
-    pub accel_est_ne_mps2: [f32; 2],
-    /// Raw gravity-compensated accelerometer in the heading frame (forward, right), m/s².
-    pub accel_meas_fr_mps2: [f32; 2],
-    pub roll_cmd_rad: f32,
-    pub pitch_cmd_rad: f32,
-    pub yaw_cmd_rad: f32,
-    pub thrust_n: f32,
-    pub torque_nm: [f32; 3],
-    pub cross_track_m: f32,
-    pub saturation: MixerSaturation,
-    /// The attitude (and horizontal) loops ran this step (not landed).
-    pub attitude_active: bool,
-}
+pub use crate::control::cascade::StepTelemetry;
 
 pub struct FlightCore {
     params: Params,
@@ -127,18 +89,9 @@ pub struct FlightCore {
     /// On the ground or in the air ([`crate::land_detector`]).
     land: LandDetector,
     touchdown_gate: TouchdownGate,
-    cross_track: CrossTrack,
-    vel_ctrl: VelocityController,
-    accel_ctrl: [AccelController; 2],
-    observer: [AccelObserver; 2],
-    vert_ctrl: VerticalController,
-    roll_pid: TiltPid,
-    pitch_pid: TiltPid,
-    yaw_ctrl: YawController,
-    mixer: Mixer,
-    /// Last tilt command (forward, right), rad: the observer's θ_cmd input.
-    tilt_cmd_fr_rad: [f32; 2],
-    tilt_sat_fr: [f32; 2],
+    /// The control cascade ([`crate::control::cascade`]): velocity → acceleration → attitude
+    /// → vertical → mixer.
+    cascade: Cascade,
     last_step_us: Option<u64>,
     motors: [f32; MOTOR_COUNT],
     telemetry: StepTelemetry,
@@ -151,17 +104,6 @@ pub struct FlightCore {
 
 impl FlightCore {
     pub fn new(params: Params) -> Self {
-        let c = params.control;
-        let a = params.airframe;
-        let acc = AccelController::new(
-            c.model_k1_mps2_per_rad,
-            c.model_k2_per_s,
-            c.accel_p_rad_per_mps2,
-            c.accel_i_rad_per_mps,
-            c.accel_forgetting,
-            params.limits.max_tilt_deg.to_radians() * 0.5,
-        );
-        let obs = AccelObserver::new(c.observer_params());
         Self {
             params,
             nav: Navigator::new(params.nav),
@@ -180,49 +122,7 @@ impl FlightCore {
             takeoff_alt_m: 0.0,
             land: LandDetector::new(),
             touchdown_gate: TouchdownGate::new(),
-            cross_track: CrossTrack::new(c.cross_track_k_per_s),
-            vel_ctrl: VelocityController::new(
-                c.vel_p_per_s,
-                c.vel_i_per_s2,
-                c.vel_i_limit_mps2,
-                c.accel_cmd_limit_mps2,
-            ),
-            accel_ctrl: [acc, acc],
-            observer: [obs, obs],
-            vert_ctrl: VerticalController::new(
-                a.mass_kg,
-                c.vz_p_per_s,
-                c.vz_i_per_s2,
-                c.vz_i_limit_mps2,
-            ),
-            roll_pid: TiltPid::new(
-                c.att_p_nm_per_rad,
-                c.att_i_nm_per_rad_s,
-                c.att_d_nm_per_radps,
-                c.att_i_limit_nm,
-            ),
-            pitch_pid: TiltPid::new(
-                c.att_p_nm_per_rad,
-                c.att_i_nm_per_rad_s,
-                c.att_d_nm_per_radps,
-                c.att_i_limit_nm,
-            ),
-            yaw_ctrl: YawController::new(
-                c.yaw_p_per_s,
-                c.yaw_rate_ff_nm_per_radps,
-                c.yaw_rate_p_nm_per_radps,
-                c.yaw_rate_i_nm_per_rad,
-                c.yaw_rate_forgetting,
-                c.yaw_rate_limit_radps,
-            ),
-            mixer: Mixer::new(
-                a.arm_m,
-                a.torque_to_thrust_m,
-                a.max_thrust_per_motor_n,
-                a.idle_cmd,
-            ),
-            tilt_cmd_fr_rad: [0.0; 2],
-            tilt_sat_fr: [0.0; 2],
+            cascade: Cascade::from_params(&params),
             last_step_us: None,
             motors: [0.0; MOTOR_COUNT],
             telemetry: StepTelemetry::default(),
@@ -237,10 +137,9 @@ impl FlightCore {
 
     /// Change one tunable parameter (ids: `fcc_msgs::param_id`, the one table in
     /// `fcc_msgs::params`) in flight: set on a copy, checked with [`Params::validate`] (the
-    /// table's range and the cross-checks), then applied, and the controllers that depend on it
-    /// rebuilt (their integrators restart).
+    /// table's range and the cross-checks), then applied; the cascade rebuilds the controllers
+    /// whose parameters changed ([`Cascade::set_params`]: their integrators restart).
     pub fn set_param(&mut self, id: u16, value: f32) -> Result<(), ParamError> {
-        use fcc_msgs::param_id as pid;
         let mut p = self.params;
         let field = p.link_param_mut(id).ok_or(ParamError {
             field: "id",
@@ -249,30 +148,7 @@ impl FlightCore {
         *field = value;
         p.validate()?;
         self.params = p;
-        let c = p.control;
-        match id {
-            pid::MAX_TILT_DEG => {
-                let acc = AccelController::new(
-                    c.model_k1_mps2_per_rad,
-                    c.model_k2_per_s,
-                    c.accel_p_rad_per_mps2,
-                    c.accel_i_rad_per_mps,
-                    c.accel_forgetting,
-                    p.limits.max_tilt_deg.to_radians() * 0.5,
-                );
-                self.accel_ctrl = [acc, acc];
-            }
-            pid::CROSS_TRACK_K_PER_S => self.cross_track = CrossTrack::new(c.cross_track_k_per_s),
-            pid::VEL_P_PER_S => {
-                self.vel_ctrl = VelocityController::new(
-                    c.vel_p_per_s,
-                    c.vel_i_per_s2,
-                    c.vel_i_limit_mps2,
-                    c.accel_cmd_limit_mps2,
-                )
-            }
-            _ => {}
-        }
+        self.cascade.set_params(&p);
         Ok(())
     }
 
@@ -351,7 +227,7 @@ impl FlightCore {
                 if !self.land.landed() {
                     return Err(CommandError::NotLanded);
                 }
-                self.reset_controllers();
+                self.cascade.reset();
                 self.nav.clear_faults();
                 self.fault_since_us = None;
                 self.takeoff_alt_m = -nav.pos_ned_m[2];
@@ -441,23 +317,6 @@ impl FlightCore {
         Ok(())
     }
 
-    fn reset_controllers(&mut self) {
-        self.cross_track.reset();
-        self.vel_ctrl.reset();
-        for c in &mut self.accel_ctrl {
-            c.reset();
-        }
-        for o in &mut self.observer {
-            o.reset(0.0);
-        }
-        self.vert_ctrl.reset();
-        self.roll_pid.reset();
-        self.pitch_pid.reset();
-        self.yaw_ctrl.reset();
-        self.tilt_cmd_fr_rad = [0.0; 2];
-        self.tilt_sat_fr = [0.0; 2];
-    }
-
     fn enter_hold(&mut self, nav: &NavState) {
         self.vel_alt_m = None;
         self.vel_slew_ne = None;
@@ -465,7 +324,7 @@ impl FlightCore {
         self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         self.hold_alt_m = -nav.pos_ned_m[2];
         self.yaw_hold_rad = nav.euler.yaw_rad;
-        self.cross_track.reset();
+        self.cascade.reset_track();
     }
 
     fn enter_land(&mut self, nav: &NavState) {
@@ -475,7 +334,7 @@ impl FlightCore {
         self.touchdown_gate.reset();
         self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
         self.yaw_hold_rad = nav.euler.yaw_rad;
-        self.cross_track.reset();
+        self.cascade.reset_track();
     }
 
     /// One 500 Hz step; returns the ESC commands (0..1).
@@ -815,8 +674,9 @@ impl FlightCore {
         }
     }
 
-    /// The control cascade for this step's velocity, climb-rate and heading commands:
-    /// [`Self::horizontal`] → [`Self::vertical`] → [`Self::attitude`] → mixer.
+    /// The control cascade for this step's velocity, climb-rate and heading commands: the mode
+    /// logic's part (take-off, the tilt limit, which climb rate to close the loop on, the wind
+    /// limit's count) around [`Cascade::update`].
     fn control(
         &mut self,
         dt_s: f32,
@@ -831,170 +691,41 @@ impl FlightCore {
         // Every loop flies until the land detector confirms touchdown (never the estimated
         // altitude alone: it can be off by more than the gear height).
         let airborne = !self.land.landed();
-        let heading = Heading::new(nav.euler.yaw_rad);
-        let h = self.horizontal(dt_s, nav, &heading, v_cmd_ne, airborne);
-        let thrust_n = self.vertical(dt_s, nav, vz_cmd_down);
-        let torque = self.attitude(dt_s, nav, h.tilt_cmd_fr_rad, yaw_cmd, airborne);
-        let (mut motors, sat) = self.mixer.mix(thrust_n, torque);
-        if self.land.landed() {
-            motors = [self.params.airframe.idle_cmd; MOTOR_COUNT];
-        }
-        self.motors = motors;
-        self.telemetry = StepTelemetry {
-            t_us: nav.t_us,
-            vel_cmd_ned_mps: [h.v_cmd_ne[0], h.v_cmd_ne[1], vz_cmd_down],
-            accel_cmd_ne_mps2: h.a_cmd_ne,
-            accel_est_fr_mps2: h.a_est_fr,
-            accel_est_ne_mps2: heading.to_ne(h.a_est_fr),
-            accel_meas_fr_mps2: h.a_meas_fr,
-            roll_cmd_rad: h.tilt_cmd_fr_rad[1],
-            pitch_cmd_rad: -h.tilt_cmd_fr_rad[0],
-            yaw_cmd_rad: yaw_cmd,
-            thrust_n,
-            torque_nm: torque,
-            cross_track_m: self.cross_track.error_m(),
-            saturation: sat,
-            attitude_active: airborne,
+        // Final descent: the rangefinders see the ground, so the climb rate relative to it is
+        // what the touchdown speed is about (paper B's fused height, issue: use in flight).
+        let climb_over_ground = self.mode == Mode::Land
+            && self.ground_usable(nav)
+            && nav.ground.height_m < self.params.limits.land_slow_alt_m;
+        let demand = Demand {
+            vel_ne_mps: v_cmd_ne,
+            vz_down_mps: vz_cmd_down,
+            yaw_rad: yaw_cmd,
+            tilt_limit_rad: self.tilt_limit_rad(nav),
+            cross_track: self.mode == Mode::Velocity,
+            climb_over_ground,
+            airborne,
         };
+        let out = self.cascade.update(dt_s, nav, &demand);
+        self.count_wind_saturation(dt_s, airborne, out.tilt_limited, out.vel_err_mps);
+        self.motors = out.motors;
+        self.telemetry = out.telemetry;
     }
 
-    /// Horizontal: cross-track (velocity mode only) → velocity PI → acceleration command (NED)
-    /// → per heading-frame axis, the observer and the acceleration controller → tilt command,
-    /// limited to [`Self::tilt_limit_rad`]; counts the wind limit.
-    fn horizontal(
+    /// The wind limit's count: time at the tilt limit with the velocity command missed by
+    /// more than [`WIND_VEL_ERR_MPS`] (not in LAND). Leaky: gust lulls pause the count instead
+    /// of restarting it.
+    fn count_wind_saturation(
         &mut self,
         dt_s: f32,
-        nav: &NavState,
-        heading: &Heading,
-        v_cmd_ne: [f32; 2],
         airborne: bool,
-    ) -> Horizontal {
-        let e = nav.euler;
-        let v_ne = [nav.vel_ned_mps[0], nav.vel_ned_mps[1]];
-        let p_ne = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
-        let v_cmd = if self.mode == Mode::Velocity && airborne {
-            self.cross_track.update(dt_s, v_cmd_ne, p_ne, v_ne)
-        } else {
-            self.cross_track.reset();
-            v_cmd_ne
-        };
-        let sat_ne = heading.to_ne(self.tilt_sat_fr);
-        let sat_ne = [sign_or_zero(sat_ne[0]), sign_or_zero(sat_ne[1])];
-        let mut a_cmd_ne = if airborne {
-            self.vel_ctrl.update(dt_s, v_cmd, v_ne, sat_ne)
-        } else {
-            [0.0; 2]
-        };
-        if !airborne {
-            self.vel_ctrl.reset();
-        }
-        // Heading frame (forward, right): observer and acceleration controller per axis.
-        let a_cmd_fr = heading.to_fr(a_cmd_ne);
-        let v_fr = heading.to_fr(v_ne);
-        let a_meas_fr = heading.to_fr([nav.accel_ned_mps2[0], nav.accel_ned_mps2[1]]);
-        let tilt_fr = [-e.pitch_rad, e.roll_rad];
-        let max_tilt = self.tilt_limit_rad(nav);
-        let mut tilt_cmd = [0.0f32; 2];
-        let mut a_est = [0.0f32; 2];
-        for i in 0..2 {
-            a_est[i] =
-                self.observer[i].update(tilt_fr[i], self.tilt_cmd_fr_rad[i], a_meas_fr[i], dt_s);
-            tilt_cmd[i] = if airborne {
-                self.accel_ctrl[i].update(dt_s, a_cmd_fr[i], a_est[i], v_fr[i], self.tilt_sat_fr[i])
-            } else {
-                self.accel_ctrl[i].reset();
-                0.0
-            };
-        }
-        let n = fcc_nav::math::hypotf(tilt_cmd[0], tilt_cmd[1]);
-        self.tilt_sat_fr = [0.0; 2];
-        let v_err = fcc_nav::math::hypotf(v_cmd[0] - v_ne[0], v_cmd[1] - v_ne[1]);
-        // Leaky: gust lulls pause the count instead of restarting it.
-        if airborne && n > max_tilt && v_err > WIND_VEL_ERR_MPS && self.mode != Mode::Land {
+        tilt_limited: bool,
+        vel_err_mps: f32,
+    ) {
+        if airborne && tilt_limited && vel_err_mps > WIND_VEL_ERR_MPS && self.mode != Mode::Land {
             self.wind_sat_s += dt_s;
         } else {
             self.wind_sat_s = (self.wind_sat_s - WIND_LEAK * dt_s).max(0.0);
         }
-        if n > max_tilt {
-            self.tilt_sat_fr = [sign_or_zero(tilt_cmd[0]), sign_or_zero(tilt_cmd[1])];
-            tilt_cmd = [tilt_cmd[0] * max_tilt / n, tilt_cmd[1] * max_tilt / n];
-            let k1 = self.params.control.model_k1_mps2_per_rad;
-            a_cmd_ne = clamp_norm(a_cmd_ne, k1 * max_tilt);
-        }
-        self.tilt_cmd_fr_rad = tilt_cmd;
-        Horizontal {
-            v_cmd_ne: v_cmd,
-            a_cmd_ne,
-            a_est_fr: a_est,
-            a_meas_fr,
-            tilt_cmd_fr_rad: tilt_cmd,
-        }
-    }
-
-    /// Vertical: climb-rate PI → collective thrust (N); none once landed.
-    fn vertical(&mut self, dt_s: f32, nav: &NavState, vz_cmd_down: f32) -> f32 {
-        let e = nav.euler;
-        let tilt_cos = fcc_nav::math::cosf(e.roll_rad) * fcc_nav::math::cosf(e.pitch_rad);
-        // Final descent: the rangefinders see the ground, so the climb rate relative to it is
-        // what the touchdown speed is about (paper B's fused height, issue: use in flight).
-        let vz_up_meas = if self.mode == Mode::Land
-            && self.ground_usable(nav)
-            && nav.ground.height_m < self.params.limits.land_slow_alt_m
-        {
-            nav.ground_rate_up_mps
-        } else {
-            -nav.vel_ned_mps[2]
-        };
-        if self.land.landed() {
-            self.vert_ctrl.reset();
-            0.0
-        } else {
-            // Note: `step` resets the telemetry before the cascade runs, so this (and the yaw
-            // loop's `ys` below) reads `MixerSaturation::default()`, not the last mix.
-            let sat = self.telemetry.saturation.thrust_shift_sign;
-            self.vert_ctrl
-                .update(dt_s, -vz_cmd_down, vz_up_meas, tilt_cos, sat)
-        }
-    }
-
-    /// Attitude and yaw → body torques (N·m) for the mixer; near the ground (not airborne),
-    /// rate damping only.
-    fn attitude(
-        &mut self,
-        dt_s: f32,
-        nav: &NavState,
-        tilt_cmd_fr_rad: [f32; 2],
-        yaw_cmd: f32,
-        airborne: bool,
-    ) -> [f32; 3] {
-        let e = nav.euler;
-        let r = nav.rate_frd_radps;
-        if !airborne {
-            self.roll_pid.reset();
-            self.pitch_pid.reset();
-            self.yaw_ctrl.reset();
-            let d = self.params.control.att_d_nm_per_radps;
-            return [-d * r[0], -d * r[1], 0.0];
-        }
-        let (pitch_cmd, roll_cmd) = (-tilt_cmd_fr_rad[0], tilt_cmd_fr_rad[1]);
-        let t_roll = self.roll_pid.update(dt_s, roll_cmd, e.roll_rad, r[0], true);
-        let t_pitch = self
-            .pitch_pid
-            .update(dt_s, pitch_cmd, e.pitch_rad, r[1], true);
-        let yaw_rate = fcc_nav::attitude::euler_rates(r, e.roll_rad, e.pitch_rad)[2];
-        let ys = if self.telemetry.saturation.yaw_scale < 1.0 {
-            1.0
-        } else {
-            0.0
-        };
-        let t_yaw = self.yaw_ctrl.update(
-            dt_s,
-            yaw_cmd,
-            e.yaw_rad,
-            yaw_rate,
-            ys * sign_or_zero(yaw_cmd - e.yaw_rad),
-        );
-        [t_roll, t_pitch, t_yaw]
     }
 
     /// Height of the rangefinders above the ground, for landing: the rangefinder fusion when
@@ -1057,24 +788,5 @@ impl FlightCore {
         self.mode = Mode::Disarmed;
         self.setpoint = None;
         self.motors = [0.0; MOTOR_COUNT];
-    }
-}
-
-fn clamp_norm(v: [f32; 2], max: f32) -> [f32; 2] {
-    let n = fcc_nav::math::hypotf(v[0], v[1]);
-    if n > max && n > 0.0 {
-        [v[0] * max / n, v[1] * max / n]
-    } else {
-        v
-    }
-}
-
-fn sign_or_zero(x: f32) -> f32 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
-        0.0
     }
 }

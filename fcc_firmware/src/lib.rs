@@ -11,10 +11,11 @@
 //!   [`nav_health`]: the estimator-fault monitors; [`land_detector`]: touchdown and landed.
 //! - [`control`]: plain controller structs with `update(dt_s, …)`: cross-track velocity
 //!   tracking, forgetting-PI acceleration control on the Luenberger observer, vertical, attitude
-//!   PID, yaw, octorotor mixer.
+//!   PID, yaw, octorotor mixer; [`control::cascade::Cascade`] wires them into the one cascade,
+//!   `update(dt_s, &NavState, &Demand) -> motors`, with `reset()` and `set_params(&Params)`.
 //! - [`flight`]: [`flight::FlightCore::step`]`(now_us, &SensorInputs) -> [f32; 8]` — modes
 //!   (disarmed, hold, velocity, land, pilot), setpoint time-to-live, failsafes, limits,
-//!   geofence; [`commands`]: what the operator may ask (commands, velocity setpoints) and the
+//!   geofence, guidance, land detection → a `Demand` for the cascade; [`commands`]: what the operator may ask (commands, velocity setpoints) and the
 //!   refusals; [`pilot`]: the R/C pilot override (switch, receiver failsafe, sticks → velocity);
 //!   [`params`]: every gain and limit, documented defaults for the paper's vehicle.
 //! - [`touchdown_gate`]: LAND's last decimetres wait for a lull in the gusts.

@@ -134,6 +134,7 @@ impl GainCache {
 }
 
 /// Wrap an angle to (−π, π].
+#[inline]
 pub fn wrap_pi(a_rad: f32) -> f32 {
     use core::f32::consts::PI;
     if a_rad > -PI && a_rad <= PI {

@@ -9,8 +9,8 @@
 //!   `tests/tests/param_table.rs` fails when they are stale and rewrites them with
 //!   `FCC_UPDATE_PARAM_DOCS=1`).
 //!
-//! Adding a parameter is one line in the table (the `Params` field must exist; a parameter
-//! whose change must rebuild a controller also gets a line in `FlightCore::set_param`). The
+//! Adding a parameter is one line in the table (the `Params` field must exist; the controllers
+//! it feeds are rebuilt on a change by `fcc_firmware::control::cascade::Cascade::set_params`). The
 //! schema hash ([`crate::SCHEMA_HASH`]) is computed over the table's ids and names as well (the
 //! `params` line of `schema_text()`), so it changes with the table.
 

@@ -4,18 +4,7 @@
 //! (N·m, FRD: roll about x, pitch about y, yaw about z).
 
 use super::pi::ForgettingPi;
-
-/// Heading error wrap. Not `fcc_nav::complementary::wrap_pi`: that one returns an in-range angle
-/// unchanged, this one rounds through `fmod(a + π)`, and swapping them moves the campaign's
-/// figures in the third decimal (issue 15: left for a deliberate, measured change).
-fn wrap_pi(a: f32) -> f32 {
-    let two_pi = 2.0 * core::f32::consts::PI;
-    let mut x = fcc_nav::math::fmodf(a + core::f32::consts::PI, two_pi);
-    if x < 0.0 {
-        x += two_pi;
-    }
-    x - core::f32::consts::PI
-}
+use fcc_nav::complementary::wrap_pi;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TiltPid {
