@@ -27,6 +27,7 @@ use fcc_ros::frames;
 use fcc_ros::params::{self, parse_bool};
 use fcc_ros::ros_node::{self, DdsEnv, RosClock};
 use fcc_ros::startup;
+use fcc_ros::topics;
 use futures::StreamExt;
 use ros2_client::log::LogLevel;
 use ros2_client::{NodeLoggingHandle, RosoutRaw};
@@ -316,6 +317,10 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     })
 }
 
+/// The mission node's own topic (std_msgs/String, JSON): the only name not in the bridge's
+/// topic table ([`fcc_ros::topics`]).
+const MISSION_STATUS_TOPIC: &str = "mission/status";
+
 /// What [`setup_dds`] needs (owned: it runs on a thread of its own).
 struct DdsSetup {
     dds: DdsEnv,
@@ -332,14 +337,15 @@ async fn run(o: Options) -> Result<(), Failure> {
         namespace: o.namespace.clone(),
         node_name: o.node_name.clone(),
         use_sim_time: o.use_sim_time,
+        // The bridge's topics by their entries in the one topic table (name and type together).
         topics: [
-            "state/odom",
-            "status",
-            "/clock",
-            "setpoint/velocity",
-            "cmd/arm",
-            "cmd/mode",
-            "mission/status",
+            topics::ODOM.name,
+            topics::STATUS.name,
+            topics::CLOCK.name,
+            topics::SETPOINT_VELOCITY.name,
+            topics::CMD_ARM.name,
+            topics::CMD_MODE.name,
+            MISSION_STATUS_TOPIC,
         ]
         .map(|t| o.name(t)),
     };
