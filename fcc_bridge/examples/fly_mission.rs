@@ -13,9 +13,7 @@ use fcc_msgs::ros::*;
 use fcc_ros::frames::ned_to_enu;
 use futures::{FutureExt, StreamExt};
 use ros2_client::qos::{History, WhenFull};
-use ros2_client::{
-    Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription,
-};
+use ros2_client::{Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription};
 use std::time::{Duration, Instant};
 
 /// The bridge's topics this driver uses (reliable, keep last 10).
@@ -77,7 +75,11 @@ async fn main() -> anyhow::Result<()> {
     let mission = fcc_mission::from_yaml_str(&std::fs::read_to_string(mission_path)?)
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let mut follower = WaypointFollower::new(mission);
-    let ctx = Context::new()?;
+    // The one participant builder: ROS_DOMAIN_ID, and loopback only unless ROS_LOCALHOST_ONLY=0
+    // or ROS_AUTOMATIC_DISCOVERY_RANGE says otherwise (as the bridge and the mission node).
+    let dds = fcc_ros::ros_node::DdsEnv::from_env(&fcc_ros::params::RosArgs::default())
+        .map_err(anyhow::Error::msg)?;
+    let ctx = fcc_ros::ros_node::context(dds).map_err(anyhow::Error::msg)?;
     let mut node = ctx.new_node(NodeName::new("/fcc", "fly_mission")?, NodeOptions::new())?;
     tokio::spawn(node.spinner()?.spin());
     let Endpoints {

@@ -230,8 +230,12 @@ async fn play(
     rate: f64,
     prefix: &str,
 ) -> anyhow::Result<()> {
-    use ros2_client::{Context, MessageTypeName, Name, NodeName, NodeOptions};
-    let ctx = Context::new()?;
+    use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions};
+    // The one participant builder: ROS_DOMAIN_ID, and loopback only unless ROS_LOCALHOST_ONLY=0
+    // or ROS_AUTOMATIC_DISCOVERY_RANGE says otherwise (as the bridge and the mission node).
+    let dds = fcc_ros::ros_node::DdsEnv::from_env(&fcc_ros::params::RosArgs::default())
+        .map_err(anyhow::Error::msg)?;
+    let ctx = fcc_ros::ros_node::context(dds).map_err(anyhow::Error::msg)?;
     let mut node = ctx.new_node(NodeName::new("/", "fcc_replay")?, NodeOptions::new())?;
     tokio::spawn(node.spinner()?.spin());
     let mut from_bag = 0usize;
