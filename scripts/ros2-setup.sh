@@ -39,6 +39,7 @@ secs() { awk -v a="$1" -v b="$2" 'BEGIN{printf "%.1f", b-a}'; }
 #   rosidl-core-generators           find_package()'d by rosidl_default_generators
 #   ament-cmake-include-directories  find_package()'d by ament_cmake's exported dependencies
 #   ament-cmake-ros (Kilted: + -core) find_package()'d by rosidl_typesupport_fastrtps_c
+#   ament-cmake-gmock/-gtest/-pytest find_package()'d by Jazzy's ament_cmake_ros extras
 #   python-cmake-module              find_package()'d by Jazzy's rosidl_generator_py
 wheels() {
   case $1 in
@@ -48,6 +49,7 @@ wheels() {
       colcon-common-extensions
       ros-jazzy-ament-package ros-jazzy-rosidl-core-generators
       ros-jazzy-ament-cmake-include-directories ros-jazzy-ament-cmake-ros
+      ros-jazzy-ament-cmake-gmock ros-jazzy-ament-cmake-gtest ros-jazzy-ament-cmake-pytest
       ros-jazzy-python-cmake-module" ;;
     kilted) echo "ros-kilted-rclpy[fastrtps] ros-kilted-sensor-msgs ros-kilted-geometry-msgs
       ros-kilted-nav-msgs ros-kilted-diagnostic-msgs ros-kilted-std-srvs ros-kilted-rosgraph-msgs

@@ -44,7 +44,7 @@ TOPICS = {
     f"{NS}/range/laser": ("sensor_msgs/msg/Range", 7, "laser_link"),
     f"{NS}/range/sonar": ("sensor_msgs/msg/Range", 7, "sonar_link"),
     f"{NS}/battery": ("sensor_msgs/msg/BatteryState", 3, None),
-    f"{NS}/state/odom": ("nav_msgs/msg/Odometry", 40, "map"),
+    f"{NS}/state/odom": ("nav_msgs/msg/Odometry", 40, "odom"),   # REP-105: odometry in odom
     f"{NS}/state/imu": ("sensor_msgs/msg/Imu", 40, "base_link"),
     "/tf": ("tf2_msgs/msg/TFMessage", 40, None),
     "/tf_static": ("tf2_msgs/msg/TFMessage", None, None),
@@ -280,26 +280,45 @@ def report_rates(c, rec):
                 c.check(f"{t} (sensor-data QoS) frame_id {frame}", m.header.frame_id == frame, m.header.frame_id)
 
 
-def check_tf(c, rec):
-    """/tf: map → odom → base_link (REP-105), odom continuous; /tf_static: base_link → sensors,
-    stamped on the same (MCU) clock as everything else."""
-    edges_seen = set()
-    chains, odom_steps, last_odom = set(), [], None
-    for m in rec.msgs("/tf"):
-        edges = {}
+def static_edges(rec):
+    """/tf_static as a tf2 buffer keeps it: {child: (parent, tf)}, the latest per child."""
+    edges = {}
+    for m in rec.msgs("/tf_static"):
         for t in m.transforms:
             edges[t.child_frame_id] = (t.header.frame_id, tf_of(t.transform))
+    return edges
+
+
+def tf_edges(static, m):
+    """The tree at one /tf message: the static edges with the message's dynamic ones over them."""
+    edges = dict(static)
+    for t in m.transforms:
+        edges[t.child_frame_id] = (t.header.frame_id, tf_of(t.transform))
+    return edges
+
+
+def check_tf(c, rec):
+    """/tf + /tf_static (as tf2 combines them): map → odom → base_link (REP-105), odom → base_link
+    continuous and dynamic; /tf_static: base_link → sensors, stamped on the same (MCU) clock as
+    everything else."""
+    static = static_edges(rec)
+    edges_seen = {(p, k) for k, (p, _) in static.items()}
+    chains, odom_steps, last_odom = set(), [], None
+    for m in rec.msgs("/tf"):
+        for t in m.transforms:
             edges_seen.add((t.header.frame_id, t.child_frame_id))
+        edges = tf_edges(static, m)
         path, _ = tf_chain(edges)
         chains.add(tuple(path))
-        if "odom" in edges and edges["odom"][0] == "map" and "base_link" in edges and edges["base_link"][0] == "odom":
-            p = edges["base_link"][1][0]
+        dyn = {t.child_frame_id: t for t in m.transforms}
+        if "base_link" in dyn and dyn["base_link"].header.frame_id == "odom":
+            p = tf_of(dyn["base_link"].transform)[0]
             if last_odom is not None:
                 odom_steps.append(truth.dist(p, last_odom))
             last_odom = p
-    print(f"/tf edges: {sorted(edges_seen)}; chains to base_link: {sorted(chains)}", flush=True)
-    c.check("/tf: map → odom → base_link (REP-105)", chains == {("map", "odom", "base_link")}, sorted(chains))
-    c.check("/tf: odom → base_link continuous (no step > 0.5 m between messages)",
+    print(f"TF edges (/tf_static + /tf): {sorted(edges_seen)}; chains to base_link: {sorted(chains)}", flush=True)
+    c.check("TF: map → odom → base_link (REP-105)", chains == {("map", "odom", "base_link")}, sorted(chains))
+    c.check("/tf: odom → base_link dynamic and continuous (no step > 0.5 m between messages)",
             len(odom_steps) > 100 and max(odom_steps) < 0.5,
             f"{len(odom_steps)} steps, max {max(odom_steps, default=float('nan')):.3f} m")
     st = rec.msgs("/tf_static")
@@ -335,32 +354,39 @@ def check_sim_time(c, rec, pairs, speed):
 def check_truth(c, rec, log):
     """Values against the simulator's truth log at the same simulated times (ENU, not NED)."""
     od = rec.msgs(f"{NS}/state/odom")
-    est, hor = [], []
+    # The odometry's frame (odom) into map through /tf_static, as tf2 would.
+    static = static_edges(rec)
+    est, hor, pos = [], [], []
     for m in od:
+        path, tf = tf_chain(static, m.header.frame_id)
+        if path[0] != "map":
+            continue
+        p = m.pose.pose.position
+        p = truth.compose(tf, ((p.x, p.y, p.z), (1.0, 0.0, 0.0, 0.0)))[0]
+        pos.append(p)
         t = stamp_of(m)
         e, tr = truth.est_enu(log, t), truth.true_enu(log, t)
         if e is None:
             continue
-        p = m.pose.pose.position
-        est.append(truth.dist((p.x, p.y, p.z), e))
-        hor.append(math.hypot(p.x - tr[0], p.y - tr[1]))
-    c.check("state/odom = the MCU's estimate (CSV, ENU of NED) at the same sim time, p99 < 0.15 m",
+        est.append(truth.dist(p, e))
+        hor.append(math.hypot(p[0] - tr[0], p[1] - tr[1]))
+    c.check("state/odom (in map via /tf_static) = the MCU's estimate (CSV, ENU of NED) at the same sim time, p99 < 0.15 m",
             len(est) > 1000 and pct(est, 0.99) < 0.15, f"{len(est)} msgs, p50 {pct(est, 0.5):.3f} m p99 {pct(est, 0.99):.3f} m")
     c.check("state/odom vs truth horizontal p95 < 2.5 m (GPS-grade)", pct(hor, 0.95) < 2.5,
             f"p50 {pct(hor, 0.5):.2f} m p95 {pct(hor, 0.95):.2f} m")
-    ys = [m.pose.pose.position.y for m in od]
-    xs = [m.pose.pose.position.x for m in od]
+    xs = [p[0] for p in pos]
+    ys = [p[1] for p in pos]
     c.check("ENU: the north leg shows as +y ≈ 20 m, the east leg as +x ≈ 20 m",
             ys and 17 < max(ys) < 23 and 17 < max(xs) < 23, f"max y {max(ys, default=0):.1f} max x {max(xs, default=0):.1f}")
     # TF: the chain to base_link at each /tf message = the estimate.
     tfe = []
+    static = static_edges(rec)
     for m in rec.msgs("/tf"):
-        edges = {t.child_frame_id: (t.header.frame_id, tf_of(t.transform)) for t in m.transforms}
-        path, tf = tf_chain(edges)
+        path, tf = tf_chain(tf_edges(static, m))
         e = truth.est_enu(log, stamp_of(m))
         if path[0] == "map" and e is not None:
             tfe.append(truth.dist(tf[0], e))
-    c.check("/tf map → base_link = the MCU's estimate (CSV) at the same sim time, p99 < 0.15 m",
+    c.check("TF map → base_link (through /tf_static and /tf) = the MCU's estimate (CSV) at the same sim time, p99 < 0.15 m",
             len(tfe) > 1000 and pct(tfe, 0.99) < 0.15, f"{len(tfe)} msgs, p50 {pct(tfe, 0.5):.3f} m p99 {pct(tfe, 0.99):.3f} m")
     gr = []
     for m in rec.msgs(f"{NS}/altitude/ground"):
