@@ -38,12 +38,13 @@ class Peer:
             self.executor.spin_once(timeout_sec=min(0.01, max(0.0, end - time.monotonic())))
 
     def wait(self, cond, secs, what):
-        """Spin until cond() holds; raise Timeout(what) after secs (wall)."""
+        """Spin until cond() holds; raise Timeout(what) after secs (wall). cond() is evaluated
+        every 20 ms of spinning, not after each callback (a costly cond would starve them)."""
         end = time.monotonic() + secs
         while not cond():
             if time.monotonic() > end:
                 raise Timeout(f"timeout ({secs} s) waiting for {what}")
-            self.executor.spin_once(timeout_sec=0.01)
+            self.spin(0.02)
 
     def call(self, node, srv_type, name, request, secs=10.0):
         """A service call as `ros2 service call` makes it: wait for the server, call, wait."""

@@ -57,17 +57,27 @@ stop_sitl_bridge() { kill -TERM "$bridge" "$sitl" 2>/dev/null || true; wait "$si
 part_a() {
   local d="$tmp/a" t0 lrc prc; mkdir -p "$d"; t0=$(date +%s)
   echo "=== (a) Jazzy rclpy observing the square through the full stack (speed 2, ROS_DISTRO unset)"
+  # Three rclpy processes, as three terminals: the observer (graph, parameters, TF, values) and
+  # `ros2 topic echo` of every topic with the CLI's QoS choice and with sensor-data QoS.
+  local q pids=()
+  for q in cli sensor; do
+    ( unset ROS_DISTRO; py jazzy echo --qos $q --until-file "$d/done" --ready-file "$d/ready_$q" \
+        --json "$d/echo_$q.json" ) > "$d/echo_$q.log" 2>&1 &
+    pids+=($!)
+  done
   ( unset ROS_DISTRO; py jazzy observe --csv "$d/square_stack.csv" --until-file "$d/done" --ready-file "$d/ready" \
-      --speed 2 ) > "$d/peer.log" 2>&1 &
+      --echo-json "$d/echo_cli.json" --sensor-json "$d/echo_sensor.json" --speed 2 ) > "$d/peer.log" 2>&1 &
   local peer=$!
-  wait_file "$d/ready" 60 || { cat "$d/peer.log"; result "(a) the rclpy peer started" 1; return; }
+  wait_file "$d/ready" 60 && wait_file "$d/ready_cli" 60 && wait_file "$d/ready_sensor" 60 \
+    || { cat "$d"/*.log; result "(a) the rclpy peers started" 1; return; }
   set +e
   ( unset ROS_DISTRO; exec timeout 300 "$bin/fcc-launch" "$root/launch_configs/square_flight.yaml" BIN:="$bin" out:="$d" \
       speed:=2 clock_source:=mcu use_sim_time:=true hover_s:=5 ) > "$d/launch.log" 2>&1
   lrc=$?
-  touch "$d/done"; wait $peer; prc=$?
+  touch "$d/done"; wait $peer; prc=$?; wait "${pids[@]}"
   set -e
   cat "$d/peer.log"
+  cat "$d/echo_cli.log" "$d/echo_sensor.log"
   grep -E '^\[mission\] fcc-mission: mission complete' "$d/launch.log" || true
   result "(a) fcc-launch flew the square (exit 0)" "$lrc" "exit $lrc"
   result "(a) rclpy observer: every check" "$([ $prc = 0 ] && echo 0 || echo 1)" "exit $prc"
@@ -99,14 +109,15 @@ part_b() {
 
 part_c() {
   local d="$tmp/c" t0 src; mkdir -p "$d"; t0=$(date +%s)
-  echo "=== (c) Kilted rclpy smoke run through fcc-bridge (ROS_DISTRO=kilted)"
-  export ROS_DISTRO=kilted
+  echo "=== (c) Kilted rclpy smoke run through fcc-bridge (ROS_DISTRO=kilted, ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST)"
+  # Kilted's discovery setting (it dropped ROS_LOCALHOST_ONLY), for the bridge and the peer alike.
+  export ROS_DISTRO=kilted ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
   start_sitl_bridge "$d" 1 sync
   set +e
   py kilted smoke; src=$?
   set -e
   stop_sitl_bridge
-  unset ROS_DISTRO
+  unset ROS_DISTRO ROS_AUTOMATIC_DISCOVERY_RANGE
   result "(c) Kilted rclpy smoke run: every check" "$([ $src = 0 ] && echo 0 || echo 1)" "exit $src"
   no_error_lines "(c) fcc-sitl + fcc-bridge, ROS_DISTRO=kilted" "$d/sitl.log" "$d/bridge.log"
   [ "$src" = 0 ] || { echo "--- bridge log (tail)"; tail -20 "$d/bridge.log"; }
