@@ -5,9 +5,11 @@ Issue 16. Our own types (fcc_msgs/Status, Altitude) and tf2_msgs/TFMessage are t
 `colcon build` generated (target/ros2/DISTRO/install, via env.sh).
 
 Modes (run by tests/ros2/run_ros2_peer.sh, all inside one loopback-only network namespace):
+  echo       `ros2 topic echo` of every topic (--qos cli: the CLI's QoS choice; --qos sensor:
+             sensor-data QoS), each in its own process; figures (JSON) for `observe`.
   observe    while fcc-launch flies the square (speed 2, clock_source:=mcu, the mission node on
-             use_sim_time): node list, topic list with EXACTLY one type per topic, every topic
-             echoed with the CLI's QoS and with sensor-data QoS (rates, frame_ids), TF
+             use_sim_time): node list, topic list with EXACTLY one type per topic, topic info
+             (every endpoint of a named node), the echoes' rates and frame_ids, TF
              (map → odom → base_link, the static sensor frames), a late joiner, use_sim_time with
              /clock, parameters of both nodes, QoS of /rosout and /parameter_events as rclpy's;
              after the flight, values against the simulator's CSV truth.
