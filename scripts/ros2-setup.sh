@@ -19,6 +19,10 @@ cd "$(dirname "$0")/.."
 ROOT=$PWD
 distros=("$@"); [ ${#distros[@]} -gt 0 ] || distros=(jazzy kilted)
 PY=${ROS2_SETUP_PYTHON:-python3.11}
+# The wheels are cp311: python3.11, or python3 when that is 3.11.
+if ! command -v "$PY" >/dev/null && python3 -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' 2>/dev/null; then
+  PY=python3
+fi
 BASE=${ROS2_DIR:-$ROOT/target/ros2}   # ROS2_DIR=/tmp/x measures a fresh set-up elsewhere
 command -v "$PY" >/dev/null || { echo "ros2-setup.sh: $PY not found (the wheels are cp311)" >&2; exit 1; }
 if ! command -v cmake >/dev/null; then
