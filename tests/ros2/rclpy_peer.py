@@ -237,7 +237,14 @@ def observe(a):
                                  f"{NS}/altitude/ground", f"{NS}/setpoint/velocity", f"{NS}/mission/status", "/rosout"])
     clock_pairs = []   # (wall, node clock now)
     from rclpy.clock import Clock, ClockType
-    last_clock = lambda: stamp_of(rec.got["/clock"][-1][1]) if rec.got["/clock"] else None  # noqa: E731
+    # The newest /clock as rclpy's TimeSource takes it (best effort, depth 1: no backlog), the
+    # reference the node's time is compared with.
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rosgraph_msgs.msg import Clock as ClockMsg
+    newest = {}
+    node.create_subscription(ClockMsg, "/clock", lambda m: newest.update(t=stamp_of(m)),
+                             QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+    last_clock = lambda: newest.get("t")  # noqa: E731
     node.create_timer(0.2, lambda: clock_pairs.append((time.monotonic(), node.get_clock().now().nanoseconds * 1e-9, last_clock())),
                       clock=Clock(clock_type=ClockType.STEADY_TIME))
     open(a.ready_file, "w").close()
@@ -393,7 +400,6 @@ def check_tf(c, rec):
     c.check("/tf: odom → base_link dynamic and continuous (no step > 0.2 m + 8 m/s × Δt between messages)",
             len(odom_steps) > 100 and worst[0] < 0.2,
             f"{len(odom_steps)} steps, worst {worst[1]:.3f} m over {worst[2]} → {worst[3]} s")
-    return worst[2:]
     st = rec.msgs("/tf_static")
     kids = {(t.header.frame_id, t.child_frame_id) for m in st for t in m.transforms}
     want = {("base_link", k) for k in STATIC_CHILDREN}
@@ -407,6 +413,7 @@ def check_tf(c, rec):
     ok = bool(clocks and sst) and all(min(clocks) - 5.0 <= s <= max(clocks) + 1.0 for s in sst)
     c.check("/tf_static stamped on the MCU clock (within the /clock range)", ok,
             f"tf_static {sst[:2]} s, /clock {min(clocks, default=None)}..{max(clocks, default=None)} s")
+    return worst[2:]
 
 
 def slope(pts):
