@@ -31,7 +31,8 @@ Parameters: localhost_only (true), ttl_ms (300, 50..=3000), max_speed_mps (20, 0
   gps_frame (gps_link), laser_frame (laser_link), sonar_frame (sonar_link),\n\
   record (off: PATH), record_on_arm (false), record_split_s, record_split_mb (off),\n\
   record_compression (zstd | none), record_chunk_ms (500), record_chunk_mb (4).\n\
-Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE, RUST_LOG,\n\
+Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE (LOCALHOST |\n\
+  SUBNET | SYSTEM_DEFAULT; OFF is refused), ROS_STATIC_PEERS (not supported: warned), RUST_LOG,\n\
   FCC_BRIDGE_DDS_STARTUP_TIMEOUT_MS (5000: restart when the DDS set-up takes longer)."
 )]
 struct Cli {

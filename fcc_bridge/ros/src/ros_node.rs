@@ -34,8 +34,13 @@ impl DdsEnv {
     }
 }
 
-/// A ros2-client context on a participant restricted to loopback unless disabled.
+/// A ros2-client context on a participant restricted to loopback unless disabled (a
+/// `ROS_STATIC_PEERS` it cannot honour is logged as a warning).
 pub fn context(env: DdsEnv) -> Result<Context, String> {
+    let peers = std::env::var("ROS_STATIC_PEERS").ok();
+    if let Some(w) = params::static_peers_warning(peers.as_deref()) {
+        log::warn!("{w}");
+    }
     let mut b = rustdds::DomainParticipantBuilder::new(env.domain_id);
     if env.localhost_only {
         b = b.with_only_networks([Ipv4Addr::LOCALHOST]);
