@@ -49,8 +49,15 @@ pub fn context(env: DdsEnv) -> Result<Context, String> {
     Context::from_domain_participant(dp).map_err(|e| format!("ROS context: {e:?}"))
 }
 
-/// A node `namespace/name` with `/rosout`; spawns its spinner on the current tokio runtime.
-pub fn node(ctx: &Context, namespace: &str, name: &str) -> Result<Node, String> {
+/// A node `namespace/name` with `/rosout` and its `use_sim_time` parameter declared with the
+/// value in use (else ros2-client's built-in `false` is what `ros2 param get` shows); spawns its
+/// spinner on the current tokio runtime.
+pub fn node(
+    ctx: &Context,
+    namespace: &str,
+    name: &str,
+    use_sim_time: bool,
+) -> Result<Node, String> {
     let ns = if namespace.starts_with('/') {
         namespace.to_string()
     } else {
@@ -59,7 +66,10 @@ pub fn node(ctx: &Context, namespace: &str, name: &str) -> Result<Node, String> 
     let mut node = ctx
         .new_node(
             NodeName::new(&ns, name).map_err(|e| format!("node name {ns}/{name}: {e:?}"))?,
-            NodeOptions::new().enable_rosout(true),
+            NodeOptions::new().enable_rosout(true).declare_parameter(
+                "use_sim_time",
+                ros2_client::parameters::ParameterValue::Boolean(use_sim_time),
+            ),
         )
         .map_err(|e| format!("node: {e:?}"))?;
     tokio::spawn(
