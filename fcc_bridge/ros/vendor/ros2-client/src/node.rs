@@ -132,7 +132,10 @@ pub struct Spinner {
   status_event_senders: Arc<Mutex<Vec<async_channel::Sender<NodeEvent>>>>,
 
   sim_time: Arc<Mutex<ROSTime>>,
-  clock_topic: Topic,
+  // fcc (vendored): the `/clock` reader itself, created by `Node::spinner` as one of the node's
+  // readers (it was created here from the topic, outside the node: `ros2 topic info -v` showed
+  // it under an unknown node).
+  clock_reader: Subscription<builtin_interfaces::Time>,
 
   parameter_servers: Option<ParameterServers>,
   parameter_events_writer: Arc<Publisher<raw::ParameterEvent>>,
@@ -164,10 +167,7 @@ impl Spinner {
     let ros_discovery_stream = ros_discovery_reader.async_stream();
     pin_mut!(ros_discovery_stream);
 
-    let ros_clock_reader = self
-      .ros_context
-      .create_subscription::<builtin_interfaces::Time>(&self.clock_topic, None)?;
-    let ros_clock_stream = ros_clock_reader.async_stream();
+    let ros_clock_stream = self.clock_reader.async_stream();
     pin_mut!(ros_clock_stream);
 
     // These are Option< impl Stream<_>>
@@ -721,6 +721,7 @@ impl Node {
       MessageTypeName::new("rosgraph_msgs", "Clock"),
       &DEFAULT_SUBSCRIPTION_QOS,
     )?;
+    let clock_reader = self.create_subscription::<builtin_interfaces::Time>(&clock_topic, None)?;
 
     self.suppress_node_info_updates(false);
 
@@ -732,7 +733,7 @@ impl Node {
       external_nodes: Arc::clone(&self.external_nodes),
       status_event_senders: Arc::clone(&self.status_event_senders),
       sim_time: Arc::clone(&self.sim_time),
-      clock_topic,
+      clock_reader,
       parameter_servers,
       parameter_events_writer: Arc::clone(&self.parameter_events_writer),
       parameters: Arc::clone(&self.parameters),
