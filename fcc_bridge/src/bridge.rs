@@ -187,6 +187,7 @@ impl Publishers {
             Out::Odom(m) => pb!(self.odom, topics::ODOM, m),
             Out::StateImu(m) => pb!(self.state_imu, topics::STATE_IMU, m),
             Out::Tf(m) => pb!(self.tf, topics::TF, m),
+            Out::TfStatic(m) => pb!(self.tf_static, topics::TF_STATIC, m),
             Out::Altitude(m) => pb!(self.altitude, topics::ALTITUDE, m),
             Out::Ground(m) => pb!(self.ground, topics::GROUND, m),
             Out::Status(m) => {
@@ -655,42 +656,37 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     })
 }
 
-/// The node's options: /rosout, the parameter services, every parameter declared with its
-/// start-up value (bridge, frames, MCU), and the validator and set action of `shared`.
-fn node_options(opts: &Options, shared: &Arc<ParamShared>) -> NodeOptions {
+/// Every parameter the node declares, with its start-up value: bridge, frames, MCU. Each has a
+/// descriptor from [`ros_api::describe`] (a test keeps the two in step).
+pub fn declared_parameters(opts: &Options) -> Vec<(&'static str, ParameterValue)> {
     use ParameterValue as P;
     let l = &opts.limits;
     let c = &opts.cfg;
-    let mut nopts = NodeOptions::new()
-        .enable_rosout(true)
-        .start_parameter_services(true)
-        .declare_parameter("use_sim_time", P::Boolean(opts.use_sim_time))
-        .declare_parameter("ttl_ms", P::Integer(l.ttl_ms as i64))
-        .declare_parameter("max_speed_mps", P::Double(l.max_speed_mps))
-        .declare_parameter("max_stamp_age_ms", P::Double(l.max_age_ns as f64 / 1e6))
-        .declare_parameter(
+    let clock = if opts.clock == ClockSource::Mcu {
+        "mcu"
+    } else {
+        "sync"
+    };
+    let mut v = vec![
+        ("use_sim_time", P::Boolean(opts.use_sim_time)),
+        ("ttl_ms", P::Integer(l.ttl_ms as i64)),
+        ("max_speed_mps", P::Double(l.max_speed_mps)),
+        ("max_stamp_age_ms", P::Double(l.max_age_ns as f64 / 1e6)),
+        (
             "max_stamp_future_ms",
             P::Double(l.max_future_ns as f64 / 1e6),
-        )
-        .declare_parameter(
-            "clock_source",
-            P::String(
-                if opts.clock == ClockSource::Mcu {
-                    "mcu"
-                } else {
-                    "sync"
-                }
-                .into(),
-            ),
-        )
-        .declare_parameter("localhost_only", P::Boolean(opts.localhost_only))
-        .declare_parameter(
+        ),
+        ("clock_source", P::String(clock.into())),
+        ("localhost_only", P::Boolean(opts.localhost_only)),
+        (
             "ping_period_ms",
             P::Integer(opts.ping_period.as_millis() as i64),
-        )
-        .declare_parameter("record", P::String(opts.record.clone()));
-    for (k, v) in [
+        ),
+        ("record", P::String(opts.record.clone())),
+    ];
+    for (k, f) in [
         ("map_frame", &c.map_frame),
+        ("odom_frame", &c.odom_frame),
         ("base_frame", &c.base_frame),
         ("imu_frame", &c.imu_frame),
         ("mag_frame", &c.mag_frame),
@@ -699,15 +695,28 @@ fn node_options(opts: &Options, shared: &Arc<ParamShared>) -> NodeOptions {
         ("laser_frame", &c.laser_frame),
         ("sonar_frame", &c.sonar_frame),
     ] {
-        nopts = nopts.declare_parameter(k, P::String(v.clone()));
+        v.push((k, P::String(f.clone())));
     }
     for p in MCU_PARAMS {
-        let v = opts
+        let x = opts
             .mcu_params
             .get(p.name)
             .copied()
             .unwrap_or(p.default as f64);
-        nopts = nopts.declare_parameter(p.name, P::Double(v));
+        v.push((p.name, P::Double(x)));
+    }
+    v
+}
+
+/// The node's options: /rosout, the parameter services, every parameter of
+/// [`declared_parameters`] with its descriptor, and the validator and set action of `shared`.
+fn node_options(opts: &Options, shared: &Arc<ParamShared>) -> NodeOptions {
+    let mut nopts = NodeOptions::new()
+        .enable_rosout(true)
+        .start_parameter_services(true)
+        .parameter_describer(Box::new(ros_api::describe));
+    for (k, v) in declared_parameters(opts) {
+        nopts = nopts.declare_parameter(k, v);
     }
     let sh = shared.clone();
     let sh2 = shared.clone();
@@ -886,9 +895,12 @@ pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
         "uplink: setpoints at most every {:.1} ms (coalesced to the newest), commands first",
         st.uplink.interval_ns() as f64 / 1e6
     );
-    let tf_static = convert::static_transforms(Time::from_nanos(now_ns()), &st.cfg);
-    tap.published_on(&topics::TF_STATIC, &tf_static, rec_time(&st));
-    let _ = pubs.tf_static.publish(tf_static);
+    // With clock_source:=mcu, LinkState stamps /tf_static with the first MCU time instead.
+    if opts.clock == ClockSource::Sync {
+        let tf_static = convert::static_transforms(Time::from_nanos(now_ns()), &st.cfg);
+        tap.published_on(&topics::TF_STATIC, &tf_static, rec_time(&st));
+        let _ = pubs.tf_static.publish(tf_static);
+    }
     let mut rates = RateMeter::default();
     let mut first = true;
     let mut logged_open_error = false;

@@ -13,8 +13,14 @@ pub use fcc_nav::ground_altitude::LASER_NO_RETURN_M;
 /// Frame ids and sensor figures used in the published messages.
 #[derive(Clone, Debug)]
 pub struct Config {
-    /// World frame of the odometry pose and TF parent (REP-105).
+    /// World frame (REP-105 `map`; ENU, origin = home): the root of the TF tree, and the frame
+    /// of the world-fixed quantities (accelerations, altitude).
     pub map_frame: String,
+    /// Odometry frame (REP-105 `odom`): the odometry pose's frame and TF parent of the body.
+    /// `map → odom` is the identity, published once on `/tf_static`: the MCU has one
+    /// estimate, GPS-referenced (it does not drift away from `map`), so there is no correction
+    /// to carry; see [`fcc_ros::frames`].
+    pub odom_frame: String,
     /// Body frame (FLU).
     pub base_frame: String,
     pub imu_frame: String,
@@ -41,6 +47,7 @@ impl Default for Config {
     fn default() -> Self {
         Config {
             map_frame: "map".into(),
+            odom_frame: "odom".into(),
             base_frame: "base_link".into(),
             imu_frame: "imu_link".into(),
             mag_frame: "imu_link".into(),
@@ -203,10 +210,11 @@ pub fn battery(m: &link::Battery, stamp: Time, cfg: &Config) -> BatteryState {
     }
 }
 
-/// Navigation state → (`Odometry`, `state/imu`, TF map → base_link).
+/// Navigation state → (`Odometry`, `state/imu`, TF odom → base_link).
 ///
-/// Odometry: pose in `map` (ENU, home = origin), twist in `base_link` (FLU) per REP-105 /
-/// nav_msgs: linear = body-frame velocity, angular = bias-corrected body rates.
+/// Odometry: pose in `odom` (ENU, home = origin; `map → odom` is the identity), child
+/// `base_link`, twist in `base_link` (FLU) per REP-105 / nav_msgs: linear = body-frame
+/// velocity, angular = bias-corrected body rates.
 pub fn nav_state(m: &link::NavState, stamp: Time, cfg: &Config) -> (Odometry, Imu, TFMessage) {
     let q_ned = frames::quat_f64(m.q_body_to_ned);
     let q_enu = frames::q_frd_ned_to_q_flu_enu(q_ned);
@@ -229,7 +237,7 @@ pub fn nav_state(m: &link::NavState, stamp: Time, cfg: &Config) -> (Odometry, Im
         twist_cov[i * 7] = v * v;
     }
     let odom = Odometry {
-        header: Header::new(stamp, &cfg.map_frame),
+        header: Header::new(stamp, &cfg.odom_frame),
         child_frame_id: cfg.base_frame.clone(),
         pose: PoseWithCovariance {
             pose: Pose {
@@ -261,7 +269,7 @@ pub fn nav_state(m: &link::NavState, stamp: Time, cfg: &Config) -> (Odometry, Im
     };
     let tf = TFMessage {
         transforms: vec![TransformStamped {
-            header: Header::new(stamp, &cfg.map_frame),
+            header: Header::new(stamp, &cfg.odom_frame),
             child_frame_id: cfg.base_frame.clone(),
             transform: Transform {
                 translation: v3(pos),
@@ -289,8 +297,9 @@ pub fn accels(m: &link::NavState, stamp: Time, cfg: &Config) -> (AccelStamped, A
     (mk(obs), mk(meas))
 }
 
-/// Static transforms from `base_link` to the sensor frames (sensors aligned with the body; the
-/// rangefinder frames' x axis points down the beam, REP-117/`sensor_msgs/Range`).
+/// Static transforms: `map → odom` (the identity, see [`Config::odom_frame`]; left out if the
+/// two names are the same) and `base_link` to the sensor frames (sensors aligned with the body;
+/// the rangefinder frames' x axis points down the beam, REP-117/`sensor_msgs/Range`).
 pub fn static_transforms(stamp: Time, cfg: &Config) -> TFMessage {
     let s = std::f64::consts::FRAC_1_SQRT_2;
     // +90° about y (FLU): x → −z.
@@ -302,6 +311,16 @@ pub fn static_transforms(stamp: Time, cfg: &Config) -> TFMessage {
     };
     let mut frames_seen: Vec<&str> = Vec::new();
     let mut out = Vec::new();
+    if cfg.odom_frame != cfg.map_frame {
+        out.push(TransformStamped {
+            header: Header::new(stamp, &cfg.map_frame),
+            child_frame_id: cfg.odom_frame.clone(),
+            transform: Transform {
+                translation: Vector3::default(),
+                rotation: Quaternion::default(),
+            },
+        });
+    }
     for (frame, rot) in [
         (&cfg.imu_frame, Quaternion::default()),
         (&cfg.mag_frame, Quaternion::default()),
@@ -550,14 +569,15 @@ pub fn setpoint(
         }
     }
     let f = m.header.frame_id.trim_start_matches('/');
-    let ned = if f.is_empty() || f == "map" || f == "odom" || f == cfg.map_frame {
-        frames::enu_to_ned(lin)
-    } else if f == cfg.base_frame || f == "base_link" {
-        let yaw = yaw_ned.ok_or(SetpointReject::NoHeading)?;
-        frames::flu_heading_to_ned(lin, yaw)
-    } else {
-        return Err(SetpointReject::UnknownFrame(m.header.frame_id.clone()));
-    };
+    let ned =
+        if f.is_empty() || f == "map" || f == "odom" || f == cfg.map_frame || f == cfg.odom_frame {
+            frames::enu_to_ned(lin)
+        } else if f == cfg.base_frame || f == "base_link" {
+            let yaw = yaw_ned.ok_or(SetpointReject::NoHeading)?;
+            frames::flu_heading_to_ned(lin, yaw)
+        } else {
+            return Err(SetpointReject::UnknownFrame(m.header.frame_id.clone()));
+        };
     Ok((
         link::VelocitySetpoint {
             vel_ned_mps: [ned[0] as f32, ned[1] as f32, ned[2] as f32],

@@ -27,11 +27,12 @@ Services: arm (std_srvs/SetBool), land, hold (std_srvs/Trigger).\n\
 Parameters: localhost_only (true), ttl_ms (300, 50..=3000), max_speed_mps (20, 0.1..=30),\n\
   max_stamp_age_ms (500, 10..=5000), max_stamp_future_ms (500, 10..=5000), clock_source (sync | mcu),\n\
   ping_period_ms (1000, 100..=10000), use_sim_time,\n\
-  map_frame (map), base_frame (base_link), imu_frame (imu_link), gps_frame (gps_link),\n\
-  laser_frame (laser_link), sonar_frame (sonar_link),\n\
+  map_frame (map), odom_frame (odom), base_frame (base_link), imu_frame (imu_link),\n\
+  gps_frame (gps_link), laser_frame (laser_link), sonar_frame (sonar_link),\n\
   record (off: PATH), record_on_arm (false), record_split_s, record_split_mb (off),\n\
   record_compression (zstd | none), record_chunk_ms (500), record_chunk_mb (4).\n\
-Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE, RUST_LOG,\n\
+Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE (LOCALHOST |\n\
+  SUBNET | SYSTEM_DEFAULT; OFF is refused), ROS_STATIC_PEERS (not supported: warned), RUST_LOG,\n\
   FCC_BRIDGE_DDS_STARTUP_TIMEOUT_MS (5000: restart when the DDS set-up takes longer)."
 )]
 struct Cli {
@@ -151,10 +152,11 @@ fn mcu_params(o: &mut Options, p: &BTreeMap<String, String>) -> Result<(), Strin
     Ok(())
 }
 
-/// The frame ids (`map_frame`, `base_frame`, the sensors' frames).
+/// The frame ids (`map_frame`, `odom_frame`, `base_frame`, the sensors' frames).
 fn frame_params(c: &mut fcc_bridge::convert::Config, p: &BTreeMap<String, String>) {
     for (k, slot) in [
         ("map_frame", &mut c.map_frame),
+        ("odom_frame", &mut c.odom_frame),
         ("base_frame", &mut c.base_frame),
         ("imu_frame", &mut c.imu_frame),
         ("mag_frame", &mut c.mag_frame),
@@ -181,6 +183,7 @@ fn check_known(p: &BTreeMap<String, String>) -> Result<(), String> {
         "clock_source",
         "use_sim_time",
         "map_frame",
+        "odom_frame",
         "base_frame",
         "imu_frame",
         "mag_frame",

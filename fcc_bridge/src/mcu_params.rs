@@ -8,8 +8,7 @@ use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType};
 pub use fcc_msgs::params::{by_id, by_name, ParamSpec as McuParam, PARAMS as MCU_PARAMS};
 
 /// The ROS parameter descriptor of an MCU parameter (type, range, doc with unit), from the
-/// table. ros2-client 0.12.1 answers `describe_parameters` from the value alone and takes no
-/// user descriptors, so this is what a describe would say once it can be served.
+/// table, as `describe_parameters` answers it ([`crate::ros_api::describe`]).
 pub fn descriptor(p: &McuParam) -> ParameterDescriptor {
     ParameterDescriptor {
         name: p.name.to_string(),

@@ -196,9 +196,8 @@ impl BridgeParam {
         self.check(x)
     }
 
-    /// The ROS parameter descriptor (type, range, read-only) derived from the table.
-    /// ros2-client 0.12.1 answers `describe_parameters` from the value alone and takes no
-    /// user descriptors, so this is what a describe would say once it can be served.
+    /// The ROS parameter descriptor (type, range, description with unit, read-only) derived
+    /// from the table, as `describe_parameters` answers it ([`describe`]).
     pub fn descriptor(&self) -> ros2_client::parameters::ParameterDescriptor {
         use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType};
         ParameterDescriptor {
@@ -225,6 +224,80 @@ impl BridgeParam {
             },
         }
     }
+}
+
+/// The bridge's other parameters (not numeric, not the MCU's): set at start-up (`-p`,
+/// `--params-file`) and read-only at run time ([`check_bridge_param`] refuses a live set of
+/// any name outside [`BRIDGE_PARAMS`]), with what `describe_parameters` says of each.
+pub const STARTUP_PARAMS: &[(&str, &str)] = &[
+    (
+        "clock_source",
+        "stamp clock: sync (MCU time mapped to the Linux clock by the link's time sync) | mcu \
+         (MCU time as ROS time; the bridge publishes /clock)",
+    ),
+    (
+        "localhost_only",
+        "DDS on loopback only (default; also from ROS_LOCALHOST_ONLY and \
+         ROS_AUTOMATIC_DISCOVERY_RANGE)",
+    ),
+    ("record", "MCAP bag of every topic (path; empty = off)"),
+    ("map_frame", "world frame (ENU, origin = home; REP-105 map)"),
+    (
+        "odom_frame",
+        "odometry frame (ENU; REP-105 odom, identity under map: the estimate is GPS-referenced)",
+    ),
+    ("base_frame", "body frame (FLU; REP-105 base_link)"),
+    (
+        "imu_frame",
+        "frame of imu/data_raw (FLU, aligned with the body)",
+    ),
+    ("mag_frame", "frame of mag (FLU, aligned with the body)"),
+    ("baro_frame", "frame of baro"),
+    ("gps_frame", "frame of gps/fix"),
+    (
+        "laser_frame",
+        "frame of range/laser (x along the beam, down)",
+    ),
+    (
+        "sonar_frame",
+        "frame of range/sonar (x along the beam, down)",
+    ),
+];
+
+/// `use_sim_time`'s descriptor text (ros2-client keeps that parameter itself; settable).
+const USE_SIM_TIME_TEXT: &str = "stamp with /clock instead of the Linux clock (with \
+     clock_source:=sync; with clock_source:=mcu the bridge is the clock)";
+
+/// What `describe_parameters` answers for `name` (ros2-client's describer hook): the MCU
+/// parameters from their table ([`mcu_params::descriptor`]), the numeric bridge parameters from
+/// [`BRIDGE_PARAMS`], `use_sim_time`, and the read-only [`STARTUP_PARAMS`]. `None` for a name
+/// the node does not declare. The type is filled in by ros2-client from the value.
+pub fn describe(name: &str) -> Option<ros2_client::parameters::ParameterDescriptor> {
+    use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType};
+    if let Some(p) = mcu_params::by_name(name) {
+        return Some(mcu_params::descriptor(p));
+    }
+    if let Some(p) = bridge_param(name) {
+        return Some(p.descriptor());
+    }
+    let (description, read_only) = if name == "use_sim_time" {
+        (USE_SIM_TIME_TEXT, false)
+    } else {
+        (STARTUP_PARAMS.iter().find(|(n, _)| *n == name)?.1, true)
+    };
+    Some(ParameterDescriptor {
+        name: name.to_string(),
+        param_type: ParameterType::NotSet,
+        description: description.to_string(),
+        additional_constraints: if read_only {
+            "set at start-up (-p / --params-file); read-only at run time".into()
+        } else {
+            String::new()
+        },
+        read_only,
+        dynamic_typing: false,
+        range: NumericRange::NotSpecified,
+    })
 }
 
 /// Bridge parameters that can be changed at run time (the rest are read-only after start):
@@ -401,6 +474,57 @@ mod tests {
         );
         h.join().unwrap();
     }
+
+    /// `describe_parameters` (ros2-client's describer hook) has a descriptor for every
+    /// parameter the node declares, with a description; its `read_only` is what the validator
+    /// enforces live; numeric ones carry their table's range and unit.
+    #[test]
+    fn every_declared_parameter_is_described() {
+        use ros2_client::parameters::NumericRange;
+        let (tx, _rx) = mpsc::channel(4);
+        let sh = ParamShared {
+            live: AtomicBool::new(true),
+            mcu_values: Mutex::new(BTreeMap::new()),
+            link: tx,
+        };
+        let declared = crate::bridge::declared_parameters(&crate::bridge::Options::default());
+        assert!(declared.len() > MCU_PARAM_COUNT + BRIDGE_PARAMS.len());
+        for (name, value) in &declared {
+            let d = describe(name).unwrap_or_else(|| panic!("{name}: no descriptor"));
+            assert_eq!(d.name, *name);
+            assert!(!d.description.is_empty(), "{name}");
+            // Live, a read-only parameter is refused and a writable one is not refused for
+            // being read-only (use_sim_time is ros2-client's own and never reaches the
+            // validator; MCU parameters would wait for the MCU here, so only the table is used).
+            if *name != "use_sim_time" && mcu_params::by_name(name).is_none() {
+                let refused = validate(&sh, name, value)
+                    .err()
+                    .is_some_and(|e| e.contains("read-only"));
+                assert_eq!(d.read_only, refused, "{name}: read_only vs the validator");
+            }
+            match (bridge_param(name), mcu_params::by_name(name)) {
+                (Some(p), _) => {
+                    assert!(d.description.contains(p.unit), "{name}: {}", d.description);
+                    assert!(!matches!(d.range, NumericRange::NotSpecified), "{name}");
+                }
+                (_, Some(p)) => {
+                    assert!(d.description.contains(p.unit), "{name}: {}", d.description);
+                    assert!(
+                        matches!(d.range, NumericRange::FloatingPointRange { from_value, to_value, .. }
+                            if from_value == p.min as f64 && to_value == p.max as f64),
+                        "{name}"
+                    );
+                    assert!(!d.read_only, "{name}");
+                }
+                _ => assert!(matches!(d.range, NumericRange::NotSpecified), "{name}"),
+            }
+        }
+        assert!(describe("use_sim_time").is_some_and(|d| !d.read_only));
+        assert!(describe("clock_source").is_some_and(|d| d.read_only));
+        assert!(describe("not_a_parameter").is_none());
+    }
+
+    const MCU_PARAM_COUNT: usize = mcu_params::MCU_PARAMS.len();
 
     #[test]
     fn bridge_param_table_is_safe() {

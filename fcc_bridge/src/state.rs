@@ -32,6 +32,9 @@ pub enum Out {
     Odom(Odometry),
     StateImu(Imu),
     Tf(TFMessage),
+    /// `/tf_static` stamped with the MCU clock (`clock_source:=mcu`; with `sync` the IO layer
+    /// publishes it at start-up on the Linux clock).
+    TfStatic(TFMessage),
     Altitude(Altitude),
     Ground(Range),
     Status(Status),
@@ -151,6 +154,9 @@ pub struct LinkState {
     pub warn: bounded::WarnLimiter,
     /// The uplink shaper: setpoints coalesced to the newest at a bounded rate, commands first.
     pub uplink: Uplink,
+    /// `clock_source:=mcu`: `/tf_static` still to be published, stamped with the first MCU time
+    /// of this connection (one clock on every stamp).
+    pub tf_static_due: bool,
 }
 
 fn seq_counters(c: &link::LinkCounters) -> [u32; 3] {
@@ -180,6 +186,7 @@ impl LinkState {
             seq_forgiven: [0; 3],
             warn: bounded::WarnLimiter::default(),
             uplink: Uplink::new(SETPOINT_MIN_INTERVAL_NS),
+            tf_static_due: clock == ClockSource::Mcu,
         }
     }
 
@@ -193,6 +200,8 @@ impl LinkState {
         self.timesync.reset();
         self.uplink.reconnect();
         self.counters.reconnects += 1;
+        // A restarted MCU counts its time from 0 again: restamp the static transforms.
+        self.tf_static_due = self.clock == ClockSource::Mcu;
     }
 
     /// Link receive totals over all connections. A sequence jump onto the MCU's `Hello` (a new
@@ -335,6 +344,10 @@ impl LinkState {
     fn on_telemetry(&mut self, message: link::Message, t_us: u64, now_ns: i64, out: &mut Vec<Out>) {
         let st = Time::from_nanos(self.stamp_ns(t_us, now_ns));
         let cfg = &self.cfg;
+        if self.tf_static_due {
+            self.tf_static_due = false;
+            out.push(Out::TfStatic(convert::static_transforms(st, cfg)));
+        }
         match message {
             link::Message::ImuRaw(m) => out.push(Out::ImuRaw(convert::imu_raw(&m, st, cfg))),
             link::Message::MagRaw(m) => out.push(Out::Mag(convert::mag(&m, st, cfg))),

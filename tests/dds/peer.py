@@ -229,7 +229,8 @@ def main():
     c.check("battery", abs(bat.voltage - 15.8) < 1e-4 and abs(bat.current + 12.0) < 1e-4 and bat.present)
 
     od = got["state/odom"][-1]
-    c.check("odom frames map→base_link", od.header.frame_id == "map" and od.child_frame_id == "base_link")
+    c.check("odom frames odom→base_link (REP-105)", od.header.frame_id == "odom" and od.child_frame_id == "base_link",
+            (od.header.frame_id, od.child_frame_id))
     c.check("odom position ENU", close(vec(od.pose.pose.position), P_ENU), vec(od.pose.pose.position))
     c.check("odom orientation ENU/FLU (yaw 60°, nose down 10°)", close(quat(od.pose.pose.orientation), Q_EXPECT, 1e-5),
             (quat(od.pose.pose.orientation), Q_EXPECT))
@@ -242,10 +243,15 @@ def main():
     si = got["state/imu"][-1]
     c.check("state/imu orientation", close(quat(si.orientation), Q_EXPECT, 1e-5) and si.header.frame_id == "base_link")
     tf = got["/tf"][-1].transforms[0]
-    c.check("tf map→base_link", tf.header.frame_id == "map" and tf.child_frame_id == "base_link"
+    c.check("tf odom→base_link", tf.header.frame_id == "odom" and tf.child_frame_id == "base_link"
             and close(vec(tf.transform.translation), P_ENU) and close(quat(tf.transform.rotation), Q_EXPECT, 1e-5))
     c.check("tf_static sensor frames", bool(static_tf) and {t.child_frame_id for t in static_tf[-1].transforms}
             >= {"imu_link", "laser_link", "sonar_link", "gps_link"})
+    edges = {(t.header.frame_id, t.child_frame_id) for t in static_tf[-1].transforms} if static_tf else set()
+    mo = [t.transform for t in static_tf[-1].transforms if t.child_frame_id == "odom"] if static_tf else []
+    c.check("tf_static map→odom, the identity (tree map → odom → base_link → sensors)",
+            ("map", "odom") in edges and len(mo) == 1 and close(vec(mo[0].translation), (0.0, 0.0, 0.0))
+            and close(quat(mo[0].rotation), (1.0, 0.0, 0.0, 0.0)), sorted(edges))
 
     al = got["altitude"][-1]
     c.check("altitude: up-positive vertical speed, alt, laser, source",

@@ -96,6 +96,7 @@ def main():
     get_p = Service(dp, f"{fq}/get_parameters", st.GetParametersRequest, st.GetParametersResponse)
     set_p = Service(dp, f"{fq}/set_parameters", st.SetParametersRequest, st.SetParametersResponse)
     list_p = Service(dp, f"{fq}/list_parameters", st.ListParametersRequest, st.ListParametersResponse)
+    desc_p = Service(dp, f"{fq}/describe_parameters", st.DescribeParametersRequest, st.DescribeParametersResponse)
     arm = Service(dp, f"{ns}/arm", st.SetBoolRequest, st.SetBoolResponse)
     land = Service(dp, f"{ns}/land", st.TriggerRequest, st.TriggerResponse)
     hold = Service(dp, f"{ns}/hold", st.TriggerRequest, st.TriggerResponse)
@@ -145,6 +146,28 @@ def main():
     c.check("--params-file value for the MCU (max_horiz_speed_mps 6)",
             v and abs(v[2].double_value - 6.0) < 1e-6, v and v[2])
     c.check("use_sim_time true", v and v[3].type == P_BOOL and v[3].bool_value, v and v[3])
+
+    # describe_parameters (what `ros2 param describe` shows): every listed parameter has a
+    # description; ranges with units from the tables; read-only flags as the validator enforces.
+    r = desc_p.call(st.DescribeParametersRequest(names=sorted(names)))
+    ds = {d.name: d for d in r.descriptors} if r else {}
+    undescribed = [n for n in sorted(names) if n not in ds or not ds[n].description
+                   or "description missing" in ds[n].description]
+    c.check(f"describe_parameters: all {len(names)} parameters described", bool(ds) and not undescribed, undescribed)
+    d = ds.get("limits.max_tilt_deg")
+    c.check("describe limits.max_tilt_deg: double, range 5..60, unit deg, writable",
+            d is not None and d.type == P_DOUBLE and len(d.floating_point_range) == 1
+            and (d.floating_point_range[0].from_value, d.floating_point_range[0].to_value) == (5.0, 60.0)
+            and "deg" in d.description and not d.read_only, d)
+    d = ds.get("ttl_ms")
+    c.check("describe ttl_ms: integer, range 50..3000 step 1, unit ms, writable",
+            d is not None and d.type == P_INT and len(d.integer_range) == 1
+            and (d.integer_range[0].from_value, d.integer_range[0].to_value, d.integer_range[0].step) == (50, 3000, 1)
+            and "ms" in d.description and not d.read_only, d)
+    c.check("describe ping_period_ms and clock_source: read-only",
+            all(ds.get(n) is not None and ds[n].read_only for n in ("ping_period_ms", "clock_source")),
+            [(n, ds[n].read_only) for n in ("ping_period_ms", "clock_source") if n in ds])
+    c.check("describe use_sim_time: writable", ds.get("use_sim_time") is not None and not ds["use_sim_time"].read_only)
 
     def set_(name, value):
         r = set_p.call(st.SetParametersRequest(parameters=[st.Parameter(name, value)]))
@@ -208,7 +231,7 @@ def main():
         time.sleep(0.05)
     frames = {t.child_frame_id for t in got[-1].transforms} if got else set()
     c.check(f"/tf_static received by a peer joining {time.time() - first:.0f} s later (transient local)",
-            frames >= {"imu_link", "gps_link", "laser_link", "sonar_link"}, sorted(frames))
+            frames >= {"odom", "imu_link", "gps_link", "laser_link", "sonar_link"}, sorted(frames))
 
     # ---------------------------------------------------------------- what the MCU got
     recs = [json.loads(line) for line in open(a.mcu_log) if line.strip()]

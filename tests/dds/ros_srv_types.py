@@ -81,6 +81,42 @@ class ListParametersResponse(IdlStruct, typename=_s("rcl_interfaces", "ListParam
 
 
 @dataclass
+class FloatingPointRange(IdlStruct, typename=_m("rcl_interfaces", "FloatingPointRange")):
+    from_value: float64 = 0.0
+    to_value: float64 = 0.0
+    step: float64 = 0.0
+
+
+@dataclass
+class IntegerRange(IdlStruct, typename=_m("rcl_interfaces", "IntegerRange")):
+    from_value: int64 = 0
+    to_value: int64 = 0
+    step: uint64 = 0
+
+
+@dataclass
+class ParameterDescriptor(IdlStruct, typename=_m("rcl_interfaces", "ParameterDescriptor")):
+    name: str = ""
+    type: uint8 = 0
+    description: str = ""
+    additional_constraints: str = ""
+    read_only: bool = False
+    dynamic_typing: bool = False
+    floating_point_range: sequence[FloatingPointRange, 1] = field(default_factory=list)
+    integer_range: sequence[IntegerRange, 1] = field(default_factory=list)
+
+
+@dataclass
+class DescribeParametersRequest(IdlStruct, typename=_s("rcl_interfaces", "DescribeParameters_Request")):
+    names: sequence[str] = field(default_factory=list)
+
+
+@dataclass
+class DescribeParametersResponse(IdlStruct, typename=_s("rcl_interfaces", "DescribeParameters_Response")):
+    descriptors: sequence[ParameterDescriptor] = field(default_factory=list)
+
+
+@dataclass
 class SetBoolRequest(IdlStruct, typename=_s("std_srvs", "SetBool_Request")):
     data: bool = False
 

@@ -12,7 +12,7 @@ missions (--missions-dir/uavN.yaml) and the scenarios' GPS homes (--scenarios-di
   * DDS ownership: no participant (node) publishes or subscribes in two vehicle namespaces, and
     no vehicle node uses the global /tf, /tf_static, /clock or /diagnostics (the remaps work);
   * no message crosses namespaces — every message is checked against ITS vehicle:
-      - state/odom and tf (map → base_link) equal that vehicle's own estimate in its CSV at the
+      - state/odom and tf (odom → base_link) equal that vehicle's own estimate in its CSV at the
         same simulated time (none off by more than 1 m), and do NOT fit any other vehicle's log;
         the track stays on that vehicle's mission path (its own quadrant, size and altitude);
       - gps/fix lies nearest that vehicle's own GPS home (the homes stand 40 m apart);
@@ -72,7 +72,7 @@ TOPICS = {
     "range/laser": (rt.Range, 7, "laser_link"),
     "range/sonar": (rt.Range, 7, "sonar_link"),
     "battery": (rt.BatteryState, 3, None),
-    "state/odom": (rt.Odometry, 40, "map"),
+    "state/odom": (rt.Odometry, 40, "odom"),
     "state/imu": (rt.Imu, 40, "base_link"),
     "tf": (rt.TFMessage, 40, None),
     "tf_static": (rt.TFMessage, None, None),
@@ -392,23 +392,24 @@ def observe(a):
         c.check(f"/uav{v}: cruise altitude {alt:.0f} m ± 0.5 (median while above 60 % of it)",
                 zf and abs(pct(zf, 0.5) - alt) < 0.5, f"{pct(zf, 0.5):.2f} m" if zf else "never up")
         # frames: one standard TF tree per namespace
-        c.check(f"/uav{v}: odom frames map → base_link", bool(od) and {(m.header.frame_id, m.child_frame_id) for m in od} == {("map", "base_link")},
+        c.check(f"/uav{v}: odom frames odom → base_link", bool(od) and {(m.header.frame_id, m.child_frame_id) for m in od} == {("odom", "base_link")},
                 {(m.header.frame_id, m.child_frame_id) for m in od})
         for n in TOPICS:
             frame = TOPICS[n][2]
             if frame:
                 c.check(f"/uav{v}: {n} frame_id {frame}", frames[(v, n)] == {frame}, frames[(v, n)])
         tf = [(t_of(x.header.stamp), x) for m in keep[(v, "tf")] for x in m.transforms
-              if x.header.frame_id == "map" and x.child_frame_id == "base_link"]
+              if x.header.frame_id == "odom" and x.child_frame_id == "base_link"]
         tf_frames = {(x.header.frame_id, x.child_frame_id) for m in keep[(v, "tf")] for x in m.transforms}
         tf_err = [e for t, x in tf for e in [err_vs_log(log, t, x.transform.translation.x,
                                                        x.transform.translation.y, x.transform.translation.z)]
                   if e is not None]
-        c.check(f"/uav{v}: tf map → base_link = its own vehicle's estimate (none > 1 m off)",
-                len(tf_err) > 1000 and max(tf_err) < 1.0 and tf_frames == {("map", "base_link")},
+        c.check(f"/uav{v}: tf odom → base_link = its own vehicle's estimate (none > 1 m off)",
+                len(tf_err) > 1000 and max(tf_err) < 1.0 and tf_frames == {("odom", "base_link")},
                 f"{len(tf_err)} aligned, max {max(tf_err, default=math.nan):.3f} m, frames {sorted(tf_frames)}")
         st_frames = {(x.header.frame_id, x.child_frame_id) for m in keep[(v, "tf_static")] for x in m.transforms}
-        c.check(f"/uav{v}: tf_static (latched) base_link → sensor frames", ("base_link", "imu_link") in st_frames,
+        c.check(f"/uav{v}: tf_static (latched) map → odom and base_link → sensor frames",
+                ("base_link", "imu_link") in st_frames and ("map", "odom") in st_frames,
                 sorted(st_frames))
         # GPS: nearest its own home
         fixes = keep[(v, "gps/fix")]

@@ -50,6 +50,8 @@ class Clock(IdlStruct, typename="rosgraph_msgs::msg::dds_::Clock_"):
 
 RELIABLE = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepLast(200))
 BEST_EFFORT = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(200))
+LATCHED = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.Durability.TransientLocal,
+              Policy.History.KeepLast(10))
 DISCOVERY_QOS = Qos(Policy.Reliability.Reliable(duration(seconds=1)),
                     Policy.Durability.TransientLocal, Policy.History.KeepLast(1))
 
@@ -62,9 +64,10 @@ TOPICS = {
     "range/laser": (rt.Range, 7, "laser_link"),
     "range/sonar": (rt.Range, 7, "sonar_link"),
     "battery": (rt.BatteryState, 3, None),
-    "state/odom": (rt.Odometry, 40, "map"),
+    "state/odom": (rt.Odometry, 40, "odom"),
     "state/imu": (rt.Imu, 40, "base_link"),
     "/tf": (rt.TFMessage, 40, None),
+    "/tf_static": (rt.TFMessage, None, None),
     "altitude": (rt.Altitude, 15, None),
     "altitude/ground": (rt.Range, 15, "base_link"),
     "status": (rt.Status, 4, None),
@@ -254,7 +257,8 @@ def dds_name(ns, n):
 def observe(a):
     ns = a.ns.rstrip("/")
     dp = DomainParticipant(a.domain)
-    readers = {n: DataReader(dp, Topic(dp, dds_name(ns, n), ty), qos=RELIABLE if n != "setpoint/velocity" else BEST_EFFORT)
+    qos = {"setpoint/velocity": BEST_EFFORT, "/tf_static": LATCHED}
+    readers = {n: DataReader(dp, Topic(dp, dds_name(ns, n), ty), qos=qos.get(n, RELIABLE))
                for n, (ty, _, _) in TOPICS.items()}
     disc = DataReader(dp, Topic(dp, "ros_discovery_info", rt.ParticipantEntitiesInfo), qos=DISCOVERY_QOS)
     got = {n: [] for n in TOPICS}
@@ -305,6 +309,19 @@ def observe(a):
 
     od = got["state/odom"]
     c.check("odom child frame base_link", bool(od) and {m.child_frame_id for m in od} == {"base_link"})
+    # REP-105 tree: map → odom (static identity) → base_link (/tf) → sensors (static).
+    tf_edges = {(x.header.frame_id, x.child_frame_id) for m in got["/tf"] for x in m.transforms}
+    st_edges = {(x.header.frame_id, x.child_frame_id) for m in got["/tf_static"] for x in m.transforms}
+    c.check("TF tree map → odom → base_link (/tf odom→base_link, /tf_static map→odom and base_link→sensors)",
+            tf_edges == {("odom", "base_link")} and ("map", "odom") in st_edges
+            and ("base_link", "imu_link") in st_edges, f"/tf {sorted(tf_edges)}, /tf_static {sorted(st_edges)}")
+    # One clock on every stamp: /tf_static too carries the MCU's time (clock_source:=mcu), inside
+    # the span of /clock, not the Linux clock.
+    clk = [t_of(m.clock) for m in got["/clock"]]
+    st_t = [t_of(x.header.stamp) for m in got["/tf_static"] for x in m.transforms]
+    c.check("/tf_static stamped with the MCU clock (within the /clock span)",
+            bool(clk) and bool(st_t) and all(min(clk) - 1.0 <= t <= max(clk) for t in st_t),
+            f"stamps {sorted(set(st_t))[:3]} s, /clock {min(clk, default=math.nan):.3f}..{max(clk, default=math.nan):.3f} s")
     # Odometry vs the simulator's log at the same (simulated) times.
     est_err, true_h, true_v, n = [], [], [], 0
     # The estimate's origin is the GPS home on the ground; the truth is the body's centre, 0.25 m

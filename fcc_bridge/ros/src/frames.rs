@@ -11,6 +11,18 @@
 //! - Heading: NED yaw (from north towards east) ψ ↔ ENU yaw (from east towards north) π/2 − ψ.
 //!
 //! Quaternions are `[w, x, y, z]`, Hamilton convention, f64.
+//!
+//! The TF tree (REP-105): `map → odom → base_link → sensor frames`.
+//! - `map`: ENU, origin = the MCU's home (its GPS reference); world-fixed quantities
+//!   (`accel/*`, `altitude`) are in it.
+//! - `odom`: the frame of `state/odom` (`nav_msgs/Odometry`, child `base_link`) and the parent
+//!   of `base_link` on `/tf`. `map → odom` is the identity, published once on `/tf_static`:
+//!   the MCU runs one estimator, GPS-referenced, so there is no separate dead-reckoned
+//!   estimate drifting away from `map` that a `map → odom` correction would absorb. `odom` is as
+//!   continuous as that estimate: `fcc_nav::horizontal`'s complementary filter low-passes GPS
+//!   (it moves smoothly towards each fix rather than jumping to it); only an estimator reset
+//!   (start-up, a fault) moves it at once.
+//! - `base_link`: FLU body; the sensor frames hang under it on `/tf_static`.
 
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2};
 

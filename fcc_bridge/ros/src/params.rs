@@ -222,9 +222,13 @@ pub fn parse_bool(v: &str) -> Result<bool, String> {
     }
 }
 
-/// Loopback-only DDS unless the user opts out: `-p localhost_only:=false` wins, then
-/// `ROS_LOCALHOST_ONLY` (1/0), then `ROS_AUTOMATIC_DISCOVERY_RANGE` (LOCALHOST → true,
-/// SUBNET/SYSTEM_DEFAULT → false, OFF → true). Default: true.
+/// Whether DDS stays on loopback. `-p localhost_only:=…` wins; then, as rcl (Jazzy) reads the
+/// environment: `ROS_LOCALHOST_ONLY=1` → loopback (deprecated in Jazzy, gone in Kilted, still
+/// honoured); else `ROS_AUTOMATIC_DISCOVERY_RANGE`: `LOCALHOST` → loopback, `SUBNET` and
+/// `SYSTEM_DEFAULT` → every interface (rustdds' default), `OFF` → an error (rustdds cannot turn
+/// automatic discovery off), anything else → an error. With neither set: loopback (this
+/// project's default, unlike ROS 2's SUBNET), except that `ROS_LOCALHOST_ONLY=0` alone means
+/// every interface.
 pub fn localhost_only(
     param: Option<&str>,
     ros_localhost_only: Option<&str>,
@@ -233,16 +237,37 @@ pub fn localhost_only(
     if let Some(p) = param {
         return parse_bool(p);
     }
-    if let Some(v) = ros_localhost_only.filter(|v| !v.is_empty()) {
-        return Ok(v.trim() != "0");
+    let lo = ros_localhost_only.map(str::trim).filter(|v| !v.is_empty());
+    if lo == Some("1") {
+        return Ok(true);
     }
-    if let Some(r) = discovery_range.filter(|v| !v.is_empty()) {
-        return Ok(!matches!(
-            r.trim().to_ascii_uppercase().as_str(),
-            "SUBNET" | "SYSTEM_DEFAULT"
-        ));
+    let range = discovery_range
+        .map(|r| r.trim().to_ascii_uppercase())
+        .filter(|r| !r.is_empty());
+    match range.as_deref() {
+        None => Ok(lo.is_none()),
+        Some("LOCALHOST") => Ok(true),
+        Some("SUBNET") | Some("SYSTEM_DEFAULT") => Ok(false),
+        Some("OFF") => Err(
+            "ROS_AUTOMATIC_DISCOVERY_RANGE=OFF is not supported: rustdds cannot \
+             turn automatic discovery off (nor take static peers); use LOCALHOST for loopback only"
+                .into(),
+        ),
+        Some(other) => Err(format!(
+            "ROS_AUTOMATIC_DISCOVERY_RANGE '{other}' is not one of SUBNET, LOCALHOST, OFF, \
+             SYSTEM_DEFAULT"
+        )),
     }
-    Ok(true)
+}
+
+/// The warning for a non-empty `ROS_STATIC_PEERS`: rustdds 0.15 has no initial-peers list, so
+/// the peers are not contacted (discovery is by multicast only).
+pub fn static_peers_warning(ros_static_peers: Option<&str>) -> Option<String> {
+    let v = ros_static_peers.map(str::trim).filter(|v| !v.is_empty())?;
+    Some(format!(
+        "ROS_STATIC_PEERS '{v}' ignored: rustdds has no static-peer list (multicast discovery \
+         only)"
+    ))
 }
 
 /// `ROS_DOMAIN_ID` (default 0, must be ≤ 232).
@@ -341,7 +366,21 @@ other_node:\n  ros__parameters:\n    ttl_ms: 9\n";
         assert!(!localhost_only(None, Some("0"), None).unwrap());
         assert!(localhost_only(None, Some("1"), Some("SUBNET")).unwrap());
         assert!(!localhost_only(None, None, Some("SUBNET")).unwrap());
+        assert!(!localhost_only(None, None, Some("system_default")).unwrap());
         assert!(localhost_only(None, None, Some("LOCALHOST")).unwrap());
+        // ROS_LOCALHOST_ONLY=0 is "not enabled": the range decides (rcl, Jazzy).
+        assert!(localhost_only(None, Some("0"), Some("LOCALHOST")).unwrap());
+        assert!(!localhost_only(None, Some("0"), Some("SUBNET")).unwrap());
+        // OFF cannot be done with rustdds: a clear error, not a silent loopback.
+        let e = localhost_only(None, None, Some("OFF")).unwrap_err();
+        assert!(e.contains("OFF") && e.contains("LOCALHOST"), "{e}");
+        assert!(localhost_only(None, Some("1"), Some("OFF")).unwrap());
+        assert!(localhost_only(Some("true"), None, Some("OFF")).unwrap());
+        let e = localhost_only(None, None, Some("LAN")).unwrap_err();
+        assert!(e.contains("'LAN'") && e.contains("SUBNET"), "{e}");
+        assert_eq!(static_peers_warning(None), None);
+        assert_eq!(static_peers_warning(Some(" ")), None);
+        assert!(static_peers_warning(Some("192.168.0.2")).is_some_and(|w| w.contains("ignored")));
         assert_eq!(domain_id(None).unwrap(), 0);
         assert_eq!(domain_id(Some("42")).unwrap(), 42);
         assert!(domain_id(Some("300")).is_err());

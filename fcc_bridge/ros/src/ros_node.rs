@@ -34,8 +34,13 @@ impl DdsEnv {
     }
 }
 
-/// A ros2-client context on a participant restricted to loopback unless disabled.
+/// A ros2-client context on a participant restricted to loopback unless disabled (a
+/// `ROS_STATIC_PEERS` it cannot honour is logged as a warning).
 pub fn context(env: DdsEnv) -> Result<Context, String> {
+    let peers = std::env::var("ROS_STATIC_PEERS").ok();
+    if let Some(w) = params::static_peers_warning(peers.as_deref()) {
+        log::warn!("{w}");
+    }
     let mut b = rustdds::DomainParticipantBuilder::new(env.domain_id);
     if env.localhost_only {
         b = b.with_only_networks([Ipv4Addr::LOCALHOST]);
@@ -44,8 +49,15 @@ pub fn context(env: DdsEnv) -> Result<Context, String> {
     Context::from_domain_participant(dp).map_err(|e| format!("ROS context: {e:?}"))
 }
 
-/// A node `namespace/name` with `/rosout`; spawns its spinner on the current tokio runtime.
-pub fn node(ctx: &Context, namespace: &str, name: &str) -> Result<Node, String> {
+/// A node `namespace/name` with `/rosout` and its `use_sim_time` parameter declared with the
+/// value in use (else ros2-client's built-in `false` is what `ros2 param get` shows); spawns its
+/// spinner on the current tokio runtime.
+pub fn node(
+    ctx: &Context,
+    namespace: &str,
+    name: &str,
+    use_sim_time: bool,
+) -> Result<Node, String> {
     let ns = if namespace.starts_with('/') {
         namespace.to_string()
     } else {
@@ -54,7 +66,10 @@ pub fn node(ctx: &Context, namespace: &str, name: &str) -> Result<Node, String> 
     let mut node = ctx
         .new_node(
             NodeName::new(&ns, name).map_err(|e| format!("node name {ns}/{name}: {e:?}"))?,
-            NodeOptions::new().enable_rosout(true),
+            NodeOptions::new().enable_rosout(true).declare_parameter(
+                "use_sim_time",
+                ros2_client::parameters::ParameterValue::Boolean(use_sim_time),
+            ),
         )
         .map_err(|e| format!("node: {e:?}"))?;
     tokio::spawn(

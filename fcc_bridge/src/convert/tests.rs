@@ -75,9 +75,97 @@ fn nav_state_enu() {
     assert_eq!((p.x, p.y, p.z), (2.0, 1.0, 3.0));
     // Facing north, flying north: body forward 4.
     assert!((odom.twist.twist.linear.x - 4.0).abs() < 1e-6);
-    assert_eq!(odom.header.frame_id, "map");
+    // REP-105: the odometry and the body's transform hang under `odom`.
+    assert_eq!(odom.header.frame_id, "odom");
     assert_eq!(odom.child_frame_id, "base_link");
+    assert_eq!(tf.transforms.len(), 1);
+    assert_eq!(tf.transforms[0].header.frame_id, "odom");
+    assert_eq!(tf.transforms[0].child_frame_id, "base_link");
     assert_eq!(tf.transforms[0].transform.translation.z, 3.0);
+}
+
+/// The TF tree is map → odom → base_link → sensors: `map → odom` is the static identity.
+#[test]
+fn static_tree_map_odom_then_sensors() {
+    let tf = static_transforms(st(), &cfg());
+    let edges: Vec<(&str, &str)> = tf
+        .transforms
+        .iter()
+        .map(|t| (t.header.frame_id.as_str(), t.child_frame_id.as_str()))
+        .collect();
+    assert_eq!(
+        edges,
+        [
+            ("map", "odom"),
+            ("base_link", "imu_link"),
+            ("base_link", "gps_link"),
+            ("base_link", "laser_link"),
+            ("base_link", "sonar_link"),
+        ]
+    );
+    let m = &tf.transforms[0].transform;
+    assert_eq!(m.translation.to_array(), [0.0; 3]);
+    assert_eq!(
+        [m.rotation.w, m.rotation.x, m.rotation.y, m.rotation.z],
+        [1.0, 0.0, 0.0, 0.0]
+    );
+    assert!(tf.transforms.iter().all(|t| t.header.stamp == st()));
+    // odom_frame:=map (the same name): no self-loop.
+    let same = Config {
+        odom_frame: "map".into(),
+        ..cfg()
+    };
+    assert!(static_transforms(st(), &same)
+        .transforms
+        .iter()
+        .all(|t| t.header.frame_id == "base_link"));
+}
+
+/// `clock_source:=mcu`: `/tf_static` is stamped with the MCU clock like every other topic, at
+/// the first telemetry of each connection; with `sync` the state machine emits none (the IO
+/// layer publishes it at start-up).
+#[test]
+fn mcu_clock_stamps_tf_static() {
+    use crate::state::{ClockSource, LinkState, Out};
+    let mut enc = link::Encoder::new();
+    let mut buf = [0u8; link::MAX_FRAME_LEN];
+    let mut frame = |m: link::Message, t: u64| {
+        let n = enc.encode(&m, t, &mut buf).unwrap();
+        buf[..n].to_vec()
+    };
+    let hello = frame(link::Message::Hello(link::Hello::ours([0, 1, 0])), 1);
+    let mut imu = |t| frame(link::Message::ImuRaw(link::ImuRaw::default()), t);
+    let (imu_a, imu_b, imu_c) = (imu(7_000_000), imu(7_005_000), imu(42_000));
+    let linux_ns = 1_700_000_000_000_000_000;
+    let mut s = LinkState::new(cfg(), SetpointLimits::default(), ClockSource::Mcu);
+    s.on_bytes(&hello, linux_ns).unwrap();
+    let out = s.on_bytes(&imu_a, linux_ns).unwrap();
+    match &out[..] {
+        [Out::TfStatic(tf), Out::ImuRaw(m)] => {
+            assert_eq!(m.header.stamp.to_nanos(), 7_000_000_000);
+            assert!(tf
+                .transforms
+                .iter()
+                .all(|t| t.header.stamp.to_nanos() == 7_000_000_000));
+            assert_eq!(tf.transforms[0].child_frame_id, "odom");
+        }
+        other => panic!("expected /tf_static then the IMU: {other:?}"),
+    }
+    let out = s.on_bytes(&imu_b, linux_ns).unwrap();
+    assert!(matches!(&out[..], [Out::ImuRaw(_)]), "once: {out:?}");
+    // A restarted MCU (time from 0 again): restamped on the new connection.
+    s.reconnect();
+    s.on_bytes(&hello, linux_ns).unwrap();
+    let out = s.on_bytes(&imu_c, linux_ns).unwrap();
+    assert!(
+        matches!(&out[..], [Out::TfStatic(tf), Out::ImuRaw(_)]
+            if tf.transforms[0].header.stamp.to_nanos() == 42_000_000),
+        "{out:?}"
+    );
+    let mut s = LinkState::new(cfg(), SetpointLimits::default(), ClockSource::Sync);
+    s.on_bytes(&hello, linux_ns).unwrap();
+    let out = s.on_bytes(&imu_a, linux_ns).unwrap();
+    assert!(matches!(&out[..], [Out::ImuRaw(_)]), "sync: {out:?}");
 }
 
 #[test]

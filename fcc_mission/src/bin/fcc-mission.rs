@@ -280,7 +280,7 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     step.set("creating the DDS participant");
     let ctx = ros_node::context(o.dds)?;
     step.set("creating the ROS node");
-    let mut node = ros_node::node(&ctx, &o.namespace, &o.node_name)?;
+    let mut node = ros_node::node(&ctx, &o.namespace, &o.node_name, o.use_sim_time)?;
     step.set("creating the subscriptions");
     let odom_sub =
         ros_node::subscription::<Odometry>(&mut node, &o.topics[0], &ros_node::best_effort_qos(1))?;
