@@ -302,6 +302,32 @@ def check_params_observe(c, peer, node):
     # service must say so (`ros2 param get /fcc/fcc_mission use_sim_time`).
     g = param_get(peer, node, MISSION, ["use_sim_time"])
     c.check("param get fcc_mission use_sim_time = true (started with -p use_sim_time:=true)", g["use_sim_time"] is True, g)
+    check_mission_params(c, peer, node)
+
+
+def check_mission_params(c, peer, node):
+    """The mission node's parameters (fcc_mission::node_params): every one listed with the value in
+    use, described (range, unit, read-only), and a set refused with the reason."""
+    from ros_cli import describe_text, param_describe, param_get, param_list, param_set
+    want = {"mission", "rate_hz", "use_sim_time", "timeout_s", "arm_timeout_s", "localhost_only", "hover_s"}
+    names = set(param_list(peer, node, MISSION))
+    c.check(f"param list {MISSION}: every parameter of its table", want <= names, sorted(names))
+    g = param_get(peer, node, MISSION, ["rate_hz", "timeout_s", "hover_s", "localhost_only", "mission"])
+    print(f"ros2 param get {MISSION}: {g}", flush=True)
+    # fcc-launch's square_flight.yaml: -p timeout_s:=400 -p hover_s:=${hover_s}; rate_hz its default.
+    c.check("param get fcc_mission: the values in use (rate_hz 50.0, timeout_s 400.0, the mission file)",
+            g["rate_hz"] == 50.0 and g["timeout_s"] == 400.0 and str(g["mission"]).endswith("square.yaml"), g)
+    ds = param_describe(peer, node, MISSION, ["rate_hz", "hover_s", "use_sim_time"])
+    for name, lo, hi in (("rate_hz", 20.0, 100.0), ("hover_s", 0.0, 86400.0)):
+        d = ds[name]
+        print(f"ros2 param describe {MISSION} {name}: {describe_text(d)}", flush=True)
+        r = d.floating_point_range
+        c.check(f"param describe fcc_mission {name}: range [{lo}, {hi}], read-only, a description",
+                len(r) == 1 and math.isclose(r[0].from_value, lo) and math.isclose(r[0].to_value, hi)
+                and d.read_only and len(d.description) > 10, describe_text(d))
+    c.check("param describe fcc_mission use_sim_time: read-only", ds["use_sim_time"].read_only, describe_text(ds["use_sim_time"]))
+    ok, why = param_set(peer, node, MISSION, "hover_s", 5.0)
+    c.check("param set fcc_mission hover_s: refused (read at start-up) with the reason", not ok and "read-only" in why, (ok, why))
 
 
 def late_joiner(c, peer):

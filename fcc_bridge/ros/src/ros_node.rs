@@ -58,6 +58,21 @@ pub fn node(
     name: &str,
     use_sim_time: bool,
 ) -> Result<Node, String> {
+    let opts = NodeOptions::new().enable_rosout(true).declare_parameter(
+        "use_sim_time",
+        ros2_client::parameters::ParameterValue::Boolean(use_sim_time),
+    );
+    node_with(ctx, namespace, name, opts)
+}
+
+/// A node `namespace/name` with these options (its parameters, their descriptors and
+/// validator); spawns its spinner on the current tokio runtime.
+pub fn node_with(
+    ctx: &Context,
+    namespace: &str,
+    name: &str,
+    opts: NodeOptions,
+) -> Result<Node, String> {
     let ns = if namespace.starts_with('/') {
         namespace.to_string()
     } else {
@@ -66,10 +81,7 @@ pub fn node(
     let mut node = ctx
         .new_node(
             NodeName::new(&ns, name).map_err(|e| format!("node name {ns}/{name}: {e:?}"))?,
-            NodeOptions::new().enable_rosout(true).declare_parameter(
-                "use_sim_time",
-                ros2_client::parameters::ParameterValue::Boolean(use_sim_time),
-            ),
+            opts,
         )
         .map_err(|e| format!("node: {e:?}"))?;
     tokio::spawn(

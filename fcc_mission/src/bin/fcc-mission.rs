@@ -30,7 +30,10 @@ use fcc_ros::startup;
 use fcc_ros::topics;
 use futures::StreamExt;
 use ros2_client::log::LogLevel;
-use ros2_client::{NodeLoggingHandle, RosoutRaw};
+use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType, ParameterValue};
+use ros2_client::{NodeLoggingHandle, NodeOptions, RosoutRaw};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 #[derive(Parser, Debug)]
@@ -280,7 +283,10 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     step.set("creating the DDS participant");
     let ctx = ros_node::context(o.dds)?;
     step.set("creating the ROS node");
-    let mut node = ros_node::node(&ctx, &o.namespace, &o.node_name, o.use_sim_time)?;
+    let live = Arc::new(AtomicBool::new(false));
+    let opts = node_options(&o.params, live.clone());
+    let mut node = ros_node::node_with(&ctx, &o.namespace, &o.node_name, opts)?;
+    live.store(true, Ordering::SeqCst); // from now on every parameter set is refused
     step.set("creating the subscriptions");
     let odom_sub =
         ros_node::subscription::<Odometry>(&mut node, &o.topics[0], &ros_node::best_effort_qos(1))?;
@@ -317,6 +323,79 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     })
 }
 
+/// Every parameter of the table with the value this run uses (what `ros2 param get` shows).
+fn declared_parameters(o: &Options) -> Vec<(&'static str, ParameterValue)> {
+    use ParameterValue as P;
+    node_params::NODE_PARAMS
+        .iter()
+        .map(|p| {
+            let v = match p.name {
+                "mission" => P::String(o.mission_file.clone()),
+                "rate_hz" => P::Double(o.rate_hz),
+                "use_sim_time" => P::Boolean(o.use_sim_time),
+                "timeout_s" => P::Double(o.timeout_s),
+                "arm_timeout_s" => P::Double(o.arm_timeout_s),
+                "localhost_only" => P::Boolean(o.dds.localhost_only),
+                "hover_s" => P::Double(o.hover_s),
+                other => unreachable!("parameter {other} of the table has no value here"),
+            };
+            (p.name, v)
+        })
+        .collect()
+}
+
+/// The node's options: /rosout, the parameter services with every parameter declared, their
+/// descriptors from the table, and a validator that refuses every set once the node runs (the
+/// parameters are read at start-up: read-only).
+fn node_options(params: &[(&'static str, ParameterValue)], live: Arc<AtomicBool>) -> NodeOptions {
+    let mut opts = NodeOptions::new()
+        .enable_rosout(true)
+        .start_parameter_services(true)
+        .parameter_describer(Box::new(|name| node_params::by_name(name).map(descriptor)));
+    for (k, v) in params {
+        opts = opts.declare_parameter(k, v.clone());
+    }
+    // The declared values are validated while the node is created (`live` still false).
+    opts.parameter_validator(Box::new(move |name, _| {
+        if live.load(Ordering::SeqCst) {
+            Err(format!(
+                "{name} is read-only: fcc-mission reads it at start-up (--ros-args -p {name}:=VALUE)"
+            ))
+        } else {
+            Ok(())
+        }
+    }))
+}
+
+/// `describe_parameters`' answer for `p`: its meaning, unit and default, its range, read-only.
+fn descriptor(p: &node_params::NodeParam) -> ParameterDescriptor {
+    let range = match p.kind {
+        node_params::Kind::Number { min, max, .. } => NumericRange::FloatingPointRange {
+            from_value: min,
+            to_value: max,
+            step: 0.0,
+        },
+        _ => NumericRange::NotSpecified,
+    };
+    let additional_constraints = match p.kind {
+        node_params::Kind::Number {
+            min_excluded: true,
+            min,
+            ..
+        } => format!("greater than {min}; set at start-up, read-only at run time"),
+        _ => "set at start-up (-p / --params-file); read-only at run time".into(),
+    };
+    ParameterDescriptor {
+        name: p.name.to_string(),
+        param_type: ParameterType::NotSet,
+        description: p.description(),
+        additional_constraints,
+        read_only: true,
+        dynamic_typing: false,
+        range,
+    }
+}
+
 /// The mission node's own topic (std_msgs/String, JSON): the only name not in the bridge's
 /// topic table ([`fcc_ros::topics`]).
 const MISSION_STATUS_TOPIC: &str = "mission/status";
@@ -324,6 +403,8 @@ const MISSION_STATUS_TOPIC: &str = "mission/status";
 /// What [`setup_dds`] needs (owned: it runs on a thread of its own).
 struct DdsSetup {
     dds: DdsEnv,
+    /// Every parameter of [`node_params::NODE_PARAMS`] with the value in use.
+    params: Vec<(&'static str, ParameterValue)>,
     namespace: String,
     node_name: String,
     use_sim_time: bool,
@@ -334,6 +415,7 @@ struct DdsSetup {
 async fn run(o: Options) -> Result<(), Failure> {
     let setup = DdsSetup {
         dds: o.dds,
+        params: declared_parameters(&o),
         namespace: o.namespace.clone(),
         node_name: o.node_name.clone(),
         use_sim_time: o.use_sim_time,
