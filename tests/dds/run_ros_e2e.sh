@@ -16,11 +16,12 @@ rc=0
 
 # Bad argument values: one line naming the parameter, exit 2 (no DDS is started).
 bad() {
+  local env="${ROS_AUTOMATIC_DISCOVERY_RANGE:+ROS_AUTOMATIC_DISCOVERY_RANGE=$ROS_AUTOMATIC_DISCOVERY_RANGE }"
   set +e; out="$("$bin/fcc-bridge" --device /nonexistent --ros-args "$@" 2>&1)"; r=$?; set -e
   if [ $r -eq 2 ] && [ "$(echo "$out" | wc -l)" -eq 1 ] && echo "$out" | grep -q "$expect"; then
-    echo "PASS bad argument ($*) → exit 2: $out"
+    echo "PASS bad argument ($env$*) → exit 2: $out"
   else
-    echo "FAIL bad argument ($*): exit $r, '$out'"; rc=1
+    echo "FAIL bad argument ($env$*): exit $r, '$out'"; rc=1
   fi
 }
 expect=ttl_ms; bad -p ttl_ms:=0
@@ -28,6 +29,9 @@ expect=limits.max_tilt_deg; bad -p limits.max_tilt_deg:=90
 expect=use_sim_time; bad -p use_sim_time:=maybe
 printf '/**:\n  ros__parameters:\n    control:\n      vel_p_per_s: -1.0\n' > "$tmp/bad.yaml"
 expect=control.vel_p_per_s; bad --params-file "$tmp/bad.yaml"
+# Discovery settings rustdds cannot honour are refused the same way (issue 16).
+expect="ROS_AUTOMATIC_DISCOVERY_RANGE=OFF is not supported"; ROS_AUTOMATIC_DISCOVERY_RANGE=OFF bad
+expect="ROS_AUTOMATIC_DISCOVERY_RANGE 'LAN'"; ROS_AUTOMATIC_DISCOVERY_RANGE=lan bad
 
 cat > "$tmp/params.yaml" <<'YAML'
 /**:
