@@ -14,6 +14,7 @@ usage: peer.py --mcu-log FILE [--ns /fcc] [--seconds 6]
 import argparse
 import json
 import math
+import os
 import sys
 import time
 
@@ -26,6 +27,9 @@ from cyclonedds.util import duration
 
 import ros_types as rt
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "lib"))
+from truth import qmul, qrot  # noqa: E402
+
 RELIABLE = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepLast(50))
 DISCOVERY_QOS = Qos(Policy.Reliability.Reliable(duration(seconds=1)),
                     Policy.Durability.TransientLocal, Policy.History.KeepLast(1))
@@ -33,18 +37,6 @@ TF_STATIC_QOS = Qos(Policy.Reliability.Reliable(duration(seconds=1)),
                     Policy.Durability.TransientLocal, Policy.History.KeepLast(1))
 
 # ---------------------------------------------------------------- independent expected values
-
-
-def qmul(a, b):
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
-
-
-def qrot(q, v):
-    p = qmul(qmul(q, (0.0, *v)), (q[0], -q[1], -q[2], -q[3]))
-    return p[1:]
 
 
 def axis_angle(axis, ang):

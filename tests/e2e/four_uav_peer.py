@@ -26,7 +26,6 @@ Prints a per-vehicle table of messages received and the peer's own CPU time.
 Run only inside a loopback-only network namespace (../shared/tools/netns-run).
 """
 import argparse
-import bisect
 import csv
 import json
 import math
@@ -39,6 +38,7 @@ import types
 from dataclasses import dataclass, field
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "dds"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "lib"))
 
 from cyclonedds.builtin import (BuiltinDataReader, BuiltinTopicDcpsPublication,  # noqa: E402
                                 BuiltinTopicDcpsSubscription)
@@ -50,6 +50,7 @@ from cyclonedds.topic import Topic  # noqa: E402
 from cyclonedds.util import duration  # noqa: E402
 
 import ros_types as rt  # noqa: E402
+from truth import interp, pct, stamp_of, t_of  # noqa: E402
 
 
 @dataclass
@@ -133,34 +134,11 @@ class Checks:
         return 0 if self.failed == 0 else 1
 
 
-def t_of(stamp):
-    return stamp.sec + stamp.nanosec * 1e-9
-
-
-def stamp_of(msg):
-    if hasattr(msg, "header"):
-        return t_of(msg.header.stamp)
-    if hasattr(msg, "clock"):
-        return t_of(msg.clock)
-    if hasattr(msg, "transforms") and msg.transforms:
-        return t_of(msg.transforms[0].header.stamp)
-    return None
-
-
 def load_csv(path):
     with open(path) as f:
         rows = list(csv.DictReader(f))
     cols = ["t_s", "armed", "est_n_m", "est_e_m", "est_d_m"]
     return {c: [float(r[c]) for r in rows] for c in cols}
-
-
-def interp(log, col, t):
-    ts = log["t_s"]
-    i = bisect.bisect_left(ts, t)
-    if i <= 0 or i >= len(ts):
-        return None
-    a = (t - ts[i - 1]) / (ts[i] - ts[i - 1])
-    return log[col][i - 1] * (1 - a) + log[col][i] * a
 
 
 def simple_yaml_numbers(path):
@@ -189,11 +167,6 @@ def dist_to_path(n, e, pts):
 
 def geo_dist_m(lat, lon, lat0, lon0):
     return math.hypot((lat - lat0) * 110_990.0, (lon - lon0) * 111_320.0 * math.cos(math.radians(lat0)))
-
-
-def pct(v, q):
-    v = sorted(v)
-    return v[min(len(v) - 1, int(q * len(v)))] if v else float("nan")
 
 
 # ------------------------------------------------------------------------------------ observe

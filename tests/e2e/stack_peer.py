@@ -31,6 +31,7 @@ import time
 from dataclasses import dataclass, field
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "dds"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "lib"))
 
 from cyclonedds.core import Policy, Qos  # noqa: E402
 from cyclonedds.domain import DomainParticipant  # noqa: E402
@@ -41,6 +42,8 @@ from cyclonedds.topic import Topic  # noqa: E402
 from cyclonedds.util import duration  # noqa: E402
 
 import ros_types as rt  # noqa: E402
+from truth import interp, nearest, pct, qrot, stamp_of, t_of  # noqa: E402
+from truth import load_csv as load_csv_all  # noqa: E402
 
 
 @dataclass
@@ -94,48 +97,12 @@ class Checks:
         return 0 if self.failed == 0 else 1
 
 
-def t_of(stamp):
-    return stamp.sec + stamp.nanosec * 1e-9
-
-
-def stamp_of(msg):
-    if hasattr(msg, "header"):
-        return t_of(msg.header.stamp)
-    if hasattr(msg, "clock"):
-        return t_of(msg.clock)
-    if hasattr(msg, "transforms") and msg.transforms:
-        return t_of(msg.transforms[0].header.stamp)
-    return None
-
-
 def load_csv(path):
     with open(path) as f:
         rows = list(csv.DictReader(f))
     cols = ["t_s", "armed", "true_n_m", "true_e_m", "true_d_m", "est_n_m", "est_e_m", "est_d_m",
             "true_vn_mps", "true_ve_mps", "true_vd_mps"]
     return {c: [float(r[c]) for r in rows] for c in cols}, [r["mode"] for r in rows]
-
-
-def load_csv_all(path):
-    """Every column as floats (mode and ground_source as strings)."""
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    out = {}
-    for k in rows[0].keys():
-        try:
-            out[k] = [float(r[k]) for r in rows]
-        except ValueError:
-            out[k] = [r[k] for r in rows]
-    return out
-
-
-def nearest(log, t):
-    """Index of the log row nearest in time to t, or None outside the log."""
-    ts = log["t_s"]
-    i = bisect.bisect_left(ts, t)
-    if i <= 0 or i >= len(ts):
-        return None
-    return i if ts[i] - t < t - ts[i - 1] else i - 1
 
 
 # fcc_nav GroundSource (CSV, Debug names) → fcc_msgs/Altitude SOURCE_* codes.
@@ -205,10 +172,6 @@ def check_altitude(c, alt, ground, path):
         if cs and math.isfinite(a.sonar_range_m):
             sonar["val"].append(min(abs(a.sonar_range_m - v) for v in cs))
 
-    def pct(v, q):
-        v = sorted(v)
-        return v[min(len(v) - 1, int(q * len(v)))] if v else float("nan")
-
     c.check("altitude/ground aligned with the simulator log", n_ok > 1000 and len(d_true) > 500,
             f"{n_ok} msgs, {len(d_true)} airborne in range")
     # Same value as the MCU computed; the CSV rows are 50 Hz samples at other instants than the
@@ -237,15 +200,6 @@ def check_altitude(c, alt, ground, path):
     sv = sonar["val"]
     c.check("altitude.sonar_range_m = the sonar reading (CSV sonar_m) p99 < 1 cm",
             len(sv) > 100 and pct(sv, 0.99) < 0.01, f"{len(sv)} p50 {pct(sv, 0.5) * 100:.2f} cm p99 {pct(sv, 0.99) * 100:.2f} cm")
-
-
-def interp(log, col, t):
-    ts = log["t_s"]
-    i = bisect.bisect_left(ts, t)
-    if i <= 0 or i >= len(ts):
-        return None
-    a = (t - ts[i - 1]) / (ts[i] - ts[i - 1])
-    return log[col][i - 1] * (1 - a) + log[col][i] * a
 
 
 def dds_name(ns, n):
@@ -341,10 +295,6 @@ def observe(a):
         true_v.append(abs(p.z + (td - dz0)))
         n += 1
 
-    def pct(v, q):
-        v = sorted(v)
-        return v[min(len(v) - 1, int(q * len(v)))] if v else float("nan")
-
     c.check("odom aligned with the simulator log", n > 1000, n)
     c.check("odom = the MCU's estimate at the same sim time (ENU of NED log), p99 < 0.15 m",
             pct(est_err, 0.99) < 0.15, f"p50 {pct(est_err, 0.5):.3f} m p99 {pct(est_err, 0.99):.3f} m")
@@ -423,16 +373,6 @@ def check_altitude_offline(a):
     c = Checks()
     check_altitude(c, alt, ground, a.csv)
     return c.done()
-
-
-def qrot(q, v):
-    def qmul(a, b):
-        aw, ax, ay, az = a
-        bw, bx, by, bz = b
-        return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-                aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
-    p = qmul(qmul(q, (0.0, *v)), (q[0], -q[1], -q[2], -q[3]))
-    return p[1:]
 
 
 # ------------------------------------------------------------------------------------ fly

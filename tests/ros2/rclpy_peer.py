@@ -29,9 +29,10 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "lib"))
 
 import truth  # noqa: E402
-from truth import Checks, pct  # noqa: E402
+from truth import Checks, pct, stamp_of  # noqa: E402
 
 NS = "/fcc"
 BRIDGE = f"{NS}/fcc_bridge"
@@ -62,17 +63,6 @@ TOPICS = {
     "/rosout": ("rcl_interfaces/msg/Log", None, None),
 }
 STATIC_CHILDREN = {"imu_link", "gps_link", "laser_link", "sonar_link"}
-
-
-def stamp_of(m):
-    from ros_cli import t_of
-    if hasattr(m, "header"):
-        return t_of(m.header.stamp)
-    if hasattr(m, "clock"):
-        return t_of(m.clock)
-    if hasattr(m, "transforms") and m.transforms:
-        return t_of(m.transforms[0].header.stamp)
-    return None
 
 
 def tf_of(t):
@@ -584,11 +574,12 @@ class Vehicle:
     def sim_time(self):
         """MCU (= simulator) time of the last status: with clock_source:=sync its stamp is
         ROS time = MCU time + time_sync_offset_ns."""
-        from ros_cli import t_of
+        from truth import t_of
         return t_of(self.st.header.stamp) - self.st.time_sync_offset_ns * 1e-9
 
     def __init__(self, node):
-        from ros_cli import msg_class, t_of
+        from ros_cli import msg_class
+        from truth import t_of
         self.st = None
         self.odom = None
         self.lat_ms = {"imu/data_raw": [], "state/odom": []}
@@ -657,17 +648,28 @@ def fly(a):
         mode = node.create_publisher(String, f"{NS}/cmd/mode", 10)
         peer.wait(lambda: mode.get_subscription_count() > 0, 10, "the bridge's cmd/mode reader")
         mode.publish(String(data="velocity"))
+        # The hold is called the moment the setpoints stop, as a pilot node does with its client
+        # already matched: a fresh client (`ros2 service call`) needs seconds to match, and by
+        # then the MCU's own failsafe acts (setpoints stale → hold, lost → land).
+        hold_cli = node.create_client(Trigger, f"{NS}/hold")
+        peer.wait(hold_cli.service_is_ready, 10, "service hold")
         fly_plan(peer, node, v, events, [(5.0, (0.0, 0.0, 1.0)), (8.0, (0.0, 2.0, 0.0)), (3.0, (0.0, 0.0, 0.0))])
-        peer.wait(lambda: v.mode() == "velocity", 2, "velocity mode")
+        c.check("velocity mode until the last setpoint", v.mode() == "velocity", v.mode())
+        # Each event is stamped with the last status BEFORE its call: the mode switches after it
+        # (a status received after the call may already show the new mode).
+        t_call = v.sim_time()
+        fut = hold_cli.call_async(Trigger.Request())
+        peer.wait(fut.done, 10, "the answer of hold")
+        r = fut.result()
+        events.append(("hold", t_call))
         z = v.odom.pose.pose.position
         c.check("after climb 5 s and north 8 s: odom y > 6 m, z > 3 m (ENU)", z.y > 6 and z.z > 3, f"x {z.x:.2f} y {z.y:.2f} z {z.z:.2f}")
-        r = peer.call(node, Trigger, f"{NS}/hold", Trigger.Request())
-        events.append(("hold", v.sim_time()))
         peer.wait(lambda: v.mode() == "hold", 5, "hold mode")
         c.check("service hold (std_srvs/Trigger): success, MCU in hold", r.success and v.mode() == "hold", (r.success, r.message, v.mode()))
         peer.spin(3.0)
+        t_call = v.sim_time()
         r = peer.call(node, Trigger, f"{NS}/land", Trigger.Request())
-        events.append(("land", v.sim_time()))
+        events.append(("land", t_call))
         peer.wait(lambda: v.mode() == "land", 5, "land mode")
         c.check("service land (std_srvs/Trigger): success, MCU in land", r.success and v.mode() == "land", (r.success, r.message, v.mode()))
         peer.wait(lambda: not v.st.armed and v.st.landed, 60, "landed and disarmed")
@@ -703,10 +705,28 @@ def check_fly(a):
     c.check("ENU (0, 2, 0) for 8 s = north: truth moves 6–17 m north, within 1.5 m east/west",
             6 < dn < 17 and abs(de) < 1.5, f"north {dn:.2f} m east {de:.2f} m")
     modes = log["mode"]
-    hold = {modes[i] for i, t in enumerate(log["t_s"]) if named["hold"] + 0.5 < t < named["land"]}
-    c.check("service hold → MCU Hold (CSV)", hold == {"Hold"}, hold)
-    land = {modes[i] for i, t in enumerate(log["t_s"]) if named["land"] + 0.5 < t < named["disarmed"] - 1}
-    c.check("service land → MCU Land (CSV)", "Land" in land, land)
+    # The MCU's mode sequence on the truth log, as runs (mode, start s, end s): the peer's hold and
+    # land services must show as a Hold of about the 3 s the peer waited, then Land. (Judged on
+    # the sequence, not on the peer's event times: those come from status stamps mapped back
+    # through the sync offset, which can be off by seconds on a loaded machine.)
+    runs = []
+    for t, m in zip(log["t_s"], modes):
+        if runs and runs[-1][0] == m:
+            runs[-1][2] = t
+        else:
+            runs.append([m, t, t])
+    seq = [(m, round(t1 - t0, 2)) for m, t0, t1 in runs]
+    after_flight = [r for r in runs if r[1] >= vel[2] - 1.0]
+    hold_then_land = any(a[0] == "Hold" and 2.0 <= a[2] - a[1] <= 10.0 and b[0] == "Land"
+                         for a, b in zip(after_flight, after_flight[1:]))
+    c.check("service hold → MCU Hold for ~3 s, then service land → MCU Land (CSV mode sequence)",
+            hold_then_land, seq)
+    # No failsafe on the way: the only Land after the flight is the commanded one, and the
+    # failsafe column stays None from the hold on.
+    lands = [r for r in after_flight if r[0] == "Land"]
+    fs = {f for t, f in zip(log["t_s"], log["failsafe"]) if t >= named["hold"] + 0.5}
+    c.check("no failsafe after the hold (one Land, failsafe None)", len(lands) == 1 and fs == {"None"},
+            (len(lands), sorted(fs)))
     c.check("landed and disarmed at the end (CSV)", modes[-1] == "Disarmed" and log["true_d_m"][-1] > -0.5,
             (modes[-1], log["true_d_m"][-1]))
     return c.done()

@@ -149,5 +149,3 @@ def describe_text(d):
             f"constraints '{d.additional_constraints}'")
 
 
-def t_of(stamp):
-    return stamp.sec + stamp.nanosec * 1e-9

@@ -1,6 +1,6 @@
-"""The simulator's truth log (fcc-sitl --csv) and the check counter, for the rclpy peer tests.
-Plain Python (no ROS import): the same helpers as tests/e2e/stack_peer.py's, which imports Cyclone
-DDS and so cannot be imported into the ROS 2 venv."""
+"""The simulator's truth log (fcc-sitl --csv), quaternion helpers and the check counter, shared
+by the peers: the rclpy peer (tests/ros2, ROS 2 venv) and the Cyclone DDS peers (tests/dds,
+tests/e2e). Plain Python (no DDS or ROS import), so every venv can import it."""
 import bisect
 import csv
 import math
@@ -28,6 +28,22 @@ class Checks:
             print(f"  failed: {n}", flush=True)
         print(f"{self.passed} passed, {self.failed} failed", flush=True)
         return 0 if self.failed == 0 else 1
+
+
+def t_of(stamp):
+    """A builtin_interfaces/Time (rclpy's or Cyclone's: fields sec, nanosec) in seconds."""
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def stamp_of(msg):
+    """A message's stamp, s: its header's, a Clock's, or a TFMessage's first transform's; None."""
+    if hasattr(msg, "header"):
+        return t_of(msg.header.stamp)
+    if hasattr(msg, "clock"):
+        return t_of(msg.clock)
+    if hasattr(msg, "transforms") and msg.transforms:
+        return t_of(msg.transforms[0].header.stamp)
+    return None
 
 
 def load_csv(path):
