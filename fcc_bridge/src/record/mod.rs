@@ -42,6 +42,16 @@ use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+/// The channel of `topic` carrying `T` with `qos` (ROS 2 schema text, offered QoS).
+fn channel_desc<T: RosMsg>(topic: &str, qos: QosInfo) -> ChannelDesc {
+    ChannelDesc {
+        topic: topic.to_string(),
+        schema_name: T::schema_name(),
+        schema: full_definition::<T>(),
+        qos: qos.yaml(),
+    }
+}
+
 /// CDR (little endian) with the 4-byte encapsulation header `00 01 00 00`.
 pub fn cdr_bytes<T: serde::Serialize>(m: &T) -> Vec<u8> {
     let mut v = vec![0u8, 1, 0, 0];
@@ -238,18 +248,17 @@ impl Tap {
         if self.tx.is_none() {
             return;
         }
-        let ch = self.channel_id(inner, topic, || ChannelDesc {
-            topic: topic.to_string(),
-            schema_name: T::schema_name(),
-            schema: full_definition::<T>(),
-            qos: qos.yaml(),
-        });
-        let data = cdr_bytes(m);
+        let ch = self.channel_id(inner, topic, || channel_desc::<T>(topic, qos));
+        self.send_msg(ch, m, t_ns);
+    }
+
+    /// One message on channel `ch` to the writer thread.
+    fn send_msg<T: serde::Serialize>(&self, ch: u16, m: &T, t_ns: i64) {
         if let Some(tx) = &self.tx {
             let _ = tx.send(Ev::Msg {
                 ch,
                 t: t_ns.max(0) as u64,
-                data,
+                data: cdr_bytes(m),
             });
         }
     }
@@ -314,22 +323,10 @@ impl Tap {
             Some(c) => *c,
             None => {
                 let topic = e.0.clone();
-                self.channel_id(g, &topic, || ChannelDesc {
-                    topic: topic.clone(),
-                    schema_name: T::schema_name(),
-                    schema: full_definition::<T>(),
-                    qos: qos.yaml(),
-                })
+                self.channel_id(g, &topic, || channel_desc::<T>(&topic, qos))
             }
         };
-        let data = cdr_bytes(m);
-        if let Some(tx) = &self.tx {
-            let _ = tx.send(Ev::Msg {
-                ch,
-                t: t_ns.max(0) as u64,
-                data,
-            });
-        }
+        self.send_msg(ch, m, t_ns);
     }
 
     /// Bytes read from the MCU (any split): recorded frame by frame at each 0x00.
