@@ -145,18 +145,6 @@ pub fn open_pty() -> std::io::Result<Pty> {
     })
 }
 
-fn quat_from_euler(roll: f32, pitch: f32, yaw: f32) -> [f32; 4] {
-    let (sr, cr) = (0.5 * roll).sin_cos();
-    let (sp, cp) = (0.5 * pitch).sin_cos();
-    let (sy, cy) = (0.5 * yaw).sin_cos();
-    [
-        cr * cp * cy + sr * sp * sy,
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-    ]
-}
-
 /// Frames sent by [`run_stats`].
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FakeStats {
@@ -599,7 +587,7 @@ impl<'a> FakeMcu<'a> {
 /// The script's navigation state.
 fn script_nav_state(s: &Script) -> link::NavState {
     link::NavState {
-        q_body_to_ned: quat_from_euler(s.roll_rad, s.pitch_rad, s.yaw_rad),
+        q_body_to_ned: fcc_nav::attitude::quat_from_euler(s.roll_rad, s.pitch_rad, s.yaw_rad),
         rate_frd_radps: s.gyro_frd_radps,
         pos_ned_m: s.pos_ned_m,
         vel_ned_mps: s.vel_ned_mps,

@@ -112,6 +112,19 @@ pub fn linear_accel_ned_mps2(e: &Euler, f_frd: [f32; 3]) -> [f32; 3] {
     a
 }
 
+/// Quaternion `[w, x, y, z]` rotating body FRD into NED for ZYX Euler angles (yaw, pitch, roll).
+pub fn quat_from_euler(roll_rad: f32, pitch_rad: f32, yaw_rad: f32) -> [f32; 4] {
+    let (sr, cr) = crate::math::sincosf(0.5 * roll_rad);
+    let (sp, cp) = crate::math::sincosf(0.5 * pitch_rad);
+    let (sy, cy) = crate::math::sincosf(0.5 * yaw_rad);
+    [
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    ]
+}
+
 /// Complementary-filter attitude estimator (roll, pitch, yaw).
 #[derive(Clone, Copy, Debug)]
 pub struct AttitudeEstimator {

@@ -168,7 +168,7 @@ mod tests {
         a.iter().zip(b).all(|(x, y)| (x - y).abs() < eps)
     }
 
-    /// ZYX Euler → FRD→NED quaternion (same formula as the firmware's `quat_from_euler`).
+    /// ZYX Euler → FRD→NED quaternion (same formula as `fcc_nav::attitude::quat_from_euler`).
     fn euler_ned(roll: f64, pitch: f64, yaw: f64) -> Quat {
         let (sr, cr) = (0.5 * roll).sin_cos();
         let (sp, cp) = (0.5 * pitch).sin_cos();

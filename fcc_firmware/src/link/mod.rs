@@ -642,18 +642,8 @@ fn nav_state(core: &FlightCore) -> NavState {
     }
 }
 
-/// Quaternion `[w, x, y, z]` rotating body FRD into NED for ZYX Euler angles (yaw, pitch, roll).
-pub fn quat_from_euler(roll_rad: f32, pitch_rad: f32, yaw_rad: f32) -> [f32; 4] {
-    let (sr, cr) = fcc_nav::math::sincosf(0.5 * roll_rad);
-    let (sp, cp) = fcc_nav::math::sincosf(0.5 * pitch_rad);
-    let (sy, cy) = fcc_nav::math::sincosf(0.5 * yaw_rad);
-    [
-        cr * cp * cy + sr * sp * sy,
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-    ]
-}
+/// The attitude quaternion on the link: `fcc_nav`'s, shared with the Linux side's fake MCU.
+pub use fcc_nav::attitude::quat_from_euler;
 
 fn to_result(r: Result<(), CommandError>) -> CommandResult {
     match r {
