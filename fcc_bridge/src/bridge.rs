@@ -427,11 +427,9 @@ impl RosSide<'_> {
                         });
                     } else {
                         // Start-up sync (a read, or a -p value): mirror the MCU's value.
-                        if a.value.is_finite() {
-                            if let Err(e) = self
-                                .node
-                                .set_parameter(name, ParameterValue::Double(a.value as f64))
-                            {
+                        if let (true, Some(p)) = (a.value.is_finite(), mcu_params::by_id(a.id)) {
+                            let v = mcu_params::ros_value(p, a.value as f64);
+                            if let Err(e) = self.node.set_parameter(name, v) {
                                 tracing::warn!("parameter {name}: {e}");
                             }
                         }
@@ -613,6 +611,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         live: Default::default(),
         mcu_values: Default::default(),
         link: ltx.clone(),
+        baud: opts.baud,
     });
     let nopts = node_options(opts, &shared);
     step.set("creating the ROS node");
@@ -703,7 +702,7 @@ pub fn declared_parameters(opts: &Options) -> Vec<(&'static str, ParameterValue)
             .get(p.name)
             .copied()
             .unwrap_or(p.default as f64);
-        v.push((p.name, P::Double(x)));
+        v.push((p.name, mcu_params::ros_value(p, x)));
     }
     v
 }

@@ -286,6 +286,8 @@ fn monotonic_us() -> u64 {
 /// its mode and parameters.
 struct FakeMcu<'a> {
     o: &'a FakeOptions,
+    /// Telemetry rates now: `o.rates`, then as the `rates.*` parameters set them.
+    rates: link::StreamRates,
     start: Instant,
     /// CLOCK_MONOTONIC at `start`.
     mono_start_us: u64,
@@ -324,11 +326,16 @@ impl<'a> FakeMcu<'a> {
             }),
             armed: false,
             mode: link::FlightMode::Disarmed,
+            // The `rates.*` parameters report the rates it actually sends.
             params: crate::mcu_params::MCU_PARAMS
                 .iter()
-                .map(|p| (p.id, p.default))
+                .map(|p| match link::Stream::by_param_id(p.id) {
+                    Some(st) => (p.id, f32::from(o.rates.hz(st))),
+                    None => (p.id, p.default),
+                })
                 .collect(),
             laser_toggle: false,
+            rates: o.rates,
         })
     }
 
@@ -420,6 +427,10 @@ impl<'a> FakeMcu<'a> {
                     link::ParamResult::OutOfRange
                 } else {
                     slot.1 = ps.value;
+                    if let Some(st) = link::Stream::by_param_id(ps.id) {
+                        // Its loop ticks at the start-up IMU rate: no stream goes faster.
+                        self.rates.set_hz(st, ps.value as u16);
+                    }
                     link::ParamResult::Accepted
                 };
                 (r, slot.1)
@@ -452,7 +463,7 @@ impl<'a> FakeMcu<'a> {
             let hz = u64::from(hz);
             hz > 0 && (tick == 0 || (tick * hz) / tick_hz != ((tick - 1) * hz) / tick_hz)
         };
-        let (rates, s) = (self.o.rates, self.o.script);
+        let (rates, s) = (self.rates, self.o.script);
         if every(rates.imu_raw_hz) {
             let mut gyro = s.gyro_frd_radps;
             if self.o.imu_counter {

@@ -146,9 +146,22 @@ fn mcu_params(o: &mut Options, p: &BTreeMap<String, String>) -> Result<(), Strin
     for mp in fcc_bridge::mcu_params::MCU_PARAMS {
         if let Some(x) = num(mp.name)? {
             mp.check(x).map_err(|e| format!("parameter {e}"))?;
+            if fcc_bridge::mcu_params::is_integer(mp) && x.fract() != 0.0 {
+                return Err(format!("parameter {}: {x} is not a whole number", mp.name));
+            }
             o.mcu_params.insert(mp.name.to_string(), x);
         }
     }
+    // Only rates given here are sent to the MCU (the others are read from it): check those.
+    if !o.mcu_params.keys().any(|k| k.starts_with("rates.")) {
+        return Ok(());
+    }
+    let start = |id: u16| {
+        let name = fcc_bridge::mcu_params::by_id(id)?.name;
+        o.mcu_params.get(name).map(|v| *v as f32)
+    };
+    fcc_bridge::mcu_params::check_link_budget(start, o.baud)
+        .map_err(|e| format!("parameters rates.*: {e}"))?;
     Ok(())
 }
 

@@ -3,25 +3,101 @@
 //! range, unit, doc). The bridge checks the range before it sends a value; the MCU checks again
 //! (same table) and has the last word.
 
-use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType};
+use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType, ParameterValue};
 
 pub use fcc_msgs::params::{by_id, by_name, ParamSpec as McuParam, PARAMS as MCU_PARAMS};
+
+/// Whole-number parameters — the `rates.*` rows (Hz, one per telemetry stream) — are ROS
+/// Integer parameters, so `ros2 param set /fcc/fcc_bridge rates.imu_hz 100` works as typed;
+/// the others are Double.
+pub fn is_integer(p: &McuParam) -> bool {
+    fcc_msgs::Stream::by_param_id(p.id).is_some()
+}
+
+/// The ROS value of an MCU parameter's value (Integer or Double, see [`is_integer`]).
+pub fn ros_value(p: &McuParam, x: f64) -> ParameterValue {
+    if is_integer(p) {
+        ParameterValue::Integer(x.round() as i64)
+    } else {
+        ParameterValue::Double(x)
+    }
+}
 
 /// The ROS parameter descriptor of an MCU parameter (type, range, doc with unit), from the
 /// table, as `describe_parameters` answers it ([`crate::ros_api::describe`]).
 pub fn descriptor(p: &McuParam) -> ParameterDescriptor {
+    let (param_type, range) = if is_integer(p) {
+        (
+            ParameterType::Integer,
+            NumericRange::IntegerRange {
+                from_value: p.min as i64,
+                to_value: p.max as i64,
+                step: 1,
+            },
+        )
+    } else {
+        (
+            ParameterType::Double,
+            NumericRange::FloatingPointRange {
+                from_value: p.min as f64,
+                to_value: p.max as f64,
+                step: 0.0,
+            },
+        )
+    };
     ParameterDescriptor {
         name: p.name.to_string(),
-        param_type: ParameterType::Double,
+        param_type,
         description: format!("{} ({}; default {})", p.doc, p.unit, p.default),
         additional_constraints: format!("finite, in [{}, {}] {}", p.min, p.max, p.unit),
         read_only: false,
         dynamic_typing: false,
-        range: NumericRange::FloatingPointRange {
-            from_value: p.min as f64,
-            to_value: p.max as f64,
-            step: 0.0,
-        },
+        range,
+    }
+}
+
+/// Share of the line rate the telemetry may take at its worst case (every frame at its largest):
+/// the rest is room for the MCU's replies (acknowledgements, time sync, hello) and clock error.
+pub const TELEMETRY_BUDGET_SHARE: f64 = 0.9;
+
+/// A set of `rates.*` values whose worst case exceeds the link budget.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OverBudget {
+    pub worst_case_bytes_per_s: u32,
+    pub line_bytes_per_s: u32,
+    pub baud: u32,
+}
+
+impl std::fmt::Display for OverBudget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the telemetry would need up to {} B/s = {:.1} % of the {} B/s a {}-baud link carries (budget {:.0} %)",
+            self.worst_case_bytes_per_s,
+            100.0 * self.worst_case_bytes_per_s as f64 / self.line_bytes_per_s as f64,
+            self.line_bytes_per_s,
+            self.baud,
+            100.0 * TELEMETRY_BUDGET_SHARE
+        )
+    }
+}
+
+/// Checks the telemetry rates that `value(id)` gives (each stream's `rates.*` parameter; a
+/// missing one is the table's default) against the budget of a link at `baud` (8N1: 10 bits a
+/// byte). Ok: the worst-case share of the line rate.
+pub fn check_link_budget(value: impl Fn(u16) -> Option<f32>, baud: u32) -> Result<f64, OverBudget> {
+    let rates =
+        fcc_msgs::StreamRates::from_params(|id| value(id).or_else(|| by_id(id).map(|p| p.default)));
+    let line_bytes_per_s = (baud / 10).max(1);
+    let share = rates.worst_case_share(line_bytes_per_s);
+    if share <= TELEMETRY_BUDGET_SHARE {
+        Ok(share)
+    } else {
+        Err(OverBudget {
+            worst_case_bytes_per_s: rates.worst_case_bytes_per_s(),
+            line_bytes_per_s,
+            baud,
+        })
     }
 }
 
@@ -86,6 +162,35 @@ mod tests {
     use super::*;
 
     #[test]
+    fn link_budget_refuses_rates_the_baud_cannot_carry() {
+        use fcc_msgs::param_id::RATES_IMU_HZ;
+        let share = check_link_budget(|_| None, 921_600).unwrap();
+        assert!(share > 0.1 && share < 0.6, "{share}");
+        // The defaults need ~28 kB/s: a 115200-baud link (11.5 kB/s) cannot carry them.
+        let e = check_link_budget(|_| None, 115_200).unwrap_err();
+        assert_eq!(e.line_bytes_per_s, 11_520);
+        assert!(
+            e.to_string()
+                .contains("of the 11520 B/s a 115200-baud link carries (budget 90 %)"),
+            "{e}"
+        );
+        use fcc_msgs::param_id::RATES_NAV_STATE_HZ;
+        let imu = |hz: f32| move |id: u16| (id == RATES_IMU_HZ).then_some(hz);
+        let fast = check_link_budget(imu(1000.0), 921_600).unwrap();
+        assert!(fast > share);
+        let low = check_link_budget(imu(0.0), 921_600).unwrap();
+        assert!(low < share);
+        // IMU at 1 kHz and odometry at 500 Hz: more than the whole line.
+        let both = |id: u16| match id {
+            RATES_IMU_HZ => Some(1000.0),
+            RATES_NAV_STATE_HZ => Some(500.0),
+            _ => None,
+        };
+        let e = check_link_budget(both, 921_600).unwrap_err();
+        assert!(e.worst_case_bytes_per_s > e.line_bytes_per_s, "{e}");
+    }
+
+    #[test]
     fn table_matches_the_link_ids() {
         assert_eq!(MCU_PARAMS.len(), fcc_msgs::param_id::ALL.len());
         for (id, name) in fcc_msgs::param_id::ALL {
@@ -94,11 +199,19 @@ mod tests {
             assert!(p.check(p.default as f64).is_ok());
             assert!(p.check(p.max as f64 * 2.0 + 1.0).is_err());
             let d = descriptor(p);
-            assert!(matches!(
-                d.range,
-                NumericRange::FloatingPointRange { from_value, to_value, .. }
-                    if from_value == p.min as f64 && to_value == p.max as f64
-            ));
+            assert!(match d.range {
+                NumericRange::FloatingPointRange {
+                    from_value,
+                    to_value,
+                    ..
+                } => !is_integer(p) && from_value == p.min as f64 && to_value == p.max as f64,
+                NumericRange::IntegerRange {
+                    from_value,
+                    to_value,
+                    ..
+                } => is_integer(p) && from_value == p.min as i64 && to_value == p.max as i64,
+                _ => false,
+            });
         }
         let e = by_name("limits.max_tilt_deg")
             .unwrap()

@@ -316,6 +316,8 @@ pub struct ParamShared {
     /// The MCU's value of each MCU parameter, as last acknowledged.
     pub mcu_values: Mutex<BTreeMap<u16, f32>>,
     pub link: mpsc::Sender<LinkRequest>,
+    /// The serial link's baud: `rates.*` sets are checked against its budget.
+    pub baud: u32,
 }
 
 pub fn as_f64(v: &ParameterValue) -> Option<f64> {
@@ -350,10 +352,22 @@ pub fn validate(shared: &ParamShared, name: &str, v: &ParameterValue) -> Result<
     };
     let x = as_f64(v).ok_or_else(|| format!("{name}: expected a number"))?;
     p.check(x).map_err(|e| e.to_string())?;
+    let value = x as f32;
+    if fcc_msgs::Stream::by_param_id(p.id).is_some() {
+        let values = shared.mcu_values.lock().unwrap().clone();
+        let with_new = |id: u16| {
+            if id == p.id {
+                Some(value)
+            } else {
+                values.get(&id).copied()
+            }
+        };
+        mcu_params::check_link_budget(with_new, shared.baud)
+            .map_err(|e| format!("{name} {x} refused: {e}"))?;
+    }
     if !live {
         return Ok(());
     }
-    let value = x as f32;
     if shared.mcu_values.lock().unwrap().get(&p.id) == Some(&value) {
         return Ok(());
     }
@@ -445,12 +459,28 @@ mod tests {
             live: AtomicBool::new(false),
             mcu_values: Mutex::new(BTreeMap::new()),
             link: tx,
+            baud: 921_600,
         };
         let d = ParameterValue::Double;
         assert!(validate(&sh, "limits.max_tilt_deg", &d(30.0)).is_ok());
         let e = validate(&sh, "limits.max_tilt_deg", &d(80.0)).unwrap_err();
         assert!(e.contains("out of range"), "{e}");
         assert!(validate(&sh, "ttl_ms", &ParameterValue::Integer(0)).is_err());
+        // A rate the link can carry passes; one it cannot is refused with the budget.
+        assert!(validate(&sh, "rates.imu_hz", &ParameterValue::Integer(1000)).is_ok());
+        sh.mcu_values
+            .lock()
+            .unwrap()
+            .insert(fcc_msgs::param_id::RATES_IMU_HZ, 1000.0);
+        let e = validate(&sh, "rates.nav_state_hz", &ParameterValue::Integer(500)).unwrap_err();
+        assert!(
+            e.starts_with("rates.nav_state_hz 500 refused: the telemetry would need up to "),
+            "{e}"
+        );
+        assert!(
+            e.contains("% of the 92160 B/s a 921600-baud link carries (budget 90 %)"),
+            "{e}"
+        );
         assert!(validate(&sh, "clock_source", &ParameterValue::String("mcu".into())).is_ok());
         sh.live.store(true, Ordering::SeqCst);
         assert!(validate(&sh, "clock_source", &ParameterValue::String("mcu".into())).is_err());
@@ -486,6 +516,7 @@ mod tests {
             live: AtomicBool::new(true),
             mcu_values: Mutex::new(BTreeMap::new()),
             link: tx,
+            baud: 921_600,
         };
         let declared = crate::bridge::declared_parameters(&crate::bridge::Options::default());
         assert!(declared.len() > MCU_PARAM_COUNT + BRIDGE_PARAMS.len());
@@ -509,9 +540,24 @@ mod tests {
                 }
                 (_, Some(p)) => {
                     assert!(d.description.contains(p.unit), "{name}: {}", d.description);
-                    assert!(
-                        matches!(d.range, NumericRange::FloatingPointRange { from_value, to_value, .. }
-                            if from_value == p.min as f64 && to_value == p.max as f64),
+                    let range_ok = match d.range {
+                        NumericRange::FloatingPointRange {
+                            from_value,
+                            to_value,
+                            ..
+                        } => from_value == p.min as f64 && to_value == p.max as f64,
+                        NumericRange::IntegerRange {
+                            from_value,
+                            to_value,
+                            ..
+                        } => from_value == p.min as i64 && to_value == p.max as i64,
+                        _ => false,
+                    };
+                    assert!(range_ok, "{name}");
+                    // The declared value has the descriptor's type.
+                    assert_eq!(
+                        matches!(value, ParameterValue::Integer(_)),
+                        mcu_params::is_integer(p),
                         "{name}"
                     );
                     assert!(!d.read_only, "{name}");

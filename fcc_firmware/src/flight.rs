@@ -146,6 +146,12 @@ impl FlightCore {
             reason: ParamFault::UnknownId,
         })?;
         *field = value;
+        self.set_params(p)
+    }
+
+    /// Replace every parameter at once: checked with [`Params::validate`], then applied as
+    /// [`Self::set_param`] applies one.
+    pub fn set_params(&mut self, p: Params) -> Result<(), ParamError> {
         p.validate()?;
         self.params = p;
         self.cascade.set_params(&p);

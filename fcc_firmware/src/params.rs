@@ -4,7 +4,7 @@
 //! Units are in the field names. Defaults were tuned in the SITL against noisy sensor models
 //! (see `fcc_sim::sensor_models`), not against perfect sensors.
 
-use fcc_msgs::param_default;
+use fcc_msgs::{param_default, Stream, StreamRates, BAUD_921600_BYTES_PER_S};
 use fcc_nav::complementary::CfGains;
 use fcc_nav::observer::AccelObserverParams;
 
@@ -272,6 +272,54 @@ impl Default for LimitParams {
     }
 }
 
+/// Telemetry rates of the link's streams, Hz (0 = off; whole Hz, fractions round down): the
+/// `rates.*` rows of the one table, so they are set over the link like any parameter and the
+/// link endpoint applies them at once (`LinkEndpoint`, on an accepted `ParamSet`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RateParams {
+    pub status_hz: f32,
+    pub nav_state_hz: f32,
+    pub altitude_hz: f32,
+    pub imu_hz: f32,
+    pub mag_hz: f32,
+    pub baro_hz: f32,
+    pub gps_hz: f32,
+    pub laser_hz: f32,
+    pub sonar_hz: f32,
+    pub battery_hz: f32,
+}
+
+impl Default for RateParams {
+    fn default() -> Self {
+        Self::from_stream_rates(&StreamRates::DEFAULT)
+    }
+}
+
+impl RateParams {
+    /// Every stream off.
+    pub fn off() -> Self {
+        Self::from_stream_rates(&StreamRates::OFF)
+    }
+
+    /// The parameters of a set of rates.
+    pub fn from_stream_rates(r: &StreamRates) -> Self {
+        let hz = |s: Stream| f32::from(r.hz(s));
+        Self {
+            status_hz: hz(Stream::Status),
+            nav_state_hz: hz(Stream::NavState),
+            altitude_hz: hz(Stream::Altitude),
+            imu_hz: hz(Stream::ImuRaw),
+            mag_hz: hz(Stream::MagRaw),
+            baro_hz: hz(Stream::BaroRaw),
+            gps_hz: hz(Stream::GpsRaw),
+            laser_hz: hz(Stream::LaserRaw),
+            sonar_hz: hz(Stream::SonarRaw),
+            battery_hz: hz(Stream::Battery),
+        }
+    }
+}
+
 /// All parameters of the flight core.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -280,6 +328,14 @@ pub struct Params {
     pub nav: NavParams,
     pub control: ControlParams,
     pub limits: LimitParams,
+    pub rates: RateParams,
+}
+
+impl Params {
+    /// The link's telemetry rates these parameters ask for.
+    pub fn stream_rates(&self) -> StreamRates {
+        StreamRates::from_params(|id| self.link_param(id))
+    }
 }
 
 /// Why a parameter set was refused: the field and a typed reason.
@@ -458,6 +514,13 @@ impl Params {
             30.0,
         )?;
         check("control.model_k2_per_s", c.model_k2_per_s, 0.0, 5.0)?;
+        // The telemetry must fit the UART (921600 baud) even with every frame at its largest.
+        if self.stream_rates().worst_case_bytes_per_s() > BAUD_921600_BYTES_PER_S {
+            return Err(ParamError {
+                field: "rates",
+                reason: ParamFault::OutOfRange,
+            });
+        }
         Ok(())
     }
 }

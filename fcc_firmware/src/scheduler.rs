@@ -5,7 +5,7 @@
 
 use crate::flight::FlightCore;
 use crate::link::LinkEndpoint;
-use crate::params::Params;
+use crate::params::{ParamError, Params, RateParams};
 use crate::sensors::{MotorOutputs, SensorBoard};
 use fcc_msgs::StreamRates;
 
@@ -19,12 +19,22 @@ pub struct FlightComputer {
 }
 
 impl FlightComputer {
-    /// A core with `params`, a link sending telemetry at `rates`.
-    pub fn new(params: Params, rates: StreamRates) -> Self {
+    /// A core with `params`, a link sending telemetry at their rates (`params.rates`).
+    pub fn new(params: Params) -> Self {
         Self {
             core: FlightCore::new(params),
-            link: LinkEndpoint::new(rates),
+            link: LinkEndpoint::new(params.stream_rates()),
         }
+    }
+
+    /// Change the telemetry rates: the core's `rates.*` parameters (so a parameter read
+    /// reports them) and the link's schedule. Refused as a parameter set would be.
+    pub fn set_stream_rates(&mut self, rates: StreamRates) -> Result<(), ParamError> {
+        let mut p = *self.core.params();
+        p.rates = RateParams::from_stream_rates(&rates);
+        self.core.set_params(p)?;
+        self.link.set_rates(p.stream_rates());
+        Ok(())
     }
 
     /// One tick at `now_us`; returns the number of bytes written to `tx`.
@@ -105,7 +115,10 @@ mod tests {
     /// board's samples, writes the ESCs, and answers in its own transmit bytes.
     #[test]
     fn tick_receives_steps_and_answers() {
-        let mut fc = FlightComputer::new(Params::default(), StreamRates::OFF);
+        let mut fc = FlightComputer::new(Params {
+            rates: RateParams::off(),
+            ..Params::default()
+        });
         let (mut board, mut escs) = (Board { polls: 0 }, Escs(None));
         let mut frame = [0u8; MAX_FRAME_LEN];
         let hold = Message::Command(Command {

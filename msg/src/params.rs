@@ -27,6 +27,20 @@ macro_rules! for_each_mcu_param {
             4, VEL_P_PER_S, control.vel_p_per_s, "1/s", 3.0, 0.05, 10.0, "Horizontal velocity loop: acceleration command per m/s of error";
             5, MAX_CLIMB_MPS, limits.max_climb_mps, "m/s", 2.5, 0.1, 10.0, "Climb speed limit";
             6, MAX_DESCENT_MPS, limits.max_descent_mps, "m/s", 1.5, 0.1, 10.0, "Descent speed limit of commanded velocities";
+            // Telemetry rates (MCU → Linux), one per `Stream`; 0 = off. Applied at once (the
+            // streams restart their schedule); the worst-case total must fit the UART
+            // (`StreamRates::worst_case_bytes_per_s`, checked by `Params::validate` on the MCU
+            // and against the configured baud by the bridge).
+            20, RATES_STATUS_HZ, rates.status_hz, "Hz", 10.0, 0.0, 100.0, "Rate of the Status stream";
+            21, RATES_NAV_STATE_HZ, rates.nav_state_hz, "Hz", 100.0, 0.0, 500.0, "Rate of the NavState stream (odometry, TF)";
+            22, RATES_ALTITUDE_HZ, rates.altitude_hz, "Hz", 50.0, 0.0, 500.0, "Rate of the AltitudeFusion stream (paper B)";
+            23, RATES_IMU_HZ, rates.imu_hz, "Hz", 200.0, 0.0, 1000.0, "Rate of the raw IMU stream (at most every sample)";
+            24, RATES_MAG_HZ, rates.mag_hz, "Hz", 50.0, 0.0, 500.0, "Rate of the raw magnetometer stream";
+            25, RATES_BARO_HZ, rates.baro_hz, "Hz", 50.0, 0.0, 500.0, "Rate of the raw barometer stream";
+            26, RATES_GPS_HZ, rates.gps_hz, "Hz", 10.0, 0.0, 100.0, "Rate of the raw GPS stream";
+            27, RATES_LASER_HZ, rates.laser_hz, "Hz", 10.0, 0.0, 500.0, "Rate of the laser altimeter stream";
+            28, RATES_SONAR_HZ, rates.sonar_hz, "Hz", 10.0, 0.0, 500.0, "Rate of the sonar stream";
+            29, RATES_BATTERY_HZ, rates.battery_hz, "Hz", 5.0, 0.0, 100.0, "Rate of the battery stream";
         }
     };
 }

@@ -30,18 +30,22 @@ impl Default for StreamRates {
 }
 
 impl StreamRates {
-    /// Defaults: worst case ≈ 30 % of 921600 baud (see the test `default_rates_fit_budget`).
-    pub const DEFAULT: StreamRates = StreamRates {
-        imu_raw_hz: 200,
-        mag_raw_hz: 50,
-        baro_raw_hz: 50,
-        gps_raw_hz: 10,
-        laser_raw_hz: 10,
-        sonar_raw_hz: 10,
-        battery_hz: 5,
-        nav_state_hz: 100,
-        altitude_hz: 50,
-        status_hz: 10,
+    /// Defaults: the `rates.*` rows of the parameter table ([`crate::for_each_mcu_param!`]);
+    /// worst case ≈ 30 % of 921600 baud (see the test `default_rates_fit_budget`).
+    pub const DEFAULT: StreamRates = {
+        use crate::param_default as d;
+        StreamRates {
+            imu_raw_hz: d::RATES_IMU_HZ as u16,
+            mag_raw_hz: d::RATES_MAG_HZ as u16,
+            baro_raw_hz: d::RATES_BARO_HZ as u16,
+            gps_raw_hz: d::RATES_GPS_HZ as u16,
+            laser_raw_hz: d::RATES_LASER_HZ as u16,
+            sonar_raw_hz: d::RATES_SONAR_HZ as u16,
+            battery_hz: d::RATES_BATTERY_HZ as u16,
+            nav_state_hz: d::RATES_NAV_STATE_HZ as u16,
+            altitude_hz: d::RATES_ALTITUDE_HZ as u16,
+            status_hz: d::RATES_STATUS_HZ as u16,
+        }
     };
 
     /// Every stream off.
@@ -72,6 +76,40 @@ impl StreamRates {
             Stream::SonarRaw => self.sonar_raw_hz,
             Stream::Battery => self.battery_hz,
         }
+    }
+
+    /// The rate of one stream changed to `hz`.
+    pub fn set_hz(&mut self, s: Stream, hz: u16) {
+        let f = match s {
+            Stream::Status => &mut self.status_hz,
+            Stream::NavState => &mut self.nav_state_hz,
+            Stream::Altitude => &mut self.altitude_hz,
+            Stream::ImuRaw => &mut self.imu_raw_hz,
+            Stream::MagRaw => &mut self.mag_raw_hz,
+            Stream::BaroRaw => &mut self.baro_raw_hz,
+            Stream::GpsRaw => &mut self.gps_raw_hz,
+            Stream::LaserRaw => &mut self.laser_raw_hz,
+            Stream::SonarRaw => &mut self.sonar_raw_hz,
+            Stream::Battery => &mut self.battery_hz,
+        };
+        *f = hz;
+    }
+
+    /// The rates read from parameter values (`param(id)` for each stream's
+    /// [`Stream::param_id`]; a missing, negative or NaN value is 0 = off, fractions round down).
+    pub fn from_params(param: impl Fn(u16) -> Option<f32>) -> StreamRates {
+        let mut r = StreamRates::OFF;
+        for s in Stream::ALL {
+            let hz = param(s.param_id()).unwrap_or(0.0);
+            // `as` saturates: NaN → 0, negative → 0, above u16::MAX → u16::MAX.
+            r.set_hz(s, hz as u16);
+        }
+        r
+    }
+
+    /// Share of a link of `bytes_per_s` the worst case at these rates takes (1.0 = all of it).
+    pub fn worst_case_share(&self, bytes_per_s: u32) -> f64 {
+        self.worst_case_bytes_per_s() as f64 / bytes_per_s.max(1) as f64
     }
 
     /// (message id, rate) per stream, in [`Stream::ALL`] order.
@@ -155,6 +193,28 @@ impl Stream {
         self as usize
     }
 
+    /// Its rate parameter (`rates.*` in the parameter table, [`crate::param_id`]).
+    pub const fn param_id(self) -> u16 {
+        use crate::param_id as p;
+        match self {
+            Stream::Status => p::RATES_STATUS_HZ,
+            Stream::NavState => p::RATES_NAV_STATE_HZ,
+            Stream::Altitude => p::RATES_ALTITUDE_HZ,
+            Stream::ImuRaw => p::RATES_IMU_HZ,
+            Stream::MagRaw => p::RATES_MAG_HZ,
+            Stream::BaroRaw => p::RATES_BARO_HZ,
+            Stream::GpsRaw => p::RATES_GPS_HZ,
+            Stream::LaserRaw => p::RATES_LASER_HZ,
+            Stream::SonarRaw => p::RATES_SONAR_HZ,
+            Stream::Battery => p::RATES_BATTERY_HZ,
+        }
+    }
+
+    /// The stream whose rate parameter is `id`.
+    pub fn by_param_id(id: u16) -> Option<Stream> {
+        Stream::ALL.into_iter().find(|s| s.param_id() == id)
+    }
+
     /// The message id the stream sends.
     pub const fn msg_id(self) -> u8 {
         match self {
@@ -186,5 +246,23 @@ mod stream_tests {
             (id::RANGE_RAW, r.laser_raw_hz)
         );
         assert_eq!(r.streams()[0], (id::STATUS, r.status_hz));
+    }
+
+    #[test]
+    fn rates_follow_the_parameter_table() {
+        let table = |id: u16| crate::params::by_id(id).map(|p| p.default);
+        assert_eq!(StreamRates::from_params(table), StreamRates::DEFAULT);
+        for s in Stream::ALL {
+            assert_eq!(Stream::by_param_id(s.param_id()), Some(s));
+            let p = crate::params::by_id(s.param_id()).unwrap();
+            assert!(p.name.starts_with("rates.") && p.name.ends_with("_hz"), "{}", p.name);
+            assert_eq!(p.min, 0.0);
+        }
+        let mut r = StreamRates::DEFAULT;
+        r.set_hz(Stream::ImuRaw, 7);
+        assert_eq!(r.hz(Stream::ImuRaw), 7);
+        assert_eq!(StreamRates::from_params(|_| Some(f32::NAN)), StreamRates::OFF);
+        assert_eq!(StreamRates::from_params(|_| Some(-3.0)), StreamRates::OFF);
+        assert_eq!(Stream::by_param_id(crate::param_id::MAX_TILT_DEG), None);
     }
 }

@@ -568,6 +568,41 @@ def check_params_fly(c, peer, node):
     param_set(peer, node, BRIDGE, "limits.max_tilt_deg", 35.0)
 
 
+def check_link_rates(c, peer, node):
+    """`ros2 param set /fcc/fcc_bridge rates.imu_hz 50`: the MCU reschedules the IMU stream and
+    the rate this peer measures (sample stamps) follows within 1 s; a set whose worst case
+    exceeds the link budget is refused with the budget in the reason."""
+    from ros_cli import param_set
+    from sensor_msgs.msg import Imu
+    stamps = []
+    node.create_subscription(Imu, f"{NS}/imu/data_raw", lambda m: stamps.append(truth.t_of(m.header.stamp)), 100)
+
+    def hz(t0, t1):
+        return sum(1 for t in stamps if t0 <= t < t1) / (t1 - t0)
+    now = lambda: node.get_clock().now().nanoseconds * 1e-9  # noqa: E731
+    peer.spin(2.0)
+    t = now()
+    before = hz(t - 1.5, t)
+    ok, why = param_set(peer, node, BRIDGE, "rates.imu_hz", 50)
+    t_ack = now()
+    peer.spin(max(0.1, t + 2.6 - now()))
+    after = hz(t + 1.0, t + 2.5)
+    print(f"imu/data_raw: {before:.1f} Hz before `param set rates.imu_hz 50`, {after:.1f} Hz from 1 s after the "
+          f"call on (acknowledged after {t_ack - t:.2f} s)", flush=True)
+    c.check("param set rates.imu_hz 50: accepted", ok, why)
+    c.check("imu/data_raw at the default 200 Hz before (±10 %)", abs(before - 200) <= 20, f"{before:.1f} Hz")
+    c.check("imu/data_raw at 50 Hz from 1 s after the set on (±10 %)", abs(after - 50) <= 5, f"{after:.1f} Hz")
+    ok, why = param_set(peer, node, BRIDGE, "rates.imu_hz", 1000)
+    c.check("param set rates.imu_hz 1000: within the link budget, accepted", ok, why)
+    ok, why = param_set(peer, node, BRIDGE, "rates.nav_state_hz", 500)
+    print(f"param set rates.nav_state_hz 500 (with rates.imu_hz 1000): {ok} {why!r}", flush=True)
+    c.check("param set rates.nav_state_hz 500 on top: refused, the budget in the reason",
+            not ok and "B/s" in why and "budget" in why and "921600-baud" in why, why)
+    for name, v in (("rates.imu_hz", 200), ("rates.nav_state_hz", 100)):
+        ok, why = param_set(peer, node, BRIDGE, name, v)
+        c.check(f"param set {name} {v} (the default again): accepted", ok, why)
+
+
 class Vehicle:
     """Status, odometry and telemetry latency as the flying peer sees them."""
 
@@ -637,6 +672,7 @@ def fly(a):
         check_graph(c, peer, node, [BRIDGE])
         peer.wait(lambda: v.st is not None, 20, "status")
         check_params_fly(c, peer, node)
+        check_link_rates(c, peer, node)
         # Arm through the service (retry: the MCU refuses until calibrated and its GPS home set).
         r = None
         end = time.monotonic() + 60

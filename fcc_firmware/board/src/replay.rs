@@ -284,7 +284,7 @@ pub fn replay<F: FnMut(u32, &[f32; MOTOR_COUNT])>(
     mut each: F,
 ) -> Option<u32> {
     let stream = InputStream::new(input)?;
-    let mut fc = FlightComputer::new(params, fcc_msgs::StreamRates::DEFAULT);
+    let mut fc = FlightComputer::new(params);
     let mut board = ReplayBoard {
         next: SensorInputs::default(),
     };

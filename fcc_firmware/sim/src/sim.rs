@@ -17,6 +17,7 @@ use super::wind::Wind;
 use fcc_firmware::commands::Mode;
 use fcc_firmware::geometry::MOTOR_COUNT;
 use fcc_firmware::link::LinkEndpoint;
+use fcc_firmware::params::{Params, RateParams};
 use fcc_firmware::scheduler::{FlightComputer, TICK_US};
 use fcc_firmware::sensors::{SensorBoard, SensorInputs};
 use nalgebra::{UnitQuaternion, Vector3};
@@ -241,7 +242,10 @@ impl Sim {
         Ok(Self {
             // Telemetry off until a link is served: the in-process mission computer reads the
             // core directly.
-            fc: FlightComputer::new(params, fcc_msgs::StreamRates::OFF),
+            fc: FlightComputer::new(Params {
+                rates: RateParams::off(),
+                ..params
+            }),
             body,
             board,
             wind: Wind::new(scenario.wind.clone(), seed),
@@ -285,9 +289,17 @@ impl Sim {
     }
 
     /// Serve the flight core's link on a pseudo-terminal instead of the in-process Linux side.
-    pub fn serve_link(&mut self, pty: super::pty::PtyLink, rates: fcc_msgs::StreamRates) {
+    /// Its telemetry starts at the scenario's `rates.*` parameters (the table's defaults unless
+    /// the scenario sets them; settable over the link like any parameter).
+    pub fn serve_link(
+        &mut self,
+        pty: super::pty::PtyLink,
+    ) -> Result<(), fcc_firmware::params::ParamError> {
+        let rates = self.scenario.params.stream_rates();
+        self.fc.set_stream_rates(rates)?;
         self.fc.link = LinkEndpoint::new(rates);
         self.link = Some(pty);
+        Ok(())
     }
 
     /// Keep the 50 Hz samples and the range readings in a scratch file in `dir` while the run

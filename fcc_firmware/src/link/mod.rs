@@ -332,7 +332,13 @@ impl LinkEndpoint {
                     ParamResult::NotFinite
                 } else {
                     match core.set_param(ps.id, ps.value) {
-                        Ok(()) => ParamResult::Accepted,
+                        Ok(()) => {
+                            // A `rates.*` parameter: the new schedule applies from now on.
+                            if Stream::by_param_id(ps.id).is_some() {
+                                self.set_rates(core.params().stream_rates());
+                            }
+                            ParamResult::Accepted
+                        }
                         Err(e) if e.reason == ParamFault::NotFinite => ParamResult::NotFinite,
                         Err(_) => ParamResult::OutOfRange,
                     }

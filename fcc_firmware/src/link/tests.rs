@@ -636,3 +636,81 @@ fn handshake_after_a_backward_jump_is_one_reset() {
         "{c:?}"
     );
 }
+
+/// IMU frames in `ticks` 500 Hz ticks from `tick0` on.
+fn imu_frames(
+    link: &mut LinkEndpoint,
+    core: &mut FlightCore,
+    linux: &mut Linux,
+    tick0: u64,
+    ticks: u64,
+) -> usize {
+    let mut n = 0;
+    for tick in tick0..tick0 + ticks {
+        let s = sensors(tick);
+        core.step(tick * TICK_US, &s);
+        let bytes = tx(link, tick * TICK_US, core, &s);
+        n += linux
+            .receive(&bytes)
+            .iter()
+            .filter(|f| matches!(f.message, Message::ImuRaw(_)))
+            .count();
+    }
+    n
+}
+
+/// `rates.imu_hz` set over the link changes the IMU stream from the next tick on; a set whose
+/// worst case would not fit 921600 baud is refused and changes nothing.
+#[test]
+fn rate_parameters_reschedule_the_streams() {
+    use fcc_msgs::{param_id, ParamSet};
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::new(core.params().stream_rates());
+    let mut linux = Linux::new();
+    let before = imu_frames(&mut link, &mut core, &mut linux, 0, 500);
+    let set =
+        |link: &mut LinkEndpoint, core: &mut FlightCore, linux: &mut Linux, id: u16, value: f32| {
+            link.on_bytes(
+                0,
+                &linux.frame(Message::ParamSet(ParamSet { id, value })),
+                core,
+            );
+            let acks: Vec<ParamAck> = linux
+                .receive(&tx(link, 1_000_000, core, &SensorInputs::default()))
+                .iter()
+                .filter_map(|f| match f.message {
+                    Message::ParamAck(a) => Some(a),
+                    _ => None,
+                })
+                .collect();
+            acks[0]
+        };
+    let ack = set(
+        &mut link,
+        &mut core,
+        &mut linux,
+        param_id::RATES_IMU_HZ,
+        50.0,
+    );
+    assert_eq!((ack.result, ack.value), (ParamResult::Accepted, 50.0));
+    assert_eq!(link.rates().imu_raw_hz, 50);
+    let after = imu_frames(&mut link, &mut core, &mut linux, 501, 500);
+    // Every stream at its table maximum: far beyond 92 160 B/s.
+    let mut over = None;
+    for s in Stream::ALL {
+        let max_hz = fcc_msgs::params::by_id(s.param_id()).unwrap().max;
+        let a = set(&mut link, &mut core, &mut linux, s.param_id(), max_hz);
+        over = over.or((a.result != ParamResult::Accepted).then_some((s, a)));
+    }
+    let (s, a) = over.expect("some set exceeds the UART");
+    assert_eq!(a.result, ParamResult::OutOfRange, "{s:?}");
+    let r = link.rates();
+    assert!(
+        r.worst_case_bytes_per_s() <= fcc_msgs::BAUD_921600_BYTES_PER_S,
+        "{r:?}"
+    );
+    assert_eq!(*r, core.params().stream_rates());
+    std::println!("IMU frames/s: {before} at the default rate, {after} after rates.imu_hz 50; {s:?} refused at {r:?}");
+    assert!((before as i64 - 200).abs() <= 1, "{before}");
+    assert!((after as i64 - 50).abs() <= 1, "{after}");
+}

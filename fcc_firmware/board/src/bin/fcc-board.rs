@@ -753,7 +753,7 @@ fn main() -> ! {
 
     cortex_m::interrupt::free(|cs| {
         BOARD.borrow(cs).set(Some(Board {
-            fc: FlightComputer::new(Params::default(), fcc_msgs::StreamRates::DEFAULT),
+            fc: FlightComputer::new(Params::default()),
             sensors,
             escs,
             sbus: SbusDecoder::new(),

@@ -130,7 +130,7 @@ fn main() -> ! {
     let mut expected = OutputStream::new(EXPECTED);
     // The board's flight computer: telemetry at the default stream rates into at most 512 bytes
     // per tick (the link reads the core and does not change it).
-    let mut fc = FlightComputer::new(Params::default(), fcc_msgs::StreamRates::DEFAULT);
+    let mut fc = FlightComputer::new(Params::default());
     let mut board = TimedBoard { replay: ReplayBoard { next: SensorInputs::default() }, polled_at: 0 };
     let mut motors = TimedEscs { latch: MotorLatch::default(), written_at: 0 };
     let mut tx = [0u8; TX_BYTES];

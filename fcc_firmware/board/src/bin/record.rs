@@ -73,7 +73,7 @@ fn main() {
     let mut sim = Sim::new(scenario).expect("sim");
     // The flight computer's tick as the replay runs it (no link traffic: the mission computer
     // below talks to the core directly and is recorded as events).
-    let mut fc = FlightComputer::new(params, fcc_msgs::StreamRates::DEFAULT);
+    let mut fc = FlightComputer::new(params);
     let mut tx = [0u8; fcc_board::replay::TX_BYTES];
 
     let mut w = encode::InputWriter::new();

@@ -87,7 +87,10 @@ fn main() -> ExitCode {
                 l.display()
             );
         }
-        sim.serve_link(pty, fcc_msgs::StreamRates::DEFAULT);
+        if let Err(e) = sim.serve_link(pty) {
+            eprintln!("fcc-sitl: the scenario's telemetry rates: {e}");
+            std::process::exit(2);
+        }
         // A board-like run lasts as long as it is left running: its log waits on disk.
         if let Err(e) = sim.spill_log(&std::env::temp_dir()) {
             eprintln!("fcc-sitl: {e}; the flight log is kept in memory");
