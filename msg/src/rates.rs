@@ -255,13 +255,20 @@ mod stream_tests {
         for s in Stream::ALL {
             assert_eq!(Stream::by_param_id(s.param_id()), Some(s));
             let p = crate::params::by_id(s.param_id()).unwrap();
-            assert!(p.name.starts_with("rates.") && p.name.ends_with("_hz"), "{}", p.name);
+            assert!(
+                p.name.starts_with("rates.") && p.name.ends_with("_hz"),
+                "{}",
+                p.name
+            );
             assert_eq!(p.min, 0.0);
         }
         let mut r = StreamRates::DEFAULT;
         r.set_hz(Stream::ImuRaw, 7);
         assert_eq!(r.hz(Stream::ImuRaw), 7);
-        assert_eq!(StreamRates::from_params(|_| Some(f32::NAN)), StreamRates::OFF);
+        assert_eq!(
+            StreamRates::from_params(|_| Some(f32::NAN)),
+            StreamRates::OFF
+        );
         assert_eq!(StreamRates::from_params(|_| Some(-3.0)), StreamRates::OFF);
         assert_eq!(Stream::by_param_id(crate::param_id::MAX_TILT_DEG), None);
     }
