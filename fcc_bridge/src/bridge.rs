@@ -577,7 +577,8 @@ pub const APP: startup::App = startup::App {
 
 /// The DDS side, created by [`setup_dds`].
 struct Dds {
-    _ctx: Context,
+    /// Bound first in [`run`], so dropped last: see [`ContextLast`].
+    ctx_last: ContextLast,
     node: Node,
     pubs: Publishers,
     /// Setpoints and /clock.
@@ -586,6 +587,34 @@ struct Dds {
     crx: mpsc::Receiver<InboundMsg>,
     lrx: mpsc::Receiver<LinkRequest>,
     shared: Arc<ParamShared>,
+}
+
+/// Holds the DDS context until every entity is gone: dropped after the node (whose drop tells
+/// the spinner to stop), it waits (≤ [`SPINNER_EXIT_WAIT`]) for the spinner thread to end — the
+/// spinner drops the parameter services' readers and writers as it ends — and only then drops
+/// the participant. Dropped the other way round, rustdds logs "Cannot remove Writer/Reader …
+/// Disconnected" ERROR lines at every exit where the spinner is late (seen under load).
+struct ContextLast {
+    ctx: Option<Context>,
+    spinner: Option<std::thread::JoinHandle<()>>,
+}
+
+/// How long an exit waits for the spinner thread before dropping the participant anyway.
+const SPINNER_EXIT_WAIT: Duration = Duration::from_secs(2);
+
+impl Drop for ContextLast {
+    fn drop(&mut self) {
+        if let Some(h) = self.spinner.take() {
+            let t0 = std::time::Instant::now();
+            while !h.is_finished() && t0.elapsed() < SPINNER_EXIT_WAIT {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            if h.is_finished() {
+                let _ = h.join();
+            }
+        }
+        drop(self.ctx.take());
+    }
 }
 
 /// Create the DDS side on a thread of its own, under a watchdog ([`startup::App::setup_dds`]:
@@ -621,7 +650,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             nopts,
         )
         .map_err(ros_err)?;
-    spawn_spinner(&mut node)?;
+    let spinner = spawn_spinner(&mut node)?;
     shared.live.store(true, Ordering::SeqCst);
     spawn_rosout(&node, opts)?;
     step.set("creating the publishers");
@@ -645,7 +674,10 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         opts.baud
     );
     Ok(Dds {
-        _ctx: ctx,
+        ctx_last: ContextLast {
+            ctx: Some(ctx),
+            spinner: Some(spinner),
+        },
         node,
         pubs,
         rx,
@@ -734,7 +766,7 @@ fn node_options(opts: &Options, shared: &Arc<ParamShared>) -> NodeOptions {
 
 /// The spinner serves discovery, /clock and the parameter services. It runs on its own thread
 /// because the parameter validator blocks while the MCU acknowledges a set.
-fn spawn_spinner(node: &mut Node) -> Result<(), BridgeError> {
+fn spawn_spinner(node: &mut Node) -> Result<std::thread::JoinHandle<()>, BridgeError> {
     let spinner = node.spinner().map_err(ros_err)?;
     std::thread::Builder::new()
         .name("ros-spinner".into())
@@ -749,8 +781,7 @@ fn spawn_spinner(node: &mut Node) -> Result<(), BridgeError> {
                 Err(e) => tracing::error!("spinner runtime: {e}"),
             }
         })
-        .map_err(ros_err)?;
-    Ok(())
+        .map_err(ros_err)
 }
 
 /// /rosout: the bridge's tracing events (INFO and above), with their level.
@@ -866,7 +897,7 @@ fn create_services(
 /// `tap` counts every message published and received and records them when recording.
 pub async fn run(opts: Options, tap: Arc<Tap>) -> Result<(), BridgeError> {
     let Dds {
-        _ctx,
+        ctx_last: _ctx_last,
         node,
         pubs,
         rx,
