@@ -87,6 +87,10 @@ tests/e2e/flood_uplink.sh "$FCC_DDS_PYTHON"
 # toggled at 100 Hz at 5 m refused and counted with the vehicle holding ±0.5 m on the CSV truth,
 # the emergency kill only by cmd/kill "KILL"; bridge parameters outside their safe range refused.
 tests/e2e/command_safety.sh "$FCC_DDS_PYTHON"
+# Heading and yaw rate through the real pty + bridge (issue 17): angular.z turns the vehicle at the
+# commanded rate ±10 % and a setpoint/heading of east is held within 3° RMS on a leg, on the CSV
+# truth; bad headings refused and counted; fcc-mission's yaw_deg 90 held on a leg. ~50 s.
+tests/e2e/heading.sh "$FCC_DDS_PYTHON"
 # --- step "real ROS 2 peer" (issue 16) ----------------------------------------------------------
 # rclpy (Jazzy, and a Kilted smoke run) against the whole stack, in ONE loopback-only namespace:
 # node/topic list (one type per topic), echo of every topic with the CLI's and sensor-data QoS

@@ -218,6 +218,8 @@ fn rec_time(st: &LinkState) -> i64 {
 #[derive(Debug)]
 enum Inbound {
     Setpoint(TwistStamped),
+    /// `setpoint/heading`: kept for the velocity setpoints that follow.
+    Heading(QuaternionStamped),
     Arm(Bool),
     Mode(StringMsg),
     /// `cmd/kill`: the emergency motor stop, confirmed by its text.
@@ -231,6 +233,7 @@ impl Inbound {
     fn bound(&mut self) -> Option<bounded::Oversize> {
         let (s, field, max) = match self {
             Inbound::Setpoint(t) => (&mut t.header.frame_id, "frame_id", bounded::MAX_FRAME_ID),
+            Inbound::Heading(q) => (&mut q.header.frame_id, "frame_id", bounded::MAX_FRAME_ID),
             Inbound::Mode(m) => (&mut m.data, "cmd/mode text", bounded::MAX_MODE),
             Inbound::Kill(m) => (&mut m.data, "cmd/kill text", bounded::MAX_MODE),
             // No strings in std_msgs/Bool and rosgraph_msgs/Clock.
@@ -810,7 +813,7 @@ fn spawn_rosout(node: &Node, opts: &Options) -> Result<(), BridgeError> {
     Ok(())
 }
 
-/// The read topics. Setpoints (and /clock) and commands on separate queues: a command never
+/// The read topics. Setpoints (velocity, heading, and /clock) and commands on separate queues: a command never
 /// waits behind a queue of setpoints from a flooding peer. Returns (setpoints, commands).
 fn subscribe_all(
     ctx: &Context,
@@ -826,6 +829,14 @@ fn subscribe_all(
         &topics::SETPOINT_VELOCITY,
         tx.clone(),
         Inbound::Setpoint,
+    )?;
+    subscribe::<QuaternionStamped>(
+        ctx,
+        node,
+        opts,
+        &topics::SETPOINT_HEADING,
+        tx.clone(),
+        Inbound::Heading,
     )?;
     subscribe::<Bool>(
         ctx,
@@ -999,6 +1010,7 @@ fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Optio
     let t = rec_time(st);
     match &m {
         Inbound::Setpoint(x) => tap.received_on(&topics::SETPOINT_VELOCITY, x, t),
+        Inbound::Heading(x) => tap.received_on(&topics::SETPOINT_HEADING, x, t),
         Inbound::Arm(x) => tap.received_on(&topics::CMD_ARM, x, t),
         Inbound::Mode(x) => tap.received_on(&topics::CMD_MODE, x, t),
         Inbound::Kill(x) => tap.received_on(&topics::CMD_KILL, x, t),
@@ -1006,7 +1018,7 @@ fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Optio
     }
     // A string that arrived too long (cut on arrival, recorded cut): refused, counted.
     match (&m, over) {
-        (Inbound::Setpoint(_), Some(o)) => {
+        (Inbound::Setpoint(_) | Inbound::Heading(_), Some(o)) => {
             st.refuse_setpoint(convert::SetpointReject::Oversize(o), now_ns());
             return None;
         }
@@ -1018,6 +1030,10 @@ fn handle_inbound((m, over): InboundMsg, st: &mut LinkState, tap: &Tap) -> Optio
     }
     match m {
         Inbound::Setpoint(t) => st.on_setpoint(&t, now_ns()),
+        Inbound::Heading(q) => {
+            st.on_heading(&q, now_ns());
+            None
+        }
         Inbound::Arm(b) => st.on_command(
             Some(convert::arm_command(&b)),
             if b.data { "arm" } else { "disarm" },

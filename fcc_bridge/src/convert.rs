@@ -480,6 +480,13 @@ pub enum SetpointReject {
     UnknownFrame(String),
     /// `base_link` setpoint but no navigation state yet (heading unknown).
     NoHeading,
+    /// `twist.angular.z` over [`link::SETPOINT_YAW_RATE_ABS_MAX_RADPS`], rad/s.
+    YawRateTooLarge(f64),
+    /// A `setpoint/heading` quaternion whose norm is not 1 (± [`HEADING_NORM_TOL`]).
+    NotUnitQuaternion(f64),
+    /// A `setpoint/heading` in a frame other than a world (ENU) frame (the name as received,
+    /// at most [`bounded::MAX_FRAME_ID`] bytes).
+    HeadingFrame(String),
     Stale {
         age_ms: i64,
     },
@@ -497,6 +504,9 @@ impl SetpointReject {
             SetpointReject::Oversize(_) => "setpoint_oversize",
             SetpointReject::UnknownFrame(_) => "setpoint_unknown_frame",
             SetpointReject::NoHeading => "setpoint_no_heading",
+            SetpointReject::YawRateTooLarge(_) => "setpoint_yaw_rate_too_large",
+            SetpointReject::NotUnitQuaternion(_) => "heading_not_unit",
+            SetpointReject::HeadingFrame(_) => "heading_frame",
             SetpointReject::Stale { .. } => "setpoint_stale",
             SetpointReject::Future { .. } => "setpoint_future",
         }
@@ -517,29 +527,35 @@ impl std::fmt::Display for SetpointReject {
             SetpointReject::NoHeading => {
                 write!(f, "base_link setpoint before any navigation state")
             }
+            SetpointReject::YawRateTooLarge(r) => write!(
+                f,
+                "yaw rate {r:.2} rad/s over the limit {:.2}",
+                link::SETPOINT_YAW_RATE_ABS_MAX_RADPS
+            ),
+            SetpointReject::NotUnitQuaternion(n) => {
+                write!(f, "heading quaternion norm {n:.4}, not a unit quaternion")
+            }
+            SetpointReject::HeadingFrame(s) => write!(
+                f,
+                "frame_id '{}': a heading is an orientation in map, odom or empty (ENU)",
+                bounded::log_value(s, bounded::LOG_CHARS)
+            ),
             SetpointReject::Stale { age_ms } => write!(f, "stamp {age_ms} ms old"),
             SetpointReject::Future { ahead_ms } => write!(f, "stamp {ahead_ms} ms in the future"),
         }
     }
 }
 
-/// `TwistStamped` → link `VelocitySetpoint` (NED).
-///
-/// - `header.frame_id` `map`, `odom` (or the configured map frame) or empty: `twist.linear` is
-///   ENU. `base_link` (the configured base frame): FLU body, levelled (rotated by the current
-///   heading only, see [`frames::flu_heading_to_ned`]).
-/// - `twist.angular` is ignored: the MCU protocol takes a heading, not a yaw rate; the vehicle
-///   keeps its heading (`has_yaw = false`). `yaw_rate_ignored` tells the caller to count it.
-/// - Stamp 0 (as `ros2 topic pub` sends without `--stamp`) is accepted as "now"; other stamps
-///   must be within the limits of `now_ns`.
-pub fn setpoint(
-    m: &TwistStamped,
-    now_ns: i64,
-    yaw_ned: Option<f64>,
-    cfg: &Config,
-    lim: &SetpointLimits,
-) -> Result<(link::VelocitySetpoint, bool), SetpointReject> {
-    let id_len = m.header.frame_id.len();
+/// How far a `setpoint/heading` quaternion's norm may be from 1.
+pub const HEADING_NORM_TOL: f64 = 1e-3;
+
+/// A heading from `setpoint/heading` is attached to the velocity setpoints received at most
+/// this long after it (bridge clock), ns; then it is dropped and the setpoints keep the heading.
+pub const HEADING_MAX_AGE_NS: i64 = 2_000_000_000;
+
+/// `frame_id` no longer than [`bounded::MAX_FRAME_ID`] (checked first on the read topics).
+fn check_frame_id_len(h: &Header) -> Result<(), SetpointReject> {
+    let id_len = h.frame_id.len();
     if id_len > bounded::MAX_FRAME_ID {
         return Err(SetpointReject::Oversize(bounded::Oversize {
             field: "frame_id",
@@ -547,16 +563,20 @@ pub fn setpoint(
             max: bounded::MAX_FRAME_ID,
         }));
     }
-    let lin = m.twist.linear.to_array();
-    let ang = m.twist.angular.to_array();
-    if lin.iter().chain(ang.iter()).any(|v| !v.is_finite()) {
-        return Err(SetpointReject::NotFinite);
-    }
-    if let Some(v) = lin.iter().map(|v| v.abs()).find(|v| *v > lim.max_speed_mps) {
-        return Err(SetpointReject::TooLarge(v));
-    }
-    if !m.header.stamp.is_zero() {
-        let t = m.header.stamp.to_nanos();
+    Ok(())
+}
+
+/// Checks shared by the read topics after their values': stamp within the limits (0 = now),
+/// then a world frame (`map`, `odom`, the configured ones, or empty = ENU) or the body frame.
+/// `true` = the body frame.
+fn check_header(
+    h: &Header,
+    now_ns: i64,
+    cfg: &Config,
+    lim: &SetpointLimits,
+) -> Result<bool, SetpointReject> {
+    if !h.stamp.is_zero() {
+        let t = h.stamp.to_nanos();
         if now_ns - t > lim.max_age_ns {
             return Err(SetpointReject::Stale {
                 age_ms: (now_ns - t) / 1_000_000,
@@ -568,25 +588,104 @@ pub fn setpoint(
             });
         }
     }
-    let f = m.header.frame_id.trim_start_matches('/');
-    let ned =
-        if f.is_empty() || f == "map" || f == "odom" || f == cfg.map_frame || f == cfg.odom_frame {
-            frames::enu_to_ned(lin)
-        } else if f == cfg.base_frame || f == "base_link" {
-            let yaw = yaw_ned.ok_or(SetpointReject::NoHeading)?;
-            frames::flu_heading_to_ned(lin, yaw)
-        } else {
-            return Err(SetpointReject::UnknownFrame(m.header.frame_id.clone()));
-        };
-    Ok((
-        link::VelocitySetpoint {
-            vel_ned_mps: [ned[0] as f32, ned[1] as f32, ned[2] as f32],
-            has_yaw: false,
-            yaw_rad: 0.0,
-            ttl_ms: lim.ttl_ms,
+    let f = h.frame_id.trim_start_matches('/');
+    if f.is_empty() || f == "map" || f == "odom" || f == cfg.map_frame || f == cfg.odom_frame {
+        Ok(false)
+    } else if f == cfg.base_frame || f == "base_link" {
+        Ok(true)
+    } else {
+        Err(SetpointReject::UnknownFrame(h.frame_id.clone()))
+    }
+}
+
+/// `setpoint/heading` (`QuaternionStamped`) → the heading to hold, NED yaw (rad, from north
+/// towards east, wrapped to (−π, π]).
+///
+/// The quaternion is an orientation in ENU (`frame_id` `map`, `odom` or empty; REP-103: yaw 0
+/// faces east, counter-clockwise positive); only its yaw is used (roll and pitch are the
+/// MCU's). Refused: a non-finite or non-unit quaternion (norm outside 1 ± [`HEADING_NORM_TOL`]),
+/// any other frame (`base_link` too: a heading relative to the body is a turn, send a yaw rate),
+/// a stamp outside the setpoint limits.
+pub fn heading(
+    m: &QuaternionStamped,
+    now_ns: i64,
+    cfg: &Config,
+    lim: &SetpointLimits,
+) -> Result<f64, SetpointReject> {
+    check_frame_id_len(&m.header)?;
+    let q = m.quaternion;
+    let q = [q.w, q.x, q.y, q.z];
+    if q.iter().any(|c| !c.is_finite()) {
+        return Err(SetpointReject::NotFinite);
+    }
+    match check_header(&m.header, now_ns, cfg, lim) {
+        Ok(false) => {}
+        Ok(true) | Err(SetpointReject::UnknownFrame(_)) => {
+            return Err(SetpointReject::HeadingFrame(m.header.frame_id.clone()))
+        }
+        Err(e) => return Err(e),
+    }
+    let norm = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > HEADING_NORM_TOL {
+        return Err(SetpointReject::NotUnitQuaternion(norm));
+    }
+    Ok(frames::yaw_enu_to_ned(frames::yaw_enu_of_q_enu(q)))
+}
+
+/// `TwistStamped` → link `VelocitySetpoint` (NED).
+///
+/// - `header.frame_id` `map`, `odom` (or the configured map frame) or empty: `twist.linear` is
+///   ENU. `base_link` (the configured base frame): FLU body, levelled (rotated by the current
+///   heading only, see [`frames::flu_heading_to_ned`]).
+/// - Heading: `twist.angular.z` ≠ 0 (rad/s, z up: counter-clockwise seen from above, in either
+///   frame) → [`link::YawSetpoint::Rate`] at the NED rate −`angular.z` (the MCU turns the
+///   heading it holds at that rate; over [`link::SETPOINT_YAW_RATE_ABS_MAX_RADPS`] refused).
+///   Else `heading_ned` (the latest `setpoint/heading`, see [`heading`]; the caller drops it
+///   after [`HEADING_MAX_AGE_NS`] and after a yaw-rate setpoint) → [`link::YawSetpoint::Heading`];
+///   else [`link::YawSetpoint::Keep`]: the vehicle keeps the heading it holds (where a turn
+///   stopped, or the last heading sent). `angular.x`/`y` are ignored (must be finite).
+/// - Stamp 0 (as `ros2 topic pub` sends without `--stamp`) is accepted as "now"; other stamps
+///   must be within the limits of `now_ns`.
+pub fn setpoint(
+    m: &TwistStamped,
+    now_ns: i64,
+    yaw_ned: Option<f64>,
+    heading_ned: Option<f64>,
+    cfg: &Config,
+    lim: &SetpointLimits,
+) -> Result<link::VelocitySetpoint, SetpointReject> {
+    check_frame_id_len(&m.header)?;
+    let lin = m.twist.linear.to_array();
+    let ang = m.twist.angular.to_array();
+    if lin.iter().chain(ang.iter()).any(|v| !v.is_finite()) {
+        return Err(SetpointReject::NotFinite);
+    }
+    if let Some(v) = lin.iter().map(|v| v.abs()).find(|v| *v > lim.max_speed_mps) {
+        return Err(SetpointReject::TooLarge(v));
+    }
+    if ang[2].abs() > link::SETPOINT_YAW_RATE_ABS_MAX_RADPS as f64 {
+        return Err(SetpointReject::YawRateTooLarge(ang[2]));
+    }
+    let ned = if check_header(&m.header, now_ns, cfg, lim)? {
+        let yaw = yaw_ned.ok_or(SetpointReject::NoHeading)?;
+        frames::flu_heading_to_ned(lin, yaw)
+    } else {
+        frames::enu_to_ned(lin)
+    };
+    let yaw = match (ang[2] != 0.0, heading_ned) {
+        (true, _) => link::YawSetpoint::Rate {
+            yaw_rate_ned_radps: frames::yaw_rate_enu_to_ned(ang[2]) as f32,
         },
-        ang[2] != 0.0,
-    ))
+        (false, Some(h)) => link::YawSetpoint::Heading {
+            yaw_ned_rad: h as f32,
+        },
+        (false, None) => link::YawSetpoint::Keep,
+    };
+    Ok(link::VelocitySetpoint {
+        vel_ned_mps: [ned[0] as f32, ned[1] as f32, ned[2] as f32],
+        yaw,
+        ttl_ms: lim.ttl_ms,
+    })
 }
 
 /// `cmd/arm`: true → Arm, false → Disarm.

@@ -242,7 +242,9 @@ fn setpoint_status(st: &LinkState, device: &str) -> DiagnosticStatus {
             kv("setpoints_superseded", st.uplink.superseded),
             kv("setpoint_rejects", c.setpoint_rejects),
             kv("last_setpoint_reject", &c.last_setpoint_reject),
-            kv("yaw_rate_ignored", c.yaw_rate_ignored),
+            kv("yaw_rate_setpoints", c.yaw_rate_setpoints),
+            kv("heading_setpoints", c.heading_setpoints),
+            kv("headings_received", c.headings_received),
             kv("commands_forwarded", c.commands_forwarded),
             kv("command_rejects", c.command_rejects),
             kv(

@@ -3,7 +3,9 @@
 //! It speaks the real link protocol (`fcc_msgs`): sends `Hello` at start and on `HelloRequest`,
 //! answers `TimeSyncPing`, streams telemetry with fixed, known values ([`Script`]) at roughly
 //! the default rates, and logs every `VelocitySetpoint` and `Command` it receives as one JSON
-//! line (`{"t_us":…,"mono_us":…,"msg":"VelocitySetpoint","vel_ned_mps":[…],…}`; `t_us` from
+//! line (`{"t_us":…,"mono_us":…,"msg":"VelocitySetpoint","vel_ned_mps":[…],"yaw":…,"ttl_ms":…}`,
+//! `yaw` being `"Keep"`, `{"Heading":{"yaw_ned_rad":…}}` or `{"Rate":{"yaw_rate_ned_radps":…}}`
+//! as serde writes the link's `YawSetpoint`; `t_us` from
 //! the fake's start, `mono_us` the same instant on CLOCK_MONOTONIC, comparable with another
 //! process's monotonic clock, e.g. Python's `time.monotonic_ns()`).
 
@@ -374,8 +376,8 @@ impl<'a> FakeMcu<'a> {
             link::Message::VelocitySetpoint(sp) => {
                 let mono = self.mono_start_us + t;
                 self.log_line(format_args!(
-                    "{{\"t_us\":{t},\"mono_us\":{},\"msg\":\"VelocitySetpoint\",\"vel_ned_mps\":[{},{},{}],\"has_yaw\":{},\"yaw_rad\":{},\"ttl_ms\":{}}}",
-                    mono, sp.vel_ned_mps[0], sp.vel_ned_mps[1], sp.vel_ned_mps[2], sp.has_yaw, sp.yaw_rad, sp.ttl_ms
+                    "{{\"t_us\":{t},\"mono_us\":{},\"msg\":\"VelocitySetpoint\",\"vel_ned_mps\":[{},{},{}],\"yaw\":{},\"ttl_ms\":{}}}",
+                    mono, sp.vel_ned_mps[0], sp.vel_ned_mps[1], sp.vel_ned_mps[2], YawJson(sp.yaw), sp.ttl_ms
                 ))?;
             }
             link::Message::Command(c) => self.on_command(c, t)?,
@@ -632,4 +634,24 @@ fn write_all_retry(f: &mut File, mut buf: &[u8]) -> std::io::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A setpoint's yaw case as JSON (serde's externally tagged form of `YawSetpoint`).
+struct YawJson(link::YawSetpoint);
+
+impl std::fmt::Display for YawJson {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0 {
+            link::YawSetpoint::Keep => write!(f, "\"Keep\""),
+            link::YawSetpoint::Heading { yaw_ned_rad } => {
+                write!(f, "{{\"Heading\":{{\"yaw_ned_rad\":{yaw_ned_rad}}}}}")
+            }
+            link::YawSetpoint::Rate { yaw_rate_ned_radps } => {
+                write!(
+                    f,
+                    "{{\"Rate\":{{\"yaw_rate_ned_radps\":{yaw_rate_ned_radps}}}}}"
+                )
+            }
+        }
+    }
 }

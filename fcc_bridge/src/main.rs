@@ -261,12 +261,17 @@ fn main() -> ExitCode {
     }
     .with_remaps(&opts.remaps);
     let rt = tokio::runtime::Runtime::new().expect("tokio runtime");
+    let mut run = Box::pin(bridge::run(opts, tap.clone()));
     let r = rt.block_on(async {
         tokio::select! {
-            r = bridge::run(opts, tap.clone()) => r,
+            r = &mut run => r,
             _ = stop.wait() => Ok(()),
         }
     });
+    // On a stop the session is left as it is, not dropped: dropping it would tear DDS down
+    // entity by entity while the subscription tasks still hold the participant, and rustdds logs
+    // an ERROR for each entity removed after its event loop has gone (see the exit below).
+    std::mem::forget(run);
     stop.stopping();
     if let Err(BridgeError::DdsStalled(e)) = &r {
         // The stalled participant cannot be recovered in this process: start afresh (same

@@ -67,7 +67,12 @@ pub struct Counters {
     pub setpoints_forwarded: u64,
     pub setpoint_rejects: u64,
     pub last_setpoint_reject: String,
-    pub yaw_rate_ignored: u64,
+    /// Forwarded setpoints that carried a yaw rate (`twist.angular.z` ≠ 0).
+    pub yaw_rate_setpoints: u64,
+    /// Forwarded setpoints that carried the latest `setpoint/heading`.
+    pub heading_setpoints: u64,
+    /// Valid `setpoint/heading` messages (refused ones count in `setpoint_rejects`).
+    pub headings_received: u64,
     pub commands_forwarded: u64,
     pub command_rejects: u64,
     pub stamped_by_arrival: u64,
@@ -130,6 +135,9 @@ pub struct LinkState {
     pub mcu_status: Option<link::Status>,
     /// NED yaw of the latest navigation state.
     pub yaw_ned: Option<f64>,
+    /// The latest valid `setpoint/heading` (NED yaw, rad) and when it arrived (bridge clock,
+    /// ns): attached to the velocity setpoints that follow (see [`LinkState::on_heading`]).
+    pub heading: Option<(f64, i64)>,
     /// MCU time of the latest frame.
     pub last_mcu_us: Option<u64>,
     /// `use_sim_time` with `clock_source:=sync`: `/clock` minus the Linux clock at the latest
@@ -176,6 +184,7 @@ impl LinkState {
             counters: Counters::default(),
             mcu_status: None,
             yaw_ned: None,
+            heading: None,
             last_mcu_us: None,
             sim_offset_ns: None,
             sim_time: false,
@@ -436,13 +445,22 @@ impl LinkState {
             return None;
         }
         let now = self.ros_now_ns(now_ns);
-        match convert::setpoint(m, now, self.yaw_ned, &self.cfg, &self.limits) {
-            Ok((sp, yaw_rate)) => {
-                if yaw_rate {
-                    if self.counters.yaw_rate_ignored == 0 {
-                        tracing::warn!("setpoint twist.angular.z (yaw rate) is not supported by the MCU link: ignored, heading is kept");
+        // The latest heading, unless older than HEADING_MAX_AGE_NS (then dropped).
+        if matches!(self.heading, Some((_, at)) if now_ns - at > convert::HEADING_MAX_AGE_NS) {
+            self.heading = None;
+        }
+        let heading = self.heading.map(|(h, _)| h);
+        match convert::setpoint(m, now, self.yaw_ned, heading, &self.cfg, &self.limits) {
+            Ok(sp) => {
+                match sp.yaw {
+                    // A turn clears the heading: when it stops, the vehicle keeps the heading
+                    // where the turn ended instead of swinging back.
+                    link::YawSetpoint::Rate { .. } => {
+                        self.heading = None;
+                        self.counters.yaw_rate_setpoints += 1;
                     }
-                    self.counters.yaw_rate_ignored += 1;
+                    link::YawSetpoint::Heading { .. } => self.counters.heading_setpoints += 1,
+                    link::YawSetpoint::Keep => {}
                 }
                 self.counters.setpoints_forwarded += 1;
                 self.uplink
@@ -452,6 +470,28 @@ impl LinkState {
             Err(e) => {
                 self.refuse_setpoint(e, now_ns);
                 None
+            }
+        }
+    }
+
+    /// A `setpoint/heading` from ROS: kept (replacing the previous one) for the velocity
+    /// setpoints that follow — nothing goes to the MCU by itself. A heading is dropped
+    /// [`convert::HEADING_MAX_AGE_NS`] after it arrived and by a yaw-rate setpoint. Refused
+    /// (counted as a setpoint refusal, reason prefixed `heading:`) when invalid
+    /// ([`convert::heading`]); a refused heading also drops the one kept: the sender's intent
+    /// is no longer that heading.
+    pub fn on_heading(&mut self, m: &QuaternionStamped, now_ns: i64) {
+        let now = self.ros_now_ns(now_ns);
+        match convert::heading(m, now, &self.cfg, &self.limits) {
+            Ok(yaw_ned) => {
+                self.heading = Some((yaw_ned, now_ns));
+                self.counters.headings_received += 1;
+            }
+            Err(e) => {
+                self.heading = None;
+                self.counters.setpoint_rejects += 1;
+                self.counters.last_setpoint_reject = format!("heading: {e}");
+                crate::warn_limited!(self.warn, e.kind(), now_ns, "setpoint/heading refused: {e}");
             }
         }
     }

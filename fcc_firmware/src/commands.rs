@@ -1,12 +1,15 @@
 //! What the Linux computer sends the flight core: velocity setpoints with a time-to-live, and
 //! mode commands. NED, m/s; times in MCU µs.
 
+pub use fcc_msgs::YawSetpoint;
+
 /// A velocity setpoint from the mission computer (paper A: per-axis velocity over UART).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VelocitySetpoint {
     pub vel_ned_mps: [f32; 3],
-    /// Heading to hold (rad, NED, from north towards east); `None` keeps the current heading.
-    pub yaw_rad: Option<f32>,
+    /// Keep the held heading, hold a heading (rad, NED, from north towards east) or turn at a
+    /// rate (rad/s, NED, clockwise seen from above): the link's vocabulary, one definition.
+    pub yaw: YawSetpoint,
     /// The setpoint is valid for this long after it arrives; then the core holds position.
     pub ttl_ms: u16,
 }

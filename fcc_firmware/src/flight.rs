@@ -6,7 +6,9 @@
 //! solution and the Linux computer's setpoints into a [`Demand`] each step, and calls the
 //! cascade for the motor commands. Time is always an argument (`now_us`, MCU µs).
 
-use crate::commands::{Command, CommandError, FailsafeCause, Mode, VelocitySetpoint, KILL_CONFIRM};
+use crate::commands::{
+    Command, CommandError, FailsafeCause, Mode, VelocitySetpoint, YawSetpoint, KILL_CONFIRM,
+};
 use crate::control::cascade::{Cascade, Demand};
 use crate::control::heading::Heading;
 use crate::control::vec2::clamp_norm;
@@ -59,8 +61,10 @@ const SETPOINT_ABS_LIMIT_MPS: f32 = 50.0;
 /// Pilot mode, sticks centred: brake (zero velocity) until slower than this, then hold the
 /// position reached (PX4 Position mode's brake-then-lock), m/s.
 const PILOT_LOCK_SPEED_MPS: f32 = 0.5;
-/// Pilot mode: the heading command leads the heading by at most this much, rad.
-const PILOT_YAW_LEAD_RAD: f32 = 0.5;
+/// Pilot mode and velocity-mode yaw-rate setpoints: the heading command, advanced at the
+/// commanded yaw rate, leads the heading by at most this much, rad (so a vehicle that cannot
+/// turn as fast does not wind up a command far ahead of it).
+const YAW_LEAD_RAD: f32 = 0.5;
 
 pub use crate::control::cascade::StepTelemetry;
 
@@ -284,7 +288,13 @@ impl FlightCore {
             .vel_ned_mps
             .iter()
             .all(|v| v.is_finite() && v.abs() <= SETPOINT_ABS_LIMIT_MPS)
-            && sp.yaw_rad.map_or(true, |y| y.is_finite());
+            && match sp.yaw {
+                YawSetpoint::Keep => true,
+                YawSetpoint::Heading { yaw_ned_rad } => yaw_ned_rad.is_finite(),
+                YawSetpoint::Rate {
+                    yaw_rate_ned_radps: r,
+                } => r.is_finite() && r.abs() <= fcc_msgs::SETPOINT_YAW_RATE_ABS_MAX_RADPS,
+            };
         // The time-to-live is the stale-setpoint failsafe: bounded to a few seconds.
         let ttl_ok =
             (fcc_msgs::SETPOINT_TTL_MS_MIN..=fcc_msgs::SETPOINT_TTL_MS_MAX).contains(&sp.ttl_ms);
@@ -307,9 +317,21 @@ impl FlightCore {
         // max/min, not clamp: clamp panics on inverted bounds; the limits are range-checked
         // (params.rs) but the MCU image must have no panic path reachable from link bytes.
         v[2] = v[2].max(-l.max_climb_mps).min(l.max_descent_mps);
+        // Headings wrapped once here, rates clamped to the yaw controller's limit.
+        let r_max = self.params.control.yaw_rate_limit_radps;
+        let yaw = match sp.yaw {
+            YawSetpoint::Keep => YawSetpoint::Keep,
+            YawSetpoint::Heading { yaw_ned_rad } => YawSetpoint::Heading {
+                yaw_ned_rad: wrap_pi(yaw_ned_rad),
+            },
+            YawSetpoint::Rate { yaw_rate_ned_radps } => YawSetpoint::Rate {
+                yaw_rate_ned_radps: yaw_rate_ned_radps.max(-r_max).min(r_max),
+            },
+        };
         self.setpoint = Some((
             VelocitySetpoint {
                 vel_ned_mps: v,
+                yaw,
                 ..sp
             },
             now_us,
@@ -451,6 +473,18 @@ impl FlightCore {
         self.failsafe = FailsafeCause::EstimatorFault;
     }
 
+    /// Advance the held heading at `yaw_rate_radps` (NED, rad/s) over `dt_s`, at most
+    /// [`YAW_LEAD_RAD`] ahead of (or behind) the heading estimate `yaw_rad`: the pilot's yaw
+    /// stick and a velocity setpoint's yaw rate.
+    fn advance_yaw_hold(&mut self, yaw_rate_radps: f32, dt_s: f32, yaw_rad: f32) {
+        let lead = fcc_nav::math::clampf(
+            wrap_pi(self.yaw_hold_rad + yaw_rate_radps * dt_s - yaw_rad),
+            -YAW_LEAD_RAD,
+            YAW_LEAD_RAD,
+        );
+        self.yaw_hold_rad = wrap_pi(yaw_rad + lead);
+    }
+
     /// Velocity command (NED north/east, down) and heading command for the current mode.
     fn guidance(&mut self, now_us: u64, dt_s: f32, nav: &NavState) -> ([f32; 2], f32, f32) {
         let l = self.params.limits;
@@ -473,8 +507,12 @@ impl FlightCore {
             }
             Mode::Velocity => match self.setpoint {
                 Some((sp, _)) => {
-                    if let Some(y) = sp.yaw_rad {
-                        self.yaw_hold_rad = y;
+                    match sp.yaw {
+                        YawSetpoint::Keep => {}
+                        YawSetpoint::Heading { yaw_ned_rad } => self.yaw_hold_rad = yaw_ned_rad,
+                        YawSetpoint::Rate { yaw_rate_ned_radps } => {
+                            self.advance_yaw_hold(yaw_rate_ned_radps, dt_s, nav.euler.yaw_rad)
+                        }
                     }
                     let vz = self.velocity_climb(dt_s, sp.vel_ned_mps[2], alt);
                     let target = [sp.vel_ned_mps[0], sp.vel_ned_mps[1]];
@@ -517,12 +555,7 @@ impl FlightCore {
                     }
                     None => self.height_loop(0.0, self.hold_alt_m, alt),
                 };
-                let lead = fcc_nav::math::clampf(
-                    wrap_pi(self.yaw_hold_rad + d.yaw_rate_radps * dt_s - nav.euler.yaw_rad),
-                    -PILOT_YAW_LEAD_RAD,
-                    PILOT_YAW_LEAD_RAD,
-                );
-                self.yaw_hold_rad = wrap_pi(nav.euler.yaw_rad + lead);
+                self.advance_yaw_hold(d.yaw_rate_radps, dt_s, nav.euler.yaw_rad);
                 (v, vz, self.yaw_hold_rad)
             }
             Mode::Disarmed => ([0.0; 2], 0.0, nav.euler.yaw_rad),

@@ -86,6 +86,8 @@ pub struct Step {
     pub mode_commands: Vec<&'static str>,
     /// Send this velocity setpoint (NED, m/s).
     pub setpoint_ned_mps: Option<[f32; 3]>,
+    /// With it, this heading to hold (NED yaw, rad; the mission's `yaw_deg`).
+    pub heading_ned_rad: Option<f32>,
     /// Publish this on `mission/status`.
     pub status: Option<String>,
     /// The run is over (after the above).
@@ -157,9 +159,6 @@ impl MissionRun {
     /// Remarks on the settings, for the log at the start.
     pub fn notes(&self) -> Vec<(Level, String)> {
         let mut n = Vec::new();
-        if self.mission.yaw_deg.is_some() {
-            n.push((Level::Info, "note: yaw_deg is not sent (TwistStamped carries no heading; the bridge keeps the current heading)".into()));
-        }
         if self.end.hover_s() > 0.0 && !self.mission.land_at_end {
             n.push((
                 Level::Warn,
@@ -335,6 +334,7 @@ impl MissionRun {
             return self.report(wall_s, s, (phase, None), None, out);
         }
         out.setpoint_ned_mps = Some(g.vel_ned_mps);
+        out.heading_ned_rad = g.yaw_rad;
         self.report(wall_s, s, phase_name(g.phase), dist, out);
     }
 
@@ -574,6 +574,31 @@ mod tests {
         );
     }
 
+    /// The mission's `yaw_deg` goes out with every setpoint (NED rad), none without it.
+    #[test]
+    fn heading_rides_with_every_setpoint() {
+        let mut m = from_yaml_str(MISSION).unwrap();
+        m.yaw_deg = Some(90.0);
+        let mut r = MissionRun::new(RunConfig {
+            mission: m,
+            timeout_s: 600.0,
+            arm_timeout_s: 60.0,
+            hover_s: 0.0,
+        });
+        let steps = fly(&mut r, &mut Vehicle::new(), 120.0, |_, _| {});
+        let with_sp: Vec<&Step> = steps
+            .iter()
+            .map(|s| &s.1)
+            .filter(|s| s.setpoint_ned_mps.is_some())
+            .collect();
+        assert!(with_sp.len() > 100, "{}", with_sp.len());
+        assert!(with_sp
+            .iter()
+            .all(|s| s.heading_ned_rad == Some(core::f32::consts::FRAC_PI_2)));
+        let steps = fly(&mut run(60.0, 0.0), &mut Vehicle::new(), 120.0, |_, _| {});
+        assert!(steps.iter().all(|s| s.1.heading_ned_rad.is_none()));
+    }
+
     #[test]
     fn flies_the_mission_arms_lands_and_completes() {
         let (mut r, mut v) = (run(60.0, 0.0), Vehicle::new());
@@ -768,10 +793,8 @@ mod tests {
             hover_s: 5.0,
         });
         let n = r.notes();
-        assert_eq!(n.len(), 2);
-        assert_eq!(n[0].0, Level::Info);
-        assert!(n[0].1.starts_with("note: yaw_deg is not sent"));
-        assert_eq!(n[1].0, Level::Warn);
-        assert!(n[1].1.starts_with("hover_s is ignored"));
+        assert_eq!(n.len(), 1);
+        assert_eq!(n[0].0, Level::Warn);
+        assert!(n[0].1.starts_with("hover_s is ignored"));
     }
 }

@@ -47,9 +47,9 @@
 //!
 //! ## Use
 //! ```
-//! use fcc_msgs::{encode, FrameDecoder, Message, VelocitySetpoint, MAX_FRAME_LEN};
+//! use fcc_msgs::{encode, FrameDecoder, Message, VelocitySetpoint, YawSetpoint, MAX_FRAME_LEN};
 //! let sp = Message::VelocitySetpoint(VelocitySetpoint {
-//!     vel_ned_mps: [1.0, 0.0, -0.5], has_yaw: false, yaw_rad: 0.0, ttl_ms: 500,
+//!     vel_ned_mps: [1.0, 0.0, -0.5], yaw: YawSetpoint::Keep, ttl_ms: 500,
 //! });
 //! let mut buf = [0u8; MAX_FRAME_LEN];
 //! let n = encode(&sp, 7, 1_000, &mut buf).unwrap();
@@ -84,4 +84,4 @@ pub use rates::{max_frame_len, period_us, Stream, StreamRates, BAUD_921600_BYTES
 
 /// Version of the frame layout and message set. Bump it for any incompatible change
 /// (the schema hash catches changes that were not bumped).
-pub const PROTOCOL_VERSION: u8 = 4;
+pub const PROTOCOL_VERSION: u8 = 5;

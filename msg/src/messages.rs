@@ -361,14 +361,31 @@ pub struct HelloRequest {
     pub schema_hash: u32,
 }
 
-/// Velocity setpoint, NED. Valid for `ttl_ms` after it arrives; then the core holds.
+/// What a [`VelocitySetpoint`] asks of the heading (NED: yaw from north towards east,
+/// positive = clockwise seen from above). The MCU refuses a non-finite value, and a rate over
+/// [`SETPOINT_YAW_RATE_ABS_MAX_RADPS`]; it clamps a rate to its yaw-rate limit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub enum YawSetpoint {
+    /// Keep the heading being held (the one reached, or the last commanded).
+    #[default]
+    Keep,
+    /// Hold this heading, NED, rad (any finite angle; the MCU wraps it to (−π, π]).
+    Heading { yaw_ned_rad: f32 },
+    /// Turn at this rate, NED (clockwise seen from above positive), rad/s: the MCU advances the
+    /// heading it holds at this rate while the setpoint is valid.
+    Rate { yaw_rate_ned_radps: f32 },
+}
+
+/// Largest yaw rate a [`YawSetpoint::Rate`] may carry before it is refused as absurd (one turn
+/// per second), rad/s; below it the MCU clamps the rate to its yaw-rate limit.
+pub const SETPOINT_YAW_RATE_ABS_MAX_RADPS: f32 = core::f32::consts::TAU;
+
+/// Velocity setpoint, NED, with a heading or yaw-rate request. Valid for `ttl_ms` after it
+/// arrives; then the core holds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
 pub struct VelocitySetpoint {
     pub vel_ned_mps: [f32; 3],
-    /// `false`: keep the current heading and ignore `yaw_rad`.
-    pub has_yaw: bool,
-    /// Heading to hold, NED, from north towards east.
-    pub yaw_rad: f32,
+    pub yaw: YawSetpoint,
     pub ttl_ms: u16,
 }
 
@@ -572,6 +589,7 @@ enum FailsafeCause { None, SetpointStale, SetpointLost, Geofence, GpsLost, WindL
 enum CommandKind { Arm, Disarm, Hold, Land, Velocity, Kill }
 enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible, PilotOverride, KillNotConfirmed }
 enum ParamResult { Accepted, UnknownId, NotFinite, OutOfRange, Incompatible }
+enum YawSetpoint { Keep, Heading { yaw_ned_rad: f32 }, Rate { yaw_rate_ned_radps: f32 } }
 ";
 
 /// The schema's messages (after the `params` line): see [`SCHEMA`].
@@ -592,7 +610,7 @@ msg 0x0B TimeSyncPong max=30 { linux_time_ns: u64, mcu_rx_time_us: u64, mcu_tx_t
 msg 0x0C CommandAck max=2 { command: CommandKind, result: CommandResult }
 msg 0x0D ParamAck max=8 { id: u16, value: f32, result: ParamResult }
 msg 0x40 HelloRequest max=6 { protocol_version: u8, schema_hash: u32 }
-msg 0x41 VelocitySetpoint max=20 { vel_ned_mps: [f32; 3], has_yaw: bool, yaw_rad: f32, ttl_ms: u16 }
+msg 0x41 VelocitySetpoint max=20 { vel_ned_mps: [f32; 3], yaw: YawSetpoint, ttl_ms: u16 }
 msg 0x42 Command max=6 { command: CommandKind, confirm: u32 }
 msg 0x43 TimeSyncPing max=10 { linux_time_ns: u64 }
 msg 0x44 ParamSet max=7 { id: u16, value: f32 }

@@ -117,8 +117,7 @@ pub(crate) fn samples() -> Vec<Message> {
         Message::HelloRequest(HelloRequest::ours()),
         Message::VelocitySetpoint(VelocitySetpoint {
             vel_ned_mps: [1.5, -0.5, -1.0],
-            has_yaw: true,
-            yaw_rad: 1.57,
+            yaw: YawSetpoint::Heading { yaw_ned_rad: 1.57 },
             ttl_ms: 500,
         }),
         Message::Command(Command {
@@ -433,7 +432,22 @@ fn trailing_bytes_and_short_payloads_are_counted() {
             msg_id: id::COMMAND
         })]
     );
-    assert_eq!(dec.counters().decode_errors, 3);
+    // A setpoint's yaw case index past `Rate` (2): 12 bytes of velocity, case 3, a rate, ttl.
+    let mut sp = vec![0u8; 12];
+    sp.push(3);
+    sp.extend_from_slice(&0.5f32.to_le_bytes());
+    sp.push(100);
+    let out = decode_all(
+        &mut dec,
+        &raw_frame(PROTOCOL_VERSION, id::VELOCITY_SETPOINT, 3, 0, &sp),
+    );
+    assert_eq!(
+        out,
+        vec![Err(DecodeError::Payload {
+            msg_id: id::VELOCITY_SETPOINT
+        })]
+    );
+    assert_eq!(dec.counters().decode_errors, 4);
     assert_eq!(dec.counters().seq_gaps, 0);
 }
 
@@ -672,16 +686,27 @@ proptest! {
         prop_assert!(last_ok, "valid frame after junk lost: {:?}", out.last());
     }
 
-    /// Random values of a setpoint round-trip bit-exactly (NaN included).
+    /// Random values of a setpoint round-trip bit-exactly (NaN included), in each yaw case.
     #[test]
-    fn setpoint_round_trip(v in any::<[u32; 3]>(), yaw in any::<u32>(), has_yaw in any::<bool>(), ttl in any::<u16>(), seq in any::<u16>(), t in any::<u64>()) {
+    fn setpoint_round_trip(v in any::<[u32; 3]>(), yaw in any::<u32>(), case in 0u8..3, ttl in any::<u16>(), seq in any::<u16>(), t in any::<u64>()) {
+        let y = f32::from_bits(yaw);
+        let yaw_sp = match case {
+            0 => YawSetpoint::Keep,
+            1 => YawSetpoint::Heading { yaw_ned_rad: y },
+            _ => YawSetpoint::Rate { yaw_rate_ned_radps: y },
+        };
         let m = Message::VelocitySetpoint(VelocitySetpoint {
-            vel_ned_mps: v.map(f32::from_bits), has_yaw, yaw_rad: f32::from_bits(yaw), ttl_ms: ttl,
+            vel_ned_mps: v.map(f32::from_bits), yaw: yaw_sp, ttl_ms: ttl,
         });
         let out = decode_all(&mut FrameDecoder::new(), &enc(&m, seq, t));
         let Ok(Frame { header, message: Message::VelocitySetpoint(sp) }) = out[0] else { panic!() };
         prop_assert_eq!(sp.vel_ned_mps.map(f32::to_bits), v);
-        prop_assert_eq!(sp.yaw_rad.to_bits(), yaw);
-        prop_assert_eq!((sp.has_yaw, sp.ttl_ms, header.seq, header.t_us), (has_yaw, ttl, seq, t));
+        let back = match sp.yaw {
+            YawSetpoint::Keep => (0, None),
+            YawSetpoint::Heading { yaw_ned_rad } => (1, Some(yaw_ned_rad.to_bits())),
+            YawSetpoint::Rate { yaw_rate_ned_radps } => (2, Some(yaw_rate_ned_radps.to_bits())),
+        };
+        prop_assert_eq!(back, (case, (case != 0).then_some(yaw)));
+        prop_assert_eq!((sp.ttl_ms, header.seq, header.t_us), (ttl, seq, t));
     }
 }

@@ -287,7 +287,7 @@ def main():
     if len(sps) >= 1:
         c.check("map ENU (1,2,0.5) → NED (2,1,-0.5), ttl 300 ms",
                 close(sps[0]["vel_ned_mps"], (2.0, 1.0, -0.5), 1e-6) and sps[0]["ttl_ms"] == 300
-                and not sps[0]["has_yaw"], sps[0])
+                and sps[0]["yaw"] == "Keep", sps[0])
     if len(sps) >= 2:
         c.check("base_link forward 1 → NED (cos30°, sin30°, 0)",
                 close(sps[1]["vel_ned_mps"], (math.cos(math.radians(30)), 0.5, 0.0), 1e-5), sps[1])

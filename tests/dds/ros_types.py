@@ -49,6 +49,12 @@ class Quaternion(IdlStruct, typename=_t("geometry_msgs", "Quaternion")):
 
 
 @dataclass
+class QuaternionStamped(IdlStruct, typename=_t("geometry_msgs", "QuaternionStamped")):
+    header: Header = field(default_factory=Header)
+    quaternion: Quaternion = field(default_factory=Quaternion)
+
+
+@dataclass
 class Point(IdlStruct, typename=_t("geometry_msgs", "Point")):
     x: float64 = 0.0
     y: float64 = 0.0

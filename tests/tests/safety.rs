@@ -131,7 +131,7 @@ fn an_estimator_fault_landing_cannot_be_cancelled_by_the_operator() {
             t,
             VelocitySetpoint {
                 vel_ned_mps: [1.0, 0.0, 0.0],
-                yaw_rad: None,
+                yaw: fcc_firmware::commands::YawSetpoint::Keep,
                 ttl_ms: 300,
             },
         );

@@ -9,6 +9,10 @@
 //!   of FLU vectors into ENU: `q_enu_flu = q_ned_to_enu ⊗ q_frd_to_ned ⊗ q_flu_to_frd` with
 //!   `q_flu_to_frd` = 180° about x and `q_ned_to_enu` = 180° about (x+y)/√2.
 //! - Heading: NED yaw (from north towards east) ψ ↔ ENU yaw (from east towards north) π/2 − ψ.
+//!   An ENU orientation's yaw (REP-103: 0 = facing east, counter-clockwise seen from above) is
+//!   its ZYX Euler yaw ([`yaw_enu_of_q_enu`]).
+//! - Yaw rate: FLU/ENU z-up rate (counter-clockwise seen from above, `twist.angular.z`) ↔ NED
+//!   yaw rate (clockwise seen from above): `r_ned = −ω_z` ([`yaw_rate_enu_to_ned`]).
 //!
 //! Quaternions are `[w, x, y, z]`, Hamilton convention, f64.
 //!
@@ -133,6 +137,26 @@ pub fn yaw_ned_to_enu(yaw_ned: f64) -> f64 {
 /// ENU yaw → NED yaw, wrapped to (−π, π].
 pub fn yaw_enu_to_ned(yaw_enu: f64) -> f64 {
     wrap_pi(FRAC_PI_2 - yaw_enu)
+}
+
+/// Yaw (ZYX Euler ψ about z-up, from east towards north) of an orientation in ENU, `[w, x, y, z]`
+/// (normalised first).
+pub fn yaw_enu_of_q_enu(q_enu: Quat) -> f64 {
+    let [w, x, y, z] = quat_normalize(q_enu);
+    (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+}
+
+/// The orientation in ENU of a level vehicle with ENU yaw `yaw_enu` (a rotation about z),
+/// `[w, x, y, z]`: what a heading is sent as (`setpoint/heading`).
+pub fn q_enu_of_yaw_enu(yaw_enu: f64) -> Quat {
+    let (s, c) = (0.5 * yaw_enu).sin_cos();
+    [c, 0.0, 0.0, s]
+}
+
+/// A z-up yaw rate (FLU body or ENU, counter-clockwise seen from above, `twist.angular.z`) →
+/// NED yaw rate (clockwise seen from above), rad/s.
+pub fn yaw_rate_enu_to_ned(yaw_rate_z_up_radps: f64) -> f64 {
+    -yaw_rate_z_up_radps
 }
 
 /// Wrap to (−π, π]: the one f64 copy, in `fcc_nav`.
@@ -318,6 +342,30 @@ mod tests {
         assert!(yaw_ned_to_enu(FRAC_PI_2).abs() < EPS); // east
         assert!((yaw_ned_to_enu(PI).abs() - FRAC_PI_2).abs() < EPS); // south = −90°
         assert!((yaw_enu_to_ned(yaw_ned_to_enu(2.0)) - 2.0).abs() < EPS);
+    }
+
+    #[test]
+    fn enu_orientation_yaw_and_rates() {
+        // REP-103: yaw 0 faces east = NED 90°; 90° (CCW) faces north = NED 0.
+        let about_z = |a: f64| [(0.5 * a).cos(), 0.0, 0.0, (0.5 * a).sin()];
+        assert!(yaw_enu_of_q_enu(about_z(0.0)).abs() < EPS);
+        assert!((yaw_enu_to_ned(yaw_enu_of_q_enu(about_z(0.0))) - FRAC_PI_2).abs() < EPS);
+        assert!(yaw_enu_to_ned(yaw_enu_of_q_enu(about_z(FRAC_PI_2))).abs() < EPS);
+        // West (ENU 180°) = NED −90°; a scaled quaternion gives the same yaw.
+        let w = about_z(PI).map(|c| 3.0 * c);
+        assert!((yaw_enu_to_ned(yaw_enu_of_q_enu(w)) + FRAC_PI_2).abs() < 1e-9);
+        // The ENU orientation of a vehicle facing NED ψ has ENU yaw π/2 − ψ.
+        for psi in [0.3, -2.0, 3.0] {
+            let q = q_frd_ned_to_q_flu_enu(euler_ned(0.1, -0.2, psi));
+            assert!((wrap_pi(yaw_enu_to_ned(yaw_enu_of_q_enu(q)) - psi)).abs() < 1e-9);
+        }
+        for psi in [0.0, 1.0, -3.0] {
+            let q = q_enu_of_yaw_enu(yaw_ned_to_enu(psi));
+            assert!((wrap_pi(yaw_enu_to_ned(yaw_enu_of_q_enu(q)) - psi)).abs() < 1e-12);
+        }
+        // Turning left (CCW, angular.z > 0) is a decreasing NED yaw.
+        assert_eq!(yaw_rate_enu_to_ned(0.3), -0.3);
+        assert_eq!(frd_to_flu([0.0, 0.0, yaw_rate_enu_to_ned(0.3)])[2], 0.3);
     }
 
     #[test]

@@ -21,6 +21,7 @@
 //! | `/diagnostics` | diagnostic_msgs/DiagnosticArray | telemetry | published |
 //! | `/clock` | rosgraph_msgs/Clock | telemetry, depth 1 | published (`clock_source:=mcu`) or read (`sync`) |
 //! | `setpoint/velocity` | geometry_msgs/TwistStamped | best effort | read |
+//! | `setpoint/heading` | geometry_msgs/QuaternionStamped | best effort | read |
 //! | `cmd/arm` | std_msgs/Bool | best effort | read |
 //! | `cmd/mode`, `cmd/kill` | std_msgs/String | best effort | read |
 //! | `link/raw_frames` | fcc_msgs/LinkFrame | telemetry | recorded only |
@@ -165,6 +166,9 @@ pub const ACCEL_MEASURED: Topic<AccelStamped> = Topic::new("accel/measured", TEL
 pub const DIAGNOSTICS: Topic<DiagnosticArray> = Topic::new("/diagnostics", TELEMETRY, P);
 pub const CLOCK: Topic<Clock> = Topic::new("/clock", TELEMETRY.with_depth(1), PublishedOrRead);
 pub const SETPOINT_VELOCITY: Topic<TwistStamped> = Topic::new("setpoint/velocity", READ, R);
+/// An absolute heading (ENU orientation, only its yaw is used) for the velocity setpoints that
+/// follow it (`fcc_bridge::convert::setpoint`).
+pub const SETPOINT_HEADING: Topic<QuaternionStamped> = Topic::new("setpoint/heading", READ, R);
 pub const CMD_ARM: Topic<Bool> = Topic::new("cmd/arm", READ, R);
 pub const CMD_MODE: Topic<StringMsg> = Topic::new("cmd/mode", READ, R);
 pub const CMD_KILL: Topic<StringMsg> = Topic::new("cmd/kill", READ, R);
@@ -195,6 +199,7 @@ pub fn table() -> Vec<(&'static str, String, QosInfo, Direction)> {
         DIAGNOSTICS,
         CLOCK,
         SETPOINT_VELOCITY,
+        SETPOINT_HEADING,
         CMD_ARM,
         CMD_MODE,
         CMD_KILL,

@@ -199,9 +199,10 @@ fn ts(frame: &str, v: [f64; 3], stamp: Time) -> TwistStamped {
 fn setpoints() {
     let lim = SetpointLimits::default();
     let now = 1_000_000_000_000;
-    let (sp, _) = setpoint(
+    let sp = setpoint(
         &ts("map", [1.0, 2.0, 0.5], Time::default()),
         now,
+        None,
         None,
         &cfg(),
         &lim,
@@ -209,10 +210,11 @@ fn setpoints() {
     .unwrap();
     assert_eq!(sp.vel_ned_mps, [2.0, 1.0, -0.5]);
     assert_eq!(sp.ttl_ms, 300);
-    assert!(!sp.has_yaw);
-    let (sp, _) = setpoint(
+    assert_eq!(sp.yaw, link::YawSetpoint::Keep);
+    let sp = setpoint(
         &ts("", [0.0, 1.0, 0.0], Time::default()),
         now,
+        None,
         None,
         &cfg(),
         &lim,
@@ -225,15 +227,17 @@ fn setpoints() {
             &ts("base_link", [1.0, 0.0, 0.0], Time::default()),
             now,
             None,
+            None,
             &cfg(),
             &lim
         ),
         Err(SetpointReject::NoHeading)
     );
-    let (sp, _) = setpoint(
+    let sp = setpoint(
         &ts("base_link", [1.0, 0.0, 0.0], Time::default()),
         now,
         Some(std::f64::consts::FRAC_PI_2),
+        None,
         &cfg(),
         &lim,
     )
@@ -245,6 +249,7 @@ fn setpoints() {
             &ts("map", [f64::NAN, 0.0, 0.0], Time::default()),
             now,
             None,
+            None,
             &cfg(),
             &lim
         ),
@@ -254,6 +259,7 @@ fn setpoints() {
         setpoint(
             &ts("map", [0.0, 0.0, 1e6], Time::default()),
             now,
+            None,
             None,
             &cfg(),
             &lim
@@ -265,6 +271,7 @@ fn setpoints() {
             &ts("camera", [0.0; 3], Time::default()),
             now,
             None,
+            None,
             &cfg(),
             &lim
         ),
@@ -272,16 +279,114 @@ fn setpoints() {
     ));
     let old = Time::from_nanos(now - 2_000_000_000);
     assert!(matches!(
-        setpoint(&ts("map", [0.0; 3], old), now, None, &cfg(), &lim),
+        setpoint(&ts("map", [0.0; 3], old), now, None, None, &cfg(), &lim),
         Err(SetpointReject::Stale { .. })
     ));
     let future = Time::from_nanos(now + 2_000_000_000);
     assert!(matches!(
-        setpoint(&ts("map", [0.0; 3], future), now, None, &cfg(), &lim),
+        setpoint(&ts("map", [0.0; 3], future), now, None, None, &cfg(), &lim),
         Err(SetpointReject::Future { .. })
     ));
     let fresh = Time::from_nanos(now - 100_000_000);
-    assert!(setpoint(&ts("map", [0.0; 3], fresh), now, None, &cfg(), &lim).is_ok());
+    assert!(setpoint(&ts("map", [0.0; 3], fresh), now, None, None, &cfg(), &lim).is_ok());
+}
+
+fn ts_yaw(frame: &str, yaw_rate_z_up: f64) -> TwistStamped {
+    let mut m = ts(frame, [1.0, 0.0, 0.0], Time::default());
+    m.twist.angular = Vector3::new([0.0, 0.0, yaw_rate_z_up]);
+    m
+}
+
+/// `angular.z` (z up, CCW) → a NED yaw-rate setpoint (−z), in the world and body frames; with
+/// no rate, the latest heading or Keep; an absurd rate refused.
+#[test]
+fn setpoint_yaw_rate_and_heading() {
+    let lim = SetpointLimits::default();
+    let now = 1_000_000_000_000;
+    let go =
+        |m: &TwistStamped, heading: Option<f64>| setpoint(m, now, Some(0.0), heading, &cfg(), &lim);
+    let rate = |r: f32| link::YawSetpoint::Rate {
+        yaw_rate_ned_radps: r,
+    };
+    assert_eq!(go(&ts_yaw("map", 0.3), None).unwrap().yaw, rate(-0.3));
+    assert_eq!(go(&ts_yaw("base_link", -0.5), None).unwrap().yaw, rate(0.5));
+    // A rate wins over a heading; no rate carries the heading; nothing = keep.
+    assert_eq!(go(&ts_yaw("map", 0.3), Some(1.0)).unwrap().yaw, rate(-0.3));
+    assert_eq!(
+        go(&ts_yaw("map", 0.0), Some(1.0)).unwrap().yaw,
+        link::YawSetpoint::Heading { yaw_ned_rad: 1.0 }
+    );
+    assert_eq!(
+        go(&ts_yaw("map", 0.0), None).unwrap().yaw,
+        link::YawSetpoint::Keep
+    );
+    assert!(matches!(
+        go(&ts_yaw("map", 7.0), None),
+        Err(SetpointReject::YawRateTooLarge(_))
+    ));
+    assert_eq!(
+        go(&ts_yaw("map", f64::INFINITY), None),
+        Err(SetpointReject::NotFinite)
+    );
+}
+
+fn qs(frame: &str, q_wxyz: [f64; 4]) -> QuaternionStamped {
+    QuaternionStamped {
+        header: Header::new(Time::default(), frame),
+        quaternion: Quaternion::from_wxyz(q_wxyz),
+    }
+}
+
+/// `setpoint/heading`: ENU orientation → NED yaw (REP-103 yaw 0 = east = NED 90°); bad input
+/// refused with its reason.
+#[test]
+fn heading_from_quaternion() {
+    let lim = SetpointLimits::default();
+    let now = 1_000_000_000_000;
+    let about_z = |deg: f64| {
+        let h = 0.5 * deg.to_radians();
+        [h.cos(), 0.0, 0.0, h.sin()]
+    };
+    let h = |m: &QuaternionStamped| heading(m, now, &cfg(), &lim);
+    for (enu_deg, ned_deg, frame) in [
+        (0.0, 90.0, "map"),
+        (90.0, 0.0, "odom"),
+        (180.0, -90.0, ""),
+        (-45.0, 135.0, "/map"),
+    ] {
+        let y = h(&qs(frame, about_z(enu_deg))).unwrap();
+        assert!(
+            (fcc_ros::frames::wrap_pi(y - f64::to_radians(ned_deg))).abs() < 1e-9,
+            "ENU {enu_deg}° → NED {}°",
+            y.to_degrees()
+        );
+    }
+    // Roll and pitch are ignored: only the yaw counts.
+    let tilted = fcc_ros::frames::quat_mul(about_z(0.0), [0.98f64.sqrt(), 0.1, 0.1, 0.0]);
+    assert!((h(&qs("map", tilted)).unwrap() - std::f64::consts::FRAC_PI_2).abs() < 0.05);
+    assert_eq!(
+        h(&qs("map", [f64::NAN, 0.0, 0.0, 1.0])),
+        Err(SetpointReject::NotFinite)
+    );
+    assert!(matches!(
+        h(&qs("map", [0.0, 0.0, 0.0, 0.0])),
+        Err(SetpointReject::NotUnitQuaternion(n)) if n == 0.0
+    ));
+    assert!(matches!(
+        h(&qs("map", [2.0, 0.0, 0.0, 0.0])),
+        Err(SetpointReject::NotUnitQuaternion(_))
+    ));
+    assert!(matches!(
+        h(&qs("base_link", about_z(0.0))),
+        Err(SetpointReject::HeadingFrame(_))
+    ));
+    assert!(matches!(
+        h(&qs("camera", about_z(0.0))),
+        Err(SetpointReject::HeadingFrame(_))
+    ));
+    let mut old = qs("map", about_z(0.0));
+    old.header.stamp = Time::from_nanos(now - 2_000_000_000);
+    assert!(matches!(h(&old), Err(SetpointReject::Stale { .. })));
 }
 
 #[test]
@@ -666,4 +771,68 @@ fn status_codes_match_the_msg_constants() {
         let key = format!("MODE_{}", name.to_ascii_uppercase());
         assert_eq!(constant(&key), Some(code), "{m:?}: {key}");
     }
+}
+
+/// The heading policy of the bridge: a `setpoint/heading` rides on the velocity setpoints that
+/// follow; a yaw-rate setpoint wins and clears it; it is dropped after HEADING_MAX_AGE_NS; an
+/// invalid heading is refused, counted and clears the kept one.
+#[test]
+fn state_heading_rides_on_setpoints_until_a_turn_or_its_age() {
+    use crate::state::{ClockSource, Handshake, LinkState};
+    let mut s = LinkState::new(cfg(), SetpointLimits::default(), ClockSource::Sync);
+    s.handshake = Handshake::Ok {
+        firmware: [0, 1, 0],
+    };
+    let mut t = 1_000_000_000_000i64;
+    let mut yaw_of = |s: &mut LinkState, z: f64| {
+        t += 20_000_000; // past the uplink's spacing: every setpoint goes at once
+        match s.on_setpoint(&ts_yaw("map", z), t) {
+            Some(link::Message::VelocitySetpoint(sp)) => (sp.yaw, t),
+            other => panic!("{other:?}"),
+        }
+    };
+    let (yaw, now) = yaw_of(&mut s, 0.0);
+    assert_eq!(yaw, link::YawSetpoint::Keep);
+    // East in ENU (identity) = NED 90°.
+    s.on_heading(&qs("map", [1.0, 0.0, 0.0, 0.0]), now);
+    let east = link::YawSetpoint::Heading {
+        yaw_ned_rad: std::f32::consts::FRAC_PI_2,
+    };
+    assert_eq!(yaw_of(&mut s, 0.0).0, east);
+    assert_eq!(yaw_of(&mut s, 0.0).0, east);
+    // A turn: rate, and the heading is gone afterwards.
+    assert_eq!(
+        yaw_of(&mut s, 0.2).0,
+        link::YawSetpoint::Rate {
+            yaw_rate_ned_radps: -0.2
+        }
+    );
+    assert_eq!(yaw_of(&mut s, 0.0).0, link::YawSetpoint::Keep);
+    // Dropped after its age.
+    let (_, now) = yaw_of(&mut s, 0.0);
+    s.on_heading(&qs("map", [1.0, 0.0, 0.0, 0.0]), now);
+    assert_eq!(yaw_of(&mut s, 0.0).0, east);
+    for _ in 0..(HEADING_MAX_AGE_NS / 20_000_000) {
+        yaw_of(&mut s, 0.0);
+    }
+    assert_eq!(yaw_of(&mut s, 0.0).0, link::YawSetpoint::Keep);
+    assert_eq!(
+        (
+            s.counters.headings_received,
+            s.counters.yaw_rate_setpoints,
+            s.counters.setpoint_rejects
+        ),
+        (2, 1, 0)
+    );
+    // A bad heading: refused, counted, and the kept one dropped.
+    let (_, now) = yaw_of(&mut s, 0.0);
+    s.on_heading(&qs("map", [1.0, 0.0, 0.0, 0.0]), now);
+    s.on_heading(&qs("map", [f64::NAN, 0.0, 0.0, 0.0]), now);
+    assert_eq!(s.counters.setpoint_rejects, 1);
+    assert!(
+        s.counters.last_setpoint_reject.starts_with("heading: "),
+        "{}",
+        s.counters.last_setpoint_reject
+    );
+    assert_eq!(yaw_of(&mut s, 0.0).0, link::YawSetpoint::Keep);
 }

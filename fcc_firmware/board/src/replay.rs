@@ -14,7 +14,7 @@
 //! Decoding never panics: every read is bounds-checked and a short or corrupt buffer ends the
 //! replay with `None`.
 
-use fcc_firmware::commands::{Command, VelocitySetpoint};
+use fcc_firmware::commands::{Command, VelocitySetpoint, YawSetpoint};
 use fcc_firmware::geometry::MOTOR_COUNT;
 use fcc_firmware::scheduler::FlightComputer;
 use fcc_firmware::sensors::*;
@@ -173,12 +173,20 @@ impl<'a> InputStream<'a> {
                     6 => Event::Command(Command::Kill { confirm: r.u32()? }),
                     5 => {
                         let vel_ned_mps = r.f32x3()?;
-                        let has_yaw = r.u8()?;
-                        let yaw = r.f32()?;
+                        let yaw_case = r.u8()?;
+                        let v = r.f32()?;
                         let ttl_ms = r.u16()?;
+                        let yaw = match yaw_case {
+                            0 => YawSetpoint::Keep,
+                            1 => YawSetpoint::Heading { yaw_ned_rad: v },
+                            2 => YawSetpoint::Rate {
+                                yaw_rate_ned_radps: v,
+                            },
+                            _ => return None,
+                        };
                         Event::Setpoint(VelocitySetpoint {
                             vel_ned_mps,
-                            yaw_rad: if has_yaw != 0 { Some(yaw) } else { None },
+                            yaw,
                             ttl_ms,
                         })
                     }
@@ -395,8 +403,15 @@ pub mod encode {
                         Event::Setpoint(sp) => {
                             self.buf.push(5);
                             self.f32s(&sp.vel_ned_mps);
-                            self.buf.push(sp.yaw_rad.is_some() as u8);
-                            self.f32s(&[sp.yaw_rad.unwrap_or(0.0)]);
+                            let (yaw_case, v) = match sp.yaw {
+                                YawSetpoint::Keep => (0, 0.0),
+                                YawSetpoint::Heading { yaw_ned_rad } => (1, yaw_ned_rad),
+                                YawSetpoint::Rate { yaw_rate_ned_radps } => {
+                                    (2, yaw_rate_ned_radps)
+                                }
+                            };
+                            self.buf.push(yaw_case);
+                            self.f32s(&[v]);
                             self.buf.extend_from_slice(&sp.ttl_ms.to_le_bytes());
                         }
                     }

@@ -5,7 +5,7 @@
 
 use super::log::PlanPhase;
 use super::scenario::{FlightPlan, Scenario};
-use fcc_firmware::commands::{Command, Mode, VelocitySetpoint};
+use fcc_firmware::commands::{Command, Mode, VelocitySetpoint, YawSetpoint};
 use fcc_firmware::flight::FlightCore;
 use fcc_mission::{Guidance, Mission, Phase, Request, WaypointFollower};
 
@@ -185,11 +185,15 @@ impl LinuxSide {
         self.plan = plan;
     }
 
-    /// A velocity setpoint with the link's time-to-live.
+    /// A velocity setpoint with the link's time-to-live; with a heading to hold (NED, rad) if
+    /// `yaw_rad` is given, else keeping the held heading.
     fn setpoint(vel_ned_mps: [f32; 3], yaw_rad: Option<f32>) -> VelocitySetpoint {
         VelocitySetpoint {
             vel_ned_mps,
-            yaw_rad,
+            yaw: match yaw_rad {
+                Some(yaw_ned_rad) => YawSetpoint::Heading { yaw_ned_rad },
+                None => YawSetpoint::Keep,
+            },
             ttl_ms: SETPOINT_TTL_MS,
         }
     }

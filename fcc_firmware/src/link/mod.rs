@@ -293,7 +293,7 @@ impl LinkEndpoint {
                 } else {
                     let core_sp = CoreSetpoint {
                         vel_ned_mps: sp.vel_ned_mps,
-                        yaw_rad: if sp.has_yaw { Some(sp.yaw_rad) } else { None },
+                        yaw: sp.yaw,
                         ttl_ms: sp.ttl_ms,
                     };
                     to_result(core.setpoint(now_us, core_sp))

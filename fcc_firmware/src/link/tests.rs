@@ -7,8 +7,8 @@ use crate::sensors::{
     BaroSample, BatterySample, GpsFix, ImuSample, MagSample, RangeSample, SensorInputs,
 };
 use fcc_msgs::{
-    Command, Frame, HelloRequest, TimeSyncPing, VelocitySetpoint, MAX_FRAME_LEN, PROTOCOL_VERSION,
-    SCHEMA_HASH,
+    Command, Frame, HelloRequest, TimeSyncPing, VelocitySetpoint, YawSetpoint, MAX_FRAME_LEN,
+    PROTOCOL_VERSION, SCHEMA_HASH,
 };
 use std::collections::BTreeMap;
 use std::vec::Vec;
@@ -107,8 +107,7 @@ fn setpoint_while_disarmed_reaches_core_and_is_counted_as_rejected() {
     let mut linux = Linux::new();
     let sp = VelocitySetpoint {
         vel_ned_mps: [1.0, 0.0, 0.0],
-        has_yaw: false,
-        yaw_rad: 0.0,
+        yaw: YawSetpoint::Keep,
         ttl_ms: 500,
     };
     let bytes = linux.frame(Message::VelocitySetpoint(sp));
@@ -175,6 +174,45 @@ fn setpoint_while_disarmed_reaches_core_and_is_counted_as_rejected() {
     );
     assert_eq!(status.link_rx.rx_frames, 9);
     assert_eq!(status.mode, Mode::Disarmed);
+}
+
+/// A heading or yaw rate that is not finite, or a rate over the absurd limit, is refused as an
+/// invalid setpoint before the arming check; any finite heading and the limit itself pass it.
+#[test]
+fn yaw_setpoints_are_validated_before_the_arming_check() {
+    let mut core = FlightCore::new(Params::default());
+    let mut link = LinkEndpoint::default();
+    let mut linux = Linux::new();
+    let max = fcc_msgs::SETPOINT_YAW_RATE_ABS_MAX_RADPS;
+    let heading = |y| YawSetpoint::Heading { yaw_ned_rad: y };
+    let rate = |r| YawSetpoint::Rate {
+        yaw_rate_ned_radps: r,
+    };
+    for (yaw, want) in [
+        (heading(f32::NAN), CommandResult::InvalidSetpoint),
+        (heading(f32::NEG_INFINITY), CommandResult::InvalidSetpoint),
+        (rate(f32::NAN), CommandResult::InvalidSetpoint),
+        (rate(f32::INFINITY), CommandResult::InvalidSetpoint),
+        (rate(max * 1.001), CommandResult::InvalidSetpoint),
+        (rate(-max * 1.001), CommandResult::InvalidSetpoint),
+        (rate(max), CommandResult::Disarmed),
+        (rate(-0.3), CommandResult::Disarmed),
+        (heading(100.0), CommandResult::Disarmed),
+        (YawSetpoint::Keep, CommandResult::Disarmed),
+    ] {
+        let sp = VelocitySetpoint {
+            vel_ned_mps: [0.0; 3],
+            yaw,
+            ttl_ms: 300,
+        };
+        link.on_bytes(
+            1_000,
+            &linux.frame(Message::VelocitySetpoint(sp)),
+            &mut core,
+        );
+        assert_eq!(link.stats().last_reject, want, "{yaw:?}");
+    }
+    assert_eq!(link.stats().setpoint_rejects, 10);
 }
 
 #[test]
@@ -247,8 +285,7 @@ fn arm_and_setpoint_through_the_link() {
     assert!(core.armed());
     let sp = VelocitySetpoint {
         vel_ned_mps: [0.0, 0.0, -0.5],
-        has_yaw: true,
-        yaw_rad: 0.3,
+        yaw: YawSetpoint::Heading { yaw_ned_rad: 0.3 },
         ttl_ms: 300,
     };
     let t = armed_at.unwrap() * TICK_US + TICK_US;

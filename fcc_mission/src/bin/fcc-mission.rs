@@ -3,6 +3,8 @@
 //! The mission node: flies a mission YAML (see `launch_configs/missions/`) through the bridge.
 //! Subscribes `state/odom` (nav_msgs/Odometry, ENU/FLU) and `status` (fcc_msgs/Status),
 //! publishes `setpoint/velocity` (geometry_msgs/TwistStamped, frame `map`, ENU) at `rate_hz`,
+//! with the mission's `yaw_deg` (if set) just before each on `setpoint/heading`
+//! (geometry_msgs/QuaternionStamped, frame `map`, an ENU orientation about z),
 //! `cmd/arm` (std_msgs/Bool), `cmd/mode` (std_msgs/String "hold", "land") and `mission/status`
 //! (std_msgs/String, one JSON object per message); logs to stdout and `/rosout`.
 //!
@@ -21,7 +23,8 @@ use clap::Parser;
 use fcc_mission::run::{Input, Level, McuStatus, MissionRun, Outcome, RunConfig, Sample, Step};
 use fcc_mission::{node_params, McuMode, Mission};
 use fcc_msgs::ros::{
-    Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
+    Bool, Clock, Header, Odometry, Quaternion, QuaternionStamped, Status, StringMsg, Time, Twist,
+    TwistStamped, Vector3,
 };
 use fcc_ros::frames;
 use fcc_ros::params::{self, parse_bool};
@@ -272,6 +275,7 @@ struct Dds {
     status_sub: ros2_client::Subscription<Status>,
     clock_sub: Option<ros2_client::Subscription<Clock>>,
     sp_pub: ros2_client::Publisher<TwistStamped>,
+    heading_pub: ros2_client::Publisher<QuaternionStamped>,
     arm_pub: ros2_client::Publisher<Bool>,
     mode_pub: ros2_client::Publisher<StringMsg>,
     status_pub: ros2_client::Publisher<StringMsg>,
@@ -304,6 +308,11 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     step.set("creating the publishers");
     let sp_pub =
         ros_node::publisher::<TwistStamped>(&mut node, &o.topics[3], &ros_node::reliable_qos(10))?;
+    let heading_pub = ros_node::publisher::<QuaternionStamped>(
+        &mut node,
+        &o.topics[7],
+        &ros_node::reliable_qos(10),
+    )?;
     let arm_pub =
         ros_node::publisher::<Bool>(&mut node, &o.topics[4], &ros_node::reliable_qos(10))?;
     let mode_pub =
@@ -317,6 +326,7 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
         status_sub,
         clock_sub,
         sp_pub,
+        heading_pub,
         arm_pub,
         mode_pub,
         status_pub,
@@ -408,8 +418,9 @@ struct DdsSetup {
     namespace: String,
     node_name: String,
     use_sim_time: bool,
-    /// state/odom, status, /clock, setpoint/velocity, cmd/arm, cmd/mode, mission/status.
-    topics: [String; 7],
+    /// state/odom, status, /clock, setpoint/velocity, cmd/arm, cmd/mode, mission/status,
+    /// setpoint/heading.
+    topics: [String; 8],
 }
 
 async fn run(o: Options) -> Result<(), Failure> {
@@ -428,6 +439,7 @@ async fn run(o: Options) -> Result<(), Failure> {
             topics::CMD_ARM.name,
             topics::CMD_MODE.name,
             MISSION_STATUS_TOPIC,
+            topics::SETPOINT_HEADING.name,
         ]
         .map(|t| o.name(t)),
     };
@@ -537,7 +549,8 @@ fn log_start(o: &Options, log: &Log) {
 }
 
 /// Does what one cycle of [`MissionRun`] asks: log lines (stamped `now_ns`), `cmd/arm`,
-/// `cmd/mode`, the velocity setpoint, `mission/status`. True when a setpoint went out.
+/// `cmd/mode`, the heading and the velocity setpoint, `mission/status`. True when a setpoint
+/// went out.
 fn send(dds: &Dds, log: &Log, now_ns: Option<i64>, step: &Step) -> bool {
     for (level, line) in &step.logs {
         log.line(*level, now_ns, line);
@@ -548,6 +561,10 @@ fn send(dds: &Dds, log: &Log, now_ns: Option<i64>, step: &Step) -> bool {
     for c in &step.mode_commands {
         let _ = dds.mode_pub.publish(StringMsg { data: (*c).into() });
     }
+    // The heading first: the bridge attaches the latest one to the setpoints that follow.
+    if let (Some(h), Some(ns)) = (step.heading_ned_rad, now_ns) {
+        let _ = dds.heading_pub.publish(heading(h, ns));
+    }
     let sent = match (step.setpoint_ned_mps, now_ns) {
         (Some(v), Some(ns)) => dds.sp_pub.publish(setpoint(v, ns)).is_ok(),
         _ => false,
@@ -556,6 +573,15 @@ fn send(dds: &Dds, log: &Log, now_ns: Option<i64>, step: &Step) -> bool {
         let _ = dds.status_pub.publish(StringMsg { data: s.clone() });
     }
     sent
+}
+
+/// The heading message: NED yaw → an ENU orientation about z, frame `map`, stamped `now_ns`.
+fn heading(yaw_ned_rad: f32, now_ns: i64) -> QuaternionStamped {
+    let q = frames::q_enu_of_yaw_enu(frames::yaw_ned_to_enu(yaw_ned_rad as f64));
+    QuaternionStamped {
+        header: Header::new(stamp(now_ns), "map"),
+        quaternion: Quaternion::from_wxyz(q),
+    }
 }
 
 /// The velocity setpoint message: NED → ENU, frame `map`, stamped `now_ns` (ROS time).

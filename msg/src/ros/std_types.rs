@@ -156,6 +156,20 @@ impl Quaternion {
     }
 }
 
+/// geometry_msgs/QuaternionStamped: an orientation in `header.frame_id`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct QuaternionStamped {
+    pub header: Header,
+    pub quaternion: Quaternion,
+}
+ros_msg!(
+    QuaternionStamped,
+    "geometry_msgs",
+    "QuaternionStamped",
+    "std_msgs/Header header\nQuaternion quaternion\n",
+    [Header, Quaternion]
+);
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Point {
     pub x: f64,

@@ -10,7 +10,7 @@
 //! bit for bit (checked here), so the recording captures everything the core depends on.
 
 use fcc_board::replay::{encode, Event};
-use fcc_firmware::commands::{Command, VelocitySetpoint};
+use fcc_firmware::commands::{Command, VelocitySetpoint, YawSetpoint};
 use fcc_firmware::geometry::MOTOR_COUNT;
 use fcc_firmware::scheduler::{FlightComputer, TICK_US};
 use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
@@ -96,7 +96,7 @@ fn main() {
         // The mission computer at 20 Hz: arm when ready, climb, fly a leg north then east, land.
         let mut events: Vec<Event> = Vec::new();
         if k % 25 == 0 {
-            let sp = |v: [f32; 3]| VelocitySetpoint { vel_ned_mps: v, yaw_rad: None, ttl_ms: 300 };
+            let sp = |v: [f32; 3]| VelocitySetpoint { vel_ned_mps: v, yaw: YawSetpoint::Keep, ttl_ms: 300 };
             match armed_at {
                 None => {
                     if fc.core.navigator().ready().is_ok() {
