@@ -317,8 +317,12 @@ impl FlightCore {
         // max/min, not clamp: clamp panics on inverted bounds; the limits are range-checked
         // (params.rs) but the MCU image must have no panic path reachable from link bytes.
         v[2] = v[2].max(-l.max_climb_mps).min(l.max_descent_mps);
-        // Headings wrapped once here, rates clamped to the yaw controller's limit.
-        let r_max = self.params.control.yaw_rate_limit_radps;
+        // Headings wrapped once here, rates clamped to the fastest turn the heading loop
+        // follows: its rate limit, and its gain times the lead the held heading may take
+        // (`advance_yaw_hold`; 1.5/s · 0.5 rad = 0.75 rad/s with the defaults) — a faster
+        // setpoint would turn the vehicle slower than asked.
+        let c = &self.params.control;
+        let r_max = c.yaw_rate_limit_radps.min(c.yaw_p_per_s * YAW_LEAD_RAD);
         let yaw = match sp.yaw {
             YawSetpoint::Keep => YawSetpoint::Keep,
             YawSetpoint::Heading { yaw_ned_rad } => YawSetpoint::Heading {
