@@ -66,7 +66,9 @@
 pub mod arming;
 pub mod cli;
 pub mod ending;
+pub mod executive;
 pub mod follower;
+pub mod goal;
 pub mod launch;
 pub mod mission;
 pub mod node_params;

@@ -13,7 +13,7 @@ use crate::arming::{ArmAction, ArmRequests};
 use crate::pilot_pause::{PauseEvent, PilotPause};
 use crate::progress::{dist_to_go_m, phase_name, PhaseName, Progress};
 use crate::status_report::{finished_json, ReportClock, StatusReport};
-use crate::{EndPhase, EndSequence, McuMode, Mission, Request, WaypointFollower};
+use crate::{EndPhase, EndSequence, McuMode, Mission, Phase, Request, WaypointFollower};
 
 /// Wall time after the start before the node says what it is still waiting for, s.
 pub const WAITING_NOTE_AFTER_S: f64 = 5.0;
@@ -70,10 +70,46 @@ pub enum Level {
 /// How the run ended.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outcome {
-    /// Every waypoint done, landed and disarmed.
+    /// Every waypoint done, landed and disarmed (an action goal without landing: holding at
+    /// the last waypoint, the MCU asked to HOLD).
     Complete,
     /// The mission failed (timeout, could not arm, disarmed in flight): the message.
     Failed(String),
+    /// [`RunKind::ActionGoal`]: an MCU failsafe became active during the mission (the message).
+    Failsafe(String),
+    /// [`RunKind::ActionGoal`]: the R/C pilot took over (the message).
+    PilotOverride(String),
+}
+
+/// What a run flies, and so how it starts and ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunKind {
+    /// A mission file (`fcc-mission --mission FILE`): waypoints from the position at arming,
+    /// always from the ground; a pilot override pauses it (resumed when the pilot lets go).
+    MissionFile,
+    /// An action goal: waypoints from the origin of `map` (home); in the air it starts from
+    /// where the vehicle is (no takeoff); a pilot override or an MCU failsafe ends it; without
+    /// landing it is complete at the last waypoint (then the MCU holds there).
+    ActionGoal,
+}
+
+/// How far a run has come, for an action's feedback.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunProgress {
+    /// `arming`, `takeoff`, `leg`, `hold`, `landing`, `done`, `hover`, `pilot`.
+    pub phase: &'static str,
+    /// The waypoint flown to (0-based; 0 before the first leg).
+    pub waypoint: usize,
+    /// Waypoints reached so far.
+    pub reached: usize,
+    /// Waypoints of the mission.
+    pub waypoint_count: usize,
+    /// To the current leg's end, m (0 without one).
+    pub distance_to_go_m: f32,
+    /// To the last waypoint at the cruise speed, with the holds, s.
+    pub eta_s: f32,
+    /// Horizontal distance from the current leg's line, m (0 off a leg).
+    pub cross_track_m: f32,
 }
 
 /// What to do after one cycle, in this order: log, arm, mode commands, setpoint, status.
@@ -111,6 +147,7 @@ pub struct RunConfig {
     pub arm_timeout_s: f64,
     /// Seconds of ROS time in HOLD after the last waypoint (see [`EndSequence`]).
     pub hover_s: f64,
+    pub kind: RunKind,
 }
 
 /// The mission node's sequencing: see the [module docs](self).
@@ -132,6 +169,8 @@ pub struct MissionRun {
     /// ROS time of the first complete sample, s (times in messages count from it).
     t_first_s: Option<f64>,
     setpoints: u64,
+    kind: RunKind,
+    progress_now: Option<RunProgress>,
 }
 
 impl MissionRun {
@@ -151,7 +190,19 @@ impl MissionRun {
             waiting_noted: false,
             t_first_s: None,
             setpoints: 0,
+            kind: c.kind,
+            progress_now: None,
         }
+    }
+
+    /// The progress at the latest cycle (None before the first complete sample).
+    pub fn progress(&self) -> Option<RunProgress> {
+        self.progress_now
+    }
+
+    /// The mission flown.
+    pub fn mission(&self) -> &Mission {
+        &self.mission
     }
 
     /// Remarks on the settings, for the log at the start.
@@ -254,13 +305,19 @@ impl MissionRun {
                 return;
             }
         }
+        self.set_progress("arming", 0, None);
         self.report(wall_s, s, ("arming", None), None, out);
     }
 
     /// Armed: home is the position now.
     fn on_armed(&mut self, t_s: f64, tr_s: f64, s: &Sample<'_>, out: &mut Step) {
         self.armed_at_ns = Some(s.now_ns);
-        let mut f = WaypointFollower::new(self.mission.clone());
+        let mut f = match self.kind {
+            RunKind::MissionFile => WaypointFollower::new(self.mission.clone()),
+            RunKind::ActionGoal => {
+                WaypointFollower::with_start(self.mission.clone(), Some([0.0; 3]), !s.mcu.landed)
+            }
+        };
         let _ = f.update(t_s, s.pos_ned_m, s.vel_ned_mps);
         self.follower = Some(f);
         let p = s.pos_ned_m;
@@ -300,12 +357,33 @@ impl MissionRun {
     /// Armed and flying: the pilot's pause, the follower, the end sequence, the setpoint.
     fn fly(&mut self, wall_s: f64, t_s: f64, tr_s: f64, s: &Sample<'_>, out: &mut Step) {
         if self.pilot(t_s, tr_s, s, out) {
+            self.set_progress("pilot", 0, None);
             return self.report(wall_s, s, ("pilot", None), None, out);
+        }
+        if self.kind == RunKind::ActionGoal
+            && s.mcu.failsafe
+            && self.end.phase() == EndPhase::Mission
+        {
+            out.outcome = Some(Outcome::Failsafe(format!(
+                "MCU failsafe {} (mode {})",
+                s.mcu.failsafe_name, s.mcu.mode_name
+            )));
+            return;
         }
         let Some(f) = self.follower.as_mut() else {
             return;
         };
         let g = f.update(t_s, s.pos_ned_m, s.vel_ned_mps);
+        let prog = progress_of(f, &g, s.pos_ned_m);
+        self.progress_now = Some(prog);
+        if self.kind == RunKind::ActionGoal && g.phase == Phase::Done && !self.mission.land_at_end {
+            out.info(format!(
+                "t={tr_s:.2} s goal reached: holding (cmd/mode hold)"
+            ));
+            out.mode_commands.push("hold");
+            out.outcome = Some(Outcome::Complete);
+            return;
+        }
         if let Some((name, idx)) = self.progress.update(&g, s.pos_ned_m) {
             let idx = idx.map(|i| format!(" {i}")).unwrap_or_default();
             out.info(format!("t={tr_s:.2} s {name}{idx}"));
@@ -332,6 +410,7 @@ impl MissionRun {
                 EndPhase::Hover => "hover",
                 _ => "landing",
             };
+            self.set_progress(phase, prog.waypoint, Some(prog.reached));
             return self.report(wall_s, s, (phase, None), None, out);
         }
         out.setpoint_ned_mps = Some(g.vel_ned_mps);
@@ -357,7 +436,27 @@ impl MissionRun {
         if p.send_resume {
             out.mode_commands.push("velocity");
         }
+        if p.paused && self.kind == RunKind::ActionGoal {
+            out.outcome = Some(Outcome::PilotOverride(format!(
+                "t={tr_s:.2} s the R/C pilot took over (mode {})",
+                s.mcu.mode_name
+            )));
+        }
         p.paused
+    }
+
+    /// Progress outside the follower's phases (arming, pilot, hover, landing).
+    fn set_progress(&mut self, phase: &'static str, waypoint: usize, reached: Option<usize>) {
+        let reached = reached.unwrap_or(self.progress_now.map_or(0, |p| p.reached));
+        self.progress_now = Some(RunProgress {
+            phase,
+            waypoint,
+            reached,
+            waypoint_count: self.mission.waypoints.len(),
+            distance_to_go_m: 0.0,
+            eta_s: 0.0,
+            cross_track_m: 0.0,
+        });
     }
 
     /// `mission/status`, when one is due: `phase` (name, waypoint), the distance to go.
@@ -385,6 +484,66 @@ impl MissionRun {
     }
 }
 
+/// The progress of a follower's guidance `g` at `pos_ned_m`: the waypoint, the distance to the
+/// leg's end, the ETA to the last waypoint (the rest of this leg and the later legs at the
+/// cruise speed, plus the holds) and the cross-track (horizontal, from the leg's line).
+fn progress_of(f: &WaypointFollower, g: &crate::Guidance, pos_ned_m: [f32; 3]) -> RunProgress {
+    let m = f.mission();
+    let n = m.waypoints.len();
+    let (phase, _) = phase_name(g.phase);
+    let waypoint = match g.phase {
+        Phase::Leg(i) | Phase::Hold(i) => i,
+        Phase::Landing | Phase::Done => n.saturating_sub(1),
+        _ => 0,
+    };
+    let reached = match g.phase {
+        Phase::Leg(i) => i,
+        Phase::Hold(i) => i + 1,
+        Phase::Landing | Phase::Done => n,
+        _ => 0,
+    };
+    let to_go = dist_to_go_m(g, pos_ned_m).unwrap_or(0.0);
+    let later: f32 = (waypoint + 1..n)
+        .map(|i| {
+            let (a, b) = (m.waypoints[i - 1].ned_m(), m.waypoints[i].ned_m());
+            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
+        })
+        .sum();
+    let holds = m.hold_s * (n - reached.min(n)) as f32;
+    let eta_s = match g.phase {
+        Phase::Landing | Phase::Done => 0.0,
+        _ => (to_go + later) / m.speed_mps + holds,
+    };
+    let cross_track_m = match (g.phase, g.leg) {
+        (Phase::Leg(_), Some(l)) => {
+            let (dn, de) = (
+                l.to_ned_m[0] - l.from_ned_m[0],
+                l.to_ned_m[1] - l.from_ned_m[1],
+            );
+            let len = (dn * dn + de * de).sqrt();
+            let (pn, pe) = (
+                pos_ned_m[0] - l.from_ned_m[0],
+                pos_ned_m[1] - l.from_ned_m[1],
+            );
+            if len < 1e-3 {
+                0.0
+            } else {
+                (pn * de - pe * dn).abs() / len
+            }
+        }
+        _ => 0.0,
+    };
+    RunProgress {
+        phase,
+        waypoint,
+        reached,
+        waypoint_count: n,
+        distance_to_go_m: to_go,
+        eta_s,
+        cross_track_m,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -402,6 +561,7 @@ mod tests {
             timeout_s: 600.0,
             arm_timeout_s,
             hover_s,
+            kind: RunKind::MissionFile,
         })
     }
 
@@ -766,6 +926,7 @@ mod tests {
             timeout_s: 600.0,
             arm_timeout_s: 60.0,
             hover_s: 5.0,
+            kind: RunKind::MissionFile,
         });
         let n = r.notes();
         assert_eq!(n.len(), 2);

@@ -1,7 +1,12 @@
-//! `fcc-mission --mission FILE [--ros-args -r __ns:=/fcc -p name:=value …]`
+//! `fcc-mission [--mission FILE] [--ros-args -r __ns:=/fcc -p name:=value …]`
 //!
-//! The mission node: flies a mission YAML (see `launch_configs/missions/`) through the bridge.
-//! Subscribes `state/odom` (nav_msgs/Odometry, ENU/FLU) and `status` (fcc_msgs/Status),
+//! The mission node: serves the action `follow_waypoints` (`fcc_msgs/action/FollowWaypoints`:
+//! local ENU or lat/lon waypoints, feedback, cancel = hold, a new goal preempts the running
+//! one; `actions.rs`) and, with `--mission FILE`, flies that mission YAML (see
+//! `launch_configs/missions/`) as its first goal through the same logic
+//! (`fcc_mission::executive`), then exits with its result.
+//! Subscribes `state/odom` (nav_msgs/Odometry, ENU/FLU), `status` (fcc_msgs/Status) and `home`
+//! (sensor_msgs/NavSatFix: lat/lon goals are converted against it),
 //! publishes `setpoint/velocity` (geometry_msgs/TwistStamped, frame `map`, ENU) at `rate_hz`,
 //! `cmd/arm` (std_msgs/Bool), `cmd/mode` (std_msgs/String "hold", "land") and `mission/status`
 //! (std_msgs/String, one JSON object per message); logs to stdout and `/rosout`.
@@ -17,11 +22,18 @@
 //! stalled on each of 3 attempts: it restarts itself after a stall, see
 //! `fcc_ros::startup`); 2 on a bad mission file or bad arguments.
 
+#[path = "fcc-mission/actions.rs"]
+mod actions;
+
+use actions::FollowWaypointsServer;
 use clap::Parser;
-use fcc_mission::run::{Input, Level, McuStatus, MissionRun, Outcome, RunConfig, Sample, Step};
+use fcc_mission::executive::{ExecConfig, Executive, Finished, GoalEnd};
+use fcc_mission::goal::{self, Fence, GoalPoint, GoalSpec, Home};
+use fcc_mission::run::{Input, Level, McuStatus, RunKind, RunProgress, Sample, Step};
 use fcc_mission::{node_params, McuMode, Mission};
 use fcc_msgs::ros::{
-    Bool, Clock, Header, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
+    Bool, Clock, FollowWaypointsFeedback, FollowWaypointsGoal, FollowWaypointsResult, Header,
+    NavSatFix, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3, Waypoint,
 };
 use fcc_ros::frames;
 use fcc_ros::params::{self, parse_bool};
@@ -29,6 +41,7 @@ use fcc_ros::ros_node::{self, DdsEnv, RosClock};
 use fcc_ros::startup;
 use fcc_ros::topics;
 use futures::StreamExt;
+use ros2_client::action::{GoalId, GoalStatusEnum};
 use ros2_client::log::LogLevel;
 use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType, ParameterValue};
 use ros2_client::{NodeLoggingHandle, NodeOptions, RosoutRaw};
@@ -48,8 +61,9 @@ struct Cli {
 }
 
 struct Options {
+    /// The mission file ("" without one).
     mission_file: String,
-    mission: Mission,
+    mission: Option<Mission>,
     namespace: String,
     node_name: String,
     dds: DdsEnv,
@@ -107,16 +121,13 @@ fn options() -> Options {
     let mission_file = cli
         .mission
         .or_else(|| p.get("mission").cloned())
-        .unwrap_or_else(|| {
-            fail(
-                2,
-                "no mission: use --mission FILE or -p mission:=FILE".into(),
-            )
-        });
-    let text = std::fs::read_to_string(&mission_file)
-        .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
-    let mission = fcc_mission::from_yaml_str(&text)
-        .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
+        .unwrap_or_default();
+    let mission = (!mission_file.is_empty()).then(|| {
+        let text = std::fs::read_to_string(&mission_file)
+            .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
+        fcc_mission::from_yaml_str(&text)
+            .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")))
+    });
     let use_sim_time = p
         .get("use_sim_time")
         .map(|v| parse_bool(v).unwrap_or_else(|e| fail(2, format!("parameter use_sim_time: {e}"))))
@@ -275,6 +286,8 @@ struct Dds {
     arm_pub: ros2_client::Publisher<Bool>,
     mode_pub: ros2_client::Publisher<StringMsg>,
     status_pub: ros2_client::Publisher<StringMsg>,
+    home_sub: ros2_client::Subscription<NavSatFix>,
+    follow: FollowWaypointsServer,
 }
 
 /// The participant, node, subscriptions and publishers. Blocking (rustdds can deadlock here
@@ -310,6 +323,14 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
         ros_node::publisher::<StringMsg>(&mut node, &o.topics[5], &ros_node::reliable_qos(10))?;
     let status_pub =
         ros_node::publisher::<StringMsg>(&mut node, &o.topics[6], &ros_node::reliable_qos(10))?;
+    // Latched: the reader is reliable and transient local, as the bridge's writer.
+    let home_sub = ros_node::subscription::<NavSatFix>(
+        &mut node,
+        &o.topics[7],
+        &topics::HOME.qos.publisher_profile(),
+    )?;
+    step.set("creating the action server");
+    let follow = FollowWaypointsServer::new(&mut node, &o.follow_waypoints)?;
     Ok(Dds {
         _ctx: ctx,
         node,
@@ -320,6 +341,8 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
         arm_pub,
         mode_pub,
         status_pub,
+        home_sub,
+        follow,
     })
 }
 
@@ -399,6 +422,8 @@ fn descriptor(p: &node_params::NodeParam) -> ParameterDescriptor {
 /// The mission node's own topic (std_msgs/String, JSON): the only name not in the bridge's
 /// topic table ([`fcc_ros::topics`]).
 const MISSION_STATUS_TOPIC: &str = "mission/status";
+/// The mission node's action (`fcc_msgs/action/FollowWaypoints`), under its namespace.
+const FOLLOW_WAYPOINTS_ACTION: &str = "mission/follow_waypoints";
 
 /// What [`setup_dds`] needs (owned: it runs on a thread of its own).
 struct DdsSetup {
@@ -408,8 +433,10 @@ struct DdsSetup {
     namespace: String,
     node_name: String,
     use_sim_time: bool,
-    /// state/odom, status, /clock, setpoint/velocity, cmd/arm, cmd/mode, mission/status.
-    topics: [String; 7],
+    /// state/odom, status, /clock, setpoint/velocity, cmd/arm, cmd/mode, mission/status, home.
+    topics: [String; 8],
+    /// The action's name (after the remaps).
+    follow_waypoints: String,
 }
 
 async fn run(o: Options) -> Result<(), Failure> {
@@ -428,8 +455,10 @@ async fn run(o: Options) -> Result<(), Failure> {
             topics::CMD_ARM.name,
             topics::CMD_MODE.name,
             MISSION_STATUS_TOPIC,
+            topics::HOME.name,
         ]
         .map(|t| o.name(t)),
+        follow_waypoints: o.name(FOLLOW_WAYPOINTS_ACTION),
     };
     let dds = match APP.setup_dds(move |st| setup_dds(&setup, st)).await {
         Ok(r) => r.map_err(|e| Failure::Exit(1, e))?,
@@ -440,39 +469,67 @@ async fn run(o: Options) -> Result<(), Failure> {
     run_result.map_err(Failure::from)
 }
 
+/// What the loop heard last from the bridge.
+#[derive(Default)]
+struct Heard {
+    odom: Option<Odometry>,
+    status: Option<Status>,
+    home: Option<Home>,
+}
+
 async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
     let log = Log {
         handle: dds.node.logging_handle(),
         name: fcc_ros::logger_name(&o.namespace, &o.node_name),
     };
     log_start(&o, &log);
-    let mut run = MissionRun::new(RunConfig {
-        mission: o.mission.clone(),
+    let mut exec: Executive<GoalId> = Executive::new(ExecConfig {
         timeout_s: o.timeout_s,
         arm_timeout_s: o.arm_timeout_s,
         hover_s: o.hover_s,
     });
-    for (level, line) in run.notes() {
-        log.line(level, None, &line);
+    let started = Instant::now();
+    // The mission file: the first goal, with an id of its own (not an action goal).
+    let file_goal = o.mission.clone().map(|m| {
+        let id = GoalId::new_random();
+        let _ = exec.start(id, m, RunKind::MissionFile, 0.0);
+        id
+    });
+    if let Some(m) = &o.mission {
+        let probe = fcc_mission::MissionRun::new(fcc_mission::RunConfig {
+            mission: m.clone(),
+            timeout_s: o.timeout_s,
+            arm_timeout_s: o.arm_timeout_s,
+            hover_s: o.hover_s,
+            kind: RunKind::MissionFile,
+        });
+        for (level, line) in probe.notes() {
+            log.line(level, None, &line);
+        }
     }
-
+    let mut dds = dds;
     let odom_stream = dds.odom_sub.async_stream();
     let status_stream = dds.status_sub.async_stream();
+    let home_stream = dds.home_sub.async_stream();
     tokio::pin!(odom_stream);
     tokio::pin!(status_stream);
+    tokio::pin!(home_stream);
     let mut clock_stream = dds.clock_sub.as_ref().map(|s| Box::pin(s.async_stream()));
 
     let mut clock = RosClock::new(o.use_sim_time);
-    let mut odom: Option<Odometry> = None;
-    let mut status: Option<Status> = None;
-    let started = Instant::now();
+    let mut heard = Heard::default();
     let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / o.rate_hz));
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let fence = Fence::from_param_table();
 
     loop {
         tokio::select! {
-            Some(r) = odom_stream.next() => { if let Ok((m, _)) = r { odom = Some(m); } continue; }
-            Some(r) = status_stream.next() => { if let Ok((m, _)) = r { status = Some(m); } continue; }
+            Some(r) = odom_stream.next() => { if let Ok((m, _)) = r { heard.odom = Some(m); } continue; }
+            Some(r) = status_stream.next() => { if let Ok((m, _)) = r { heard.status = Some(m); } continue; }
+            Some(r) = home_stream.next() => {
+                if let Ok((m, _)) = r { on_home(&mut heard, &m, &log); }
+                continue;
+            }
             Some(r) = async {
                 match clock_stream.as_mut() {
                     Some(s) => s.next().await,
@@ -482,7 +539,17 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             _ = tick.tick() => {}
         }
         let now_ns = clock.now_ns();
-        let input = match (odom.as_ref(), status.as_ref(), now_ns) {
+        let wall_s = started.elapsed().as_secs_f64();
+        take_goals(
+            &mut dds.follow,
+            &mut exec,
+            &heard,
+            fence,
+            wall_s,
+            &log,
+            now_ns,
+        );
+        let input = match (heard.odom.as_ref(), heard.status.as_ref(), now_ns) {
             (Some(od), Some(st), Some(now_ns)) => {
                 let (pos_ned_m, vel_ned_mps) = odom_to_ned(od);
                 Input::Ready(Sample {
@@ -493,47 +560,276 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
                 })
             }
             _ => Input::Waiting {
-                odom: odom.is_some(),
-                status: status.is_some(),
+                odom: heard.odom.is_some(),
+                status: heard.status.is_some(),
                 clock: now_ns.is_some(),
             },
         };
-        let step = run.tick(started.elapsed().as_secs_f64(), input);
-        if send(&dds, &log, now_ns, &step) {
-            run.setpoint_published();
+        let out = exec.tick(wall_s, input);
+        if send(&dds, &log, now_ns, &out.step) {
+            exec.setpoint_published();
         }
-        match step.outcome {
-            None => {}
-            Some(Outcome::Complete) => {
-                // Stay on the graph a moment so reliable readers get the last messages
-                // (a sample lost on a busy loopback is re-sent only while the writer lives).
-                tokio::time::sleep(LINGER).await;
-                return Ok(());
+        if let Some((id, p)) = out.feedback {
+            dds.follow.feedback(id, feedback(&p));
+        }
+        if let Some(f) = out.finished {
+            if Some(f.id) == file_goal {
+                return file_goal_end(&f, &log, now_ns).await;
             }
-            Some(Outcome::Failed(msg)) => return Err((1, msg)),
+            finish(&mut dds.follow, &f, &log, now_ns);
         }
+        dds.follow.poll_results();
+    }
+}
+
+/// The mission file's goal ended: the node's exit (after a moment on the graph, so reliable
+/// readers get the last messages: a sample lost on a busy loopback is re-sent only while the
+/// writer lives).
+async fn file_goal_end(
+    f: &Finished<GoalId>,
+    log: &Log,
+    now_ns: Option<i64>,
+) -> Result<(), (i32, String)> {
+    match &f.end {
+        GoalEnd::Succeeded => {
+            tokio::time::sleep(LINGER).await;
+            Ok(())
+        }
+        GoalEnd::Failsafe(m) | GoalEnd::PilotOverride(m) => Err((1, m.clone())),
+        GoalEnd::Preempted | GoalEnd::Canceled => {
+            log.info(
+                now_ns,
+                &format!("the mission file's goal was {:?} by an action goal", f.end),
+            );
+            Err((1, format!("mission file {:?}", f.end).to_lowercase()))
+        }
+    }
+}
+
+/// `home` from the bridge: the origin for lat/lon goals (logged when it is new or moves).
+fn on_home(heard: &mut Heard, m: &NavSatFix, log: &Log) {
+    let h = Home {
+        latitude_deg: m.latitude,
+        longitude_deg: m.longitude,
+        altitude_m: m.altitude,
+    };
+    if heard.home != Some(h) {
+        log.info(
+            None,
+            &format!(
+                "home: {:.7}, {:.7}, {:.1} m (lat/lon goals are converted against it)",
+                h.latitude_deg, h.longitude_deg, h.altitude_m
+            ),
+        );
+        heard.home = Some(h);
+    }
+}
+
+/// The action's new goals (accepted; refused ones end at once with the reason; a started one
+/// preempts the running goal) and cancel requests (the vehicle holds).
+fn take_goals(
+    follow: &mut FollowWaypointsServer,
+    exec: &mut Executive<GoalId>,
+    heard: &Heard,
+    fence: Fence,
+    wall_s: f64,
+    log: &Log,
+    now_ns: Option<i64>,
+) {
+    for (req, g) in follow.new_goals() {
+        follow.accept(req, g.id);
+        match goal::to_mission(&goal_spec(&g.goal), heard.home, fence) {
+            Err(why) => {
+                log.line(
+                    Level::Warn,
+                    now_ns,
+                    &format!("goal {:?} refused: {why}", g.id),
+                );
+                let r = result(FollowWaypointsResult::OUTCOME_REFUSED, why.to_string(), 0);
+                follow.finish(g.id, GoalStatusEnum::Aborted, r);
+            }
+            Ok(m) => {
+                log.info(
+                    now_ns,
+                    &format!(
+                        "goal {:?}: {} waypoints at {} m/s{}",
+                        g.id,
+                        m.waypoints.len(),
+                        m.speed_mps,
+                        if m.land_at_end {
+                            ", then land"
+                        } else {
+                            ", then hold"
+                        }
+                    ),
+                );
+                if let Some(old) = exec.start(g.id, m, RunKind::ActionGoal, wall_s) {
+                    finish(follow, &old, log, now_ns);
+                }
+            }
+        }
+    }
+    for id in follow.cancel_requests() {
+        match exec.cancel(&id) {
+            Some(f) => finish(follow, &f, log, now_ns),
+            None => {
+                let r = result(
+                    FollowWaypointsResult::OUTCOME_CANCELED,
+                    "canceled before it ran".into(),
+                    0,
+                );
+                follow.finish(id, GoalStatusEnum::Canceled, r);
+            }
+        }
+    }
+}
+
+/// A goal ended: its result on the action (and a log line).
+fn finish(
+    follow: &mut FollowWaypointsServer,
+    f: &Finished<GoalId>,
+    log: &Log,
+    now_ns: Option<i64>,
+) {
+    use FollowWaypointsResult as R;
+    let reached = f.reached as u32;
+    let (status, r) = match &f.end {
+        GoalEnd::Succeeded => (
+            GoalStatusEnum::Succeeded,
+            result(R::OUTCOME_SUCCEEDED, String::new(), reached),
+        ),
+        GoalEnd::Failsafe(m) => (
+            GoalStatusEnum::Aborted,
+            result(R::OUTCOME_FAILSAFE, m.clone(), reached),
+        ),
+        GoalEnd::PilotOverride(m) => (
+            GoalStatusEnum::Aborted,
+            result(R::OUTCOME_PILOT_OVERRIDE, m.clone(), reached),
+        ),
+        GoalEnd::Preempted => (
+            GoalStatusEnum::Aborted,
+            result(
+                R::OUTCOME_PREEMPTED,
+                "preempted by a newer goal".into(),
+                reached,
+            ),
+        ),
+        GoalEnd::Canceled => (
+            GoalStatusEnum::Canceled,
+            result(
+                R::OUTCOME_CANCELED,
+                "canceled: holding at the current point (cmd/mode hold)".into(),
+                reached,
+            ),
+        ),
+    };
+    let line = format!(
+        "goal {:?} ended: {:?}{}{}",
+        f.id,
+        status,
+        if r.reason.is_empty() { "" } else { ": " },
+        r.reason
+    );
+    log.line(
+        if status == GoalStatusEnum::Succeeded {
+            Level::Info
+        } else {
+            Level::Warn
+        },
+        now_ns,
+        &line,
+    );
+    follow.finish(f.id, status, r);
+}
+
+fn result(outcome: u8, reason: String, waypoints_reached: u32) -> FollowWaypointsResult {
+    FollowWaypointsResult {
+        outcome,
+        reason,
+        waypoints_reached,
+    }
+}
+
+/// The action's goal as the plain goal the mission logic checks (the ONE place where
+/// `fcc_msgs/Waypoint` frames are read).
+fn goal_spec(g: &FollowWaypointsGoal) -> GoalSpec {
+    let point = |w: &Waypoint| match w.frame {
+        Waypoint::FRAME_GLOBAL => GoalPoint::Global {
+            latitude_deg: w.latitude_deg,
+            longitude_deg: w.longitude_deg,
+            altitude_m: w.altitude_m,
+        },
+        // An unknown frame reads as NaN: refused as not finite.
+        Waypoint::FRAME_LOCAL_ENU => GoalPoint::LocalEnu {
+            x_m: w.x_m,
+            y_m: w.y_m,
+            z_m: w.z_m,
+        },
+        _ => GoalPoint::LocalEnu {
+            x_m: f64::NAN,
+            y_m: f64::NAN,
+            z_m: f64::NAN,
+        },
+    };
+    GoalSpec {
+        points: g.waypoints.iter().map(point).collect(),
+        speed_mps: g.speed_mps,
+        accept_radius_m: g.accept_radius_m,
+        hold_s: g.hold_s,
+        heading_deg: g.heading_deg,
+        takeoff_alt_m: g.takeoff_alt_m,
+        land_at_end: g.land_at_end,
+    }
+}
+
+fn feedback(p: &RunProgress) -> FollowWaypointsFeedback {
+    FollowWaypointsFeedback {
+        current_waypoint: p.waypoint as u32,
+        waypoint_count: p.waypoint_count as u32,
+        phase: p.phase.into(),
+        distance_to_go_m: p.distance_to_go_m,
+        eta_s: p.eta_s,
+        cross_track_m: p.cross_track_m,
     }
 }
 
 /// The first log line: the node, its DDS set-up, the mission and how it ends.
 fn log_start(o: &Options, log: &Log) {
-    log.info(None, &format!(
-        "node {}/{} (DDS domain {}, {}), mission {} ({} waypoints, {} m/s), setpoints at {} Hz, {} time, {}",
-        o.namespace.trim_end_matches('/'),
-        o.node_name,
-        o.dds.domain_id,
-        if o.dds.localhost_only { "loopback only" } else { "all interfaces" },
-        o.mission_file,
-        o.mission.waypoints.len(),
-        o.mission.speed_mps,
-        o.rate_hz,
-        if o.use_sim_time { "sim (/clock)" } else { "system" },
-        if o.hover_s > 0.0 {
-            format!("then {} s in HOLD before landing", o.hover_s)
-        } else {
-            "landing after the last waypoint".into()
-        }
-    ));
+    let mission = match &o.mission {
+        Some(m) => format!(
+            "mission {} ({} waypoints, {} m/s)",
+            o.mission_file,
+            m.waypoints.len(),
+            m.speed_mps
+        ),
+        None => "no mission file".into(),
+    };
+    log.info(
+        None,
+        &format!(
+            "node {}/{} (DDS domain {}, {}), {mission}, action {}, setpoints at {} Hz, {} time, {}",
+            o.namespace.trim_end_matches('/'),
+            o.node_name,
+            o.dds.domain_id,
+            if o.dds.localhost_only {
+                "loopback only"
+            } else {
+                "all interfaces"
+            },
+            o.name(FOLLOW_WAYPOINTS_ACTION),
+            o.rate_hz,
+            if o.use_sim_time {
+                "sim (/clock)"
+            } else {
+                "system"
+            },
+            if o.hover_s > 0.0 {
+                format!("then {} s in HOLD before landing", o.hover_s)
+            } else {
+                "landing after the last waypoint".into()
+            }
+        ),
+    );
 }
 
 /// Does what one cycle of [`MissionRun`] asks: log lines (stamped `now_ns`), `cmd/arm`,
