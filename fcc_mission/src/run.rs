@@ -545,15 +545,15 @@ fn progress_of(f: &WaypointFollower, g: &crate::Guidance, pos_ned_m: [f32; 3]) -
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::from_yaml_str;
 
-    const MISSION: &str = "takeoff_alt_m: 2\nspeed_mps: 2\naccel_limit_mps2: 1\n\
+    pub(crate) const MISSION: &str = "takeoff_alt_m: 2\nspeed_mps: 2\naccel_limit_mps2: 1\n\
         accept_radius_m: 0.3\nhold_s: 0.5\nwaypoints: [{north_m: 4, east_m: 0, alt_m: 2}]\n";
     /// ROS time at the first cycle, s (the node's messages count from it).
     const T0_S: f64 = 1000.0;
-    const DT_S: f64 = 0.02;
+    pub(crate) const DT_S: f64 = 0.02;
 
     fn run(arm_timeout_s: f64, hover_s: f64) -> MissionRun {
         MissionRun::new(RunConfig {
@@ -568,19 +568,19 @@ mod tests {
     /// A kinematic vehicle and its MCU: arms on `cmd/arm`, follows the setpoints exactly in
     /// velocity mode, stops in HOLD, descends at 1 m/s in land mode and disarms 1 s after
     /// touchdown. `pilot` makes it refuse everything (the pilot flies: it hovers).
-    struct Vehicle {
-        pos: [f32; 3],
-        vel: [f32; 3],
-        armed: bool,
-        landed: bool,
-        mode: McuMode,
-        pilot: bool,
+    pub(crate) struct Vehicle {
+        pub(crate) pos: [f32; 3],
+        pub(crate) vel: [f32; 3],
+        pub(crate) armed: bool,
+        pub(crate) landed: bool,
+        pub(crate) mode: McuMode,
+        pub(crate) pilot: bool,
         refuse_arm: bool,
         on_ground_s: f64,
     }
 
     impl Vehicle {
-        fn new() -> Self {
+        pub(crate) fn new() -> Self {
             Vehicle {
                 pos: [3.0, -2.0, 0.0],
                 vel: [0.0; 3],
@@ -603,7 +603,7 @@ mod tests {
             }
         }
 
-        fn sample(&self, t_s: f64) -> Sample<'static> {
+        pub(crate) fn sample(&self, t_s: f64) -> Sample<'static> {
             Sample {
                 now_ns: ((T0_S + t_s) * 1e9).round() as i64,
                 pos_ned_m: self.pos,
@@ -621,7 +621,7 @@ mod tests {
             }
         }
 
-        fn apply(&mut self, step: &Step) {
+        pub(crate) fn apply(&mut self, step: &Step) {
             if self.pilot {
                 self.vel = [0.0; 3];
             } else {
@@ -635,6 +635,10 @@ mod tests {
                         "velocity" => McuMode::Velocity,
                         other => panic!("unknown command {other}"),
                     };
+                }
+                // The firmware's rule: a fresh setpoint resumes velocity mode from HOLD.
+                if self.mode == McuMode::Hold && step.setpoint_ned_mps.is_some() {
+                    self.mode = McuMode::Velocity;
                 }
                 self.vel = match (self.mode, step.setpoint_ned_mps) {
                     (McuMode::Velocity, Some(v)) => v,
@@ -934,5 +938,73 @@ mod tests {
         assert!(n[0].1.starts_with("note: yaw_deg is not sent"));
         assert_eq!(n[1].0, Level::Warn);
         assert!(n[1].1.starts_with("hover_s is ignored"));
+    }
+
+    fn action_run(mission: &str) -> MissionRun {
+        MissionRun::new(RunConfig {
+            mission: from_yaml_str(mission).unwrap(),
+            timeout_s: 600.0,
+            arm_timeout_s: 60.0,
+            hover_s: 0.0,
+            kind: RunKind::ActionGoal,
+        })
+    }
+
+    const HOLD_AT_END: &str = "takeoff_alt_m: 2\nspeed_mps: 2\naccept_radius_m: 0.3\n\
+        land_at_end: false\nwaypoints: [{north_m: 4, east_m: 0, alt_m: 3}]\n";
+
+    /// An action goal in the air: no arm, no takeoff, leg 0 from where the vehicle is, to the
+    /// point in the map frame (not from the position at the start); complete at the point with
+    /// a hold command; feedback progress along the way.
+    #[test]
+    fn an_action_goal_in_the_air_flies_from_here_and_holds_at_the_end() {
+        let mut r = action_run(HOLD_AT_END);
+        let mut v = Vehicle::new();
+        (v.pos, v.armed, v.landed, v.mode) = ([-2.0, 1.0, -3.0], true, false, McuMode::Hold);
+        let steps = fly(&mut r, &mut v, 60.0, |_, _| {});
+        let (t, last) = steps.last().unwrap();
+        assert_eq!(last.outcome, Some(Outcome::Complete), "{:?}", lines(&steps));
+        assert_eq!(last.mode_commands, ["hold"]);
+        assert!(steps.iter().all(|s| !s.1.arm));
+        let l = lines(&steps);
+        assert!(!l.iter().any(|x| x.contains("takeoff")), "{l:?}");
+        assert!(*t < 10.0, "{t}");
+        let d = ((v.pos[0] - 4.0).powi(2) + v.pos[1].powi(2) + (v.pos[2] + 3.0).powi(2)).sqrt();
+        assert!(d < 0.4, "{:?}", v.pos);
+        let p = r.progress().unwrap();
+        assert_eq!((p.reached, p.waypoint_count), (1, 1));
+    }
+
+    #[test]
+    fn an_action_goal_ends_on_a_pilot_override_and_on_a_failsafe() {
+        let mut r = action_run(MISSION);
+        let mut v = Vehicle::new();
+        let steps = fly(&mut r, &mut v, 60.0, |t, v| v.pilot = t >= 4.0);
+        match &steps.last().unwrap().1.outcome {
+            Some(Outcome::PilotOverride(m)) => assert!(m.contains("pilot took over"), "{m}"),
+            o => panic!("{o:?}"),
+        }
+        let mut r = action_run(MISSION);
+        let mut v = Vehicle::new();
+        let mut steps = Vec::new();
+        for k in 0..1000 {
+            let t = k as f64 * DT_S;
+            let mut sample = v.sample(t);
+            sample.mcu.failsafe = t >= 4.0;
+            sample.mcu.failsafe_name = if t >= 4.0 { "geofence" } else { "none" };
+            let step = r.tick(t, Input::Ready(sample));
+            v.apply(&step);
+            let done = step.outcome.is_some();
+            steps.push(step);
+            if done {
+                break;
+            }
+        }
+        assert_eq!(
+            steps.last().unwrap().outcome,
+            Some(Outcome::Failsafe(
+                "MCU failsafe geofence (mode velocity)".into()
+            ))
+        );
     }
 }

@@ -670,7 +670,7 @@ fn take_goals(
         }
     }
     for id in follow.cancel_requests() {
-        match exec.cancel(&id) {
+        match exec.cancel(&id, wall_s) {
             Some(f) => finish(follow, &f, log, now_ns),
             None => {
                 let r = result(
