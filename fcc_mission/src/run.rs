@@ -360,8 +360,12 @@ impl MissionRun {
             self.set_progress("pilot", 0, None);
             return self.report(wall_s, s, ("pilot", None), None, out);
         }
+        // A stale setpoint (a late cycle on a loaded machine) is not an end: the MCU holds and
+        // the next setpoint resumes velocity mode (it lands only once the setpoints are lost).
+        let stale = s.mcu.failsafe_name == fcc_msgs::FailsafeCause::SetpointStale.name();
         if self.kind == RunKind::ActionGoal
             && s.mcu.failsafe
+            && !stale
             && self.end.phase() == EndPhase::Mission
         {
             out.outcome = Some(Outcome::Failsafe(format!(
@@ -990,8 +994,13 @@ pub(crate) mod tests {
         for k in 0..1000 {
             let t = k as f64 * DT_S;
             let mut sample = v.sample(t);
-            sample.mcu.failsafe = t >= 4.0;
-            sample.mcu.failsafe_name = if t >= 4.0 { "geofence" } else { "none" };
+            // A stale setpoint from 2 s to 3 s does not end it; the geofence from 4 s does.
+            sample.mcu.failsafe = t >= 4.0 || (2.0..3.0).contains(&t);
+            sample.mcu.failsafe_name = match t {
+                t if t >= 4.0 => "geofence",
+                t if (2.0..3.0).contains(&t) => "setpoint_stale",
+                _ => "none",
+            };
             let step = r.tick(t, Input::Ready(sample));
             v.apply(&step);
             let done = step.outcome.is_some();
@@ -1006,5 +1015,7 @@ pub(crate) mod tests {
                 "MCU failsafe geofence (mode velocity)".into()
             ))
         );
+        // Ended at 4 s (the first geofence cycle), not at 2 s.
+        assert_eq!(steps.len(), 201);
     }
 }

@@ -97,7 +97,9 @@ class Client:
                 w.x_m, w.y_m, w.z_m = p[1:]
             g.waypoints.append(w)
         g.speed_mps, g.accept_radius_m, g.hold_s = float(speed), float(radius), float(hold)
-        g.takeoff_alt_m, g.land_at_end, g.heading_deg = float(takeoff), land, float(heading)
+        g.takeoff_alt_m, g.land_at_end = float(takeoff), land
+        g.use_heading = not math.isnan(heading)
+        g.heading_deg = 0.0 if math.isnan(heading) else float(heading)
         return g
 
     def send(self, goal, name):

@@ -573,8 +573,11 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             dds.follow.feedback(id, feedback(&p));
         }
         if let Some(f) = out.finished {
-            if Some(f.id) == file_goal {
+            if Some(f.id) == file_goal && f.end != GoalEnd::Preempted {
                 return file_goal_end(&f, &log, now_ns).await;
+            }
+            if Some(f.id) == file_goal {
+                log.line(Level::Warn, now_ns, "the mission file's goal was preempted by an action goal: serving actions from now on (no exit)");
             }
             finish(&mut dds.follow, &f, &log, now_ns);
         }
@@ -596,12 +599,13 @@ async fn file_goal_end(
             Ok(())
         }
         GoalEnd::Failsafe(m) | GoalEnd::PilotOverride(m) => Err((1, m.clone())),
+        // Not reached: a preempted file goal keeps the node serving; only action goals cancel.
         GoalEnd::Preempted | GoalEnd::Canceled => {
             log.info(
                 now_ns,
-                &format!("the mission file's goal was {:?} by an action goal", f.end),
+                &format!("the mission file's goal ended: {:?}", f.end),
             );
-            Err((1, format!("mission file {:?}", f.end).to_lowercase()))
+            Err((1, format!("mission file goal {:?}", f.end).to_lowercase()))
         }
     }
 }
@@ -776,7 +780,11 @@ fn goal_spec(g: &FollowWaypointsGoal) -> GoalSpec {
         speed_mps: g.speed_mps,
         accept_radius_m: g.accept_radius_m,
         hold_s: g.hold_s,
-        heading_deg: g.heading_deg,
+        heading_deg: if g.use_heading {
+            g.heading_deg
+        } else {
+            f32::NAN
+        },
         takeoff_alt_m: g.takeoff_alt_m,
         land_at_end: g.land_at_end,
     }

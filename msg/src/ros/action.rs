@@ -22,6 +22,7 @@ pub struct FollowWaypointsGoal {
     pub speed_mps: f32,
     pub accept_radius_m: f32,
     pub hold_s: f32,
+    pub use_heading: bool,
     pub heading_deg: f32,
     pub takeoff_alt_m: f32,
     pub land_at_end: bool,
