@@ -25,15 +25,14 @@
 #[path = "fcc-mission/actions.rs"]
 mod actions;
 
-use actions::FollowWaypointsServer;
+use actions::{feedback, finish, take_goals, FollowWaypointsServer};
 use clap::Parser;
 use fcc_mission::executive::{ExecConfig, Executive, Finished, GoalEnd};
-use fcc_mission::goal::{self, Fence, GoalPoint, GoalSpec, Home};
-use fcc_mission::run::{Input, Level, McuStatus, RunKind, RunProgress, Sample, Step};
+use fcc_mission::goal::{Fence, Home};
+use fcc_mission::run::{Input, Level, McuStatus, RunKind, Sample, Step};
 use fcc_mission::{node_params, McuMode, Mission};
 use fcc_msgs::ros::{
-    Bool, Clock, FollowWaypointsFeedback, FollowWaypointsGoal, FollowWaypointsResult, Header,
-    NavSatFix, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3, Waypoint,
+    Bool, Clock, Header, NavSatFix, Odometry, Status, StringMsg, Time, Twist, TwistStamped, Vector3,
 };
 use fcc_ros::frames;
 use fcc_ros::params::{self, parse_bool};
@@ -41,7 +40,7 @@ use fcc_ros::ros_node::{self, DdsEnv, RosClock};
 use fcc_ros::startup;
 use fcc_ros::topics;
 use futures::StreamExt;
-use ros2_client::action::{GoalId, GoalStatusEnum};
+use ros2_client::action::GoalId;
 use ros2_client::log::LogLevel;
 use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType, ParameterValue};
 use ros2_client::{NodeLoggingHandle, NodeOptions, RosoutRaw};
@@ -626,178 +625,6 @@ fn on_home(heard: &mut Heard, m: &NavSatFix, log: &Log) {
             ),
         );
         heard.home = Some(h);
-    }
-}
-
-/// The action's new goals (accepted; refused ones end at once with the reason; a started one
-/// preempts the running goal) and cancel requests (the vehicle holds).
-fn take_goals(
-    follow: &mut FollowWaypointsServer,
-    exec: &mut Executive<GoalId>,
-    heard: &Heard,
-    fence: Fence,
-    wall_s: f64,
-    log: &Log,
-    now_ns: Option<i64>,
-) {
-    for (req, g) in follow.new_goals() {
-        follow.accept(req, g.id);
-        match goal::to_mission(&goal_spec(&g.goal), heard.home, fence) {
-            Err(why) => {
-                log.line(
-                    Level::Warn,
-                    now_ns,
-                    &format!("goal {:?} refused: {why}", g.id),
-                );
-                let r = result(FollowWaypointsResult::OUTCOME_REFUSED, why.to_string(), 0);
-                follow.finish(g.id, GoalStatusEnum::Aborted, r);
-            }
-            Ok(m) => {
-                log.info(
-                    now_ns,
-                    &format!(
-                        "goal {:?}: {} waypoints at {} m/s{}",
-                        g.id,
-                        m.waypoints.len(),
-                        m.speed_mps,
-                        if m.land_at_end {
-                            ", then land"
-                        } else {
-                            ", then hold"
-                        }
-                    ),
-                );
-                if let Some(old) = exec.start(g.id, m, RunKind::ActionGoal, wall_s) {
-                    finish(follow, &old, log, now_ns);
-                }
-            }
-        }
-    }
-    for id in follow.cancel_requests() {
-        match exec.cancel(&id, wall_s) {
-            Some(f) => finish(follow, &f, log, now_ns),
-            None => {
-                let r = result(
-                    FollowWaypointsResult::OUTCOME_CANCELED,
-                    "canceled before it ran".into(),
-                    0,
-                );
-                follow.finish(id, GoalStatusEnum::Canceled, r);
-            }
-        }
-    }
-}
-
-/// A goal ended: its result on the action (and a log line).
-fn finish(
-    follow: &mut FollowWaypointsServer,
-    f: &Finished<GoalId>,
-    log: &Log,
-    now_ns: Option<i64>,
-) {
-    use FollowWaypointsResult as R;
-    let reached = f.reached as u32;
-    let (status, r) = match &f.end {
-        GoalEnd::Succeeded => (
-            GoalStatusEnum::Succeeded,
-            result(R::OUTCOME_SUCCEEDED, String::new(), reached),
-        ),
-        GoalEnd::Failsafe(m) => (
-            GoalStatusEnum::Aborted,
-            result(R::OUTCOME_FAILSAFE, m.clone(), reached),
-        ),
-        GoalEnd::PilotOverride(m) => (
-            GoalStatusEnum::Aborted,
-            result(R::OUTCOME_PILOT_OVERRIDE, m.clone(), reached),
-        ),
-        GoalEnd::Preempted => (
-            GoalStatusEnum::Aborted,
-            result(
-                R::OUTCOME_PREEMPTED,
-                "preempted by a newer goal".into(),
-                reached,
-            ),
-        ),
-        GoalEnd::Canceled => (
-            GoalStatusEnum::Canceled,
-            result(
-                R::OUTCOME_CANCELED,
-                "canceled: holding at the current point (cmd/mode hold)".into(),
-                reached,
-            ),
-        ),
-    };
-    let line = format!(
-        "goal {:?} ended: {:?}{}{}",
-        f.id,
-        status,
-        if r.reason.is_empty() { "" } else { ": " },
-        r.reason
-    );
-    log.line(
-        if status == GoalStatusEnum::Succeeded {
-            Level::Info
-        } else {
-            Level::Warn
-        },
-        now_ns,
-        &line,
-    );
-    follow.finish(f.id, status, r);
-}
-
-fn result(outcome: u8, reason: String, waypoints_reached: u32) -> FollowWaypointsResult {
-    FollowWaypointsResult {
-        outcome,
-        reason,
-        waypoints_reached,
-    }
-}
-
-/// The action's goal as the plain goal the mission logic checks (the ONE place where
-/// `fcc_msgs/Waypoint` frames are read).
-fn goal_spec(g: &FollowWaypointsGoal) -> GoalSpec {
-    let point = |w: &Waypoint| match w.frame {
-        Waypoint::FRAME_GLOBAL => GoalPoint::Global {
-            latitude_deg: w.latitude_deg,
-            longitude_deg: w.longitude_deg,
-            altitude_m: w.altitude_m,
-        },
-        // An unknown frame reads as NaN: refused as not finite.
-        Waypoint::FRAME_LOCAL_ENU => GoalPoint::LocalEnu {
-            x_m: w.x_m,
-            y_m: w.y_m,
-            z_m: w.z_m,
-        },
-        _ => GoalPoint::LocalEnu {
-            x_m: f64::NAN,
-            y_m: f64::NAN,
-            z_m: f64::NAN,
-        },
-    };
-    GoalSpec {
-        points: g.waypoints.iter().map(point).collect(),
-        speed_mps: g.speed_mps,
-        accept_radius_m: g.accept_radius_m,
-        hold_s: g.hold_s,
-        heading_deg: if g.use_heading {
-            g.heading_deg
-        } else {
-            f32::NAN
-        },
-        takeoff_alt_m: g.takeoff_alt_m,
-        land_at_end: g.land_at_end,
-    }
-}
-
-fn feedback(p: &RunProgress) -> FollowWaypointsFeedback {
-    FollowWaypointsFeedback {
-        current_waypoint: p.waypoint as u32,
-        waypoint_count: p.waypoint_count as u32,
-        phase: p.phase.into(),
-        distance_to_go_m: p.distance_to_go_m,
-        eta_s: p.eta_s,
-        cross_track_m: p.cross_track_m,
     }
 }
 
