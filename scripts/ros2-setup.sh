@@ -2,7 +2,7 @@
 # Real ROS 2 from PyPI wheels for the rclpy peer tests (issue 16): for each distribution asked
 # (default: jazzy kilted) a Python 3.11 venv with rclpy on its default middleware (Fast DDS) and
 # the message packages the bridge uses, then `colcon build` of our interface package `msg/`
-# (fcc_msgs) and of the test-only `tests/ros2/tf2_msgs` (TFMessage; no tf2_msgs wheel exists).
+# (fcc_msgs: messages and actions) and of the test-only `tests/ros2/tf2_msgs` (TFMessage; no tf2_msgs wheel exists).
 #   usage: scripts/ros2-setup.sh [jazzy|kilted]...
 # Output, all under target/ros2/DISTRO/ (not tracked): venv/, build/, install/, log/, and env.sh,
 # which a peer script sources to get ROS2_PYTHON and the paths of the colcon install
@@ -83,7 +83,7 @@ setup_one() {
   local d=$1 dir=$BASE/$1 v list stamp t0 t1 t2
   list=$(wheels "$d") || return 1
   v=$dir/venv
-  stamp=$( { cat "$0"; cat msg/package.xml msg/CMakeLists.txt msg/msg/*.msg tests/ros2/tf2_msgs/package.xml \
+  stamp=$( { cat "$0"; cat msg/package.xml msg/CMakeLists.txt msg/msg/*.msg msg/action/*.action tests/ros2/tf2_msgs/package.xml \
     tests/ros2/tf2_msgs/CMakeLists.txt tests/ros2/tf2_msgs/msg/*.msg; } | sha256sum | cut -c1-16)
   if [ -f "$dir/stamp" ] && [ "$(cat "$dir/stamp")" = "$stamp" ] && [ -f "$dir/env.sh" ]; then
     echo "ros2-setup: $d: up to date ($dir)"; return 0
@@ -112,7 +112,7 @@ export LD_LIBRARY_PATH="$inst/fcc_msgs/lib:$inst/tf2_msgs/lib\${LD_LIBRARY_PATH:
 export AMENT_PREFIX_PATH="$inst/fcc_msgs:$inst/tf2_msgs:$v"
 EOF
   # The generated types must import with the venv's rclpy.
-  (. "$dir/env.sh" && "$ROS2_PYTHON" -c 'import rclpy, fcc_msgs.msg, tf2_msgs.msg') \
+  (. "$dir/env.sh" && "$ROS2_PYTHON" -c 'import rclpy, fcc_msgs.msg, fcc_msgs.action, tf2_msgs.msg') \
     || { echo "ros2-setup.sh: $d: the colcon-built packages do not import" >&2; return 1; }
   echo "$stamp" > "$dir/stamp"
   echo "ros2-setup: $d: venv + wheels $(secs "$t0" "$t1") s ($(du -sm "$v" | cut -f1) MB)," \

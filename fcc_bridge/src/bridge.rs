@@ -127,6 +127,7 @@ pub struct Publishers {
     accel_observer: Publisher<AccelStamped>,
     accel_measured: Publisher<AccelStamped>,
     diagnostics: Publisher<DiagnosticArray>,
+    home: Publisher<NavSatFix>,
     clock: Option<Publisher<Clock>>,
 }
 
@@ -160,6 +161,7 @@ impl Publishers {
             accel_observer: publisher(node, o, &topics::ACCEL_OBSERVER)?,
             accel_measured: publisher(node, o, &topics::ACCEL_MEASURED)?,
             diagnostics: publisher(node, o, &topics::DIAGNOSTICS)?,
+            home: publisher(node, o, &topics::HOME)?,
             clock: if o.clock == ClockSource::Mcu {
                 Some(publisher(node, o, &topics::CLOCK)?)
             } else {
@@ -196,6 +198,7 @@ impl Publishers {
             }
             Out::AccelObserver(m) => pb!(self.accel_observer, topics::ACCEL_OBSERVER, m),
             Out::AccelMeasured(m) => pb!(self.accel_measured, topics::ACCEL_MEASURED, m),
+            Out::Home(m) => pb!(self.home, topics::HOME, m),
             Out::Clock(m) => match &self.clock {
                 Some(c) => pb!(c, topics::CLOCK, m),
                 None => true,

@@ -43,6 +43,8 @@ pub enum Out {
     AccelObserver(AccelStamped),
     /// `accel/measured`: the gravity-compensated accelerometer (ENU, map).
     AccelMeasured(AccelStamped),
+    /// `home`: the MCU's home (the origin of `map`), when it is set or moves.
+    Home(NavSatFix),
 }
 
 /// Handshake progress.
@@ -165,6 +167,8 @@ pub struct LinkState {
     /// `clock_source:=mcu`: `/tf_static` still to be published, stamped with the first MCU time
     /// of this connection (one clock on every stamp).
     pub tf_static_due: bool,
+    /// The home last published on `home` (latitude, longitude, altitude), if any.
+    pub home_published: Option<(f64, f64, f32)>,
 }
 
 fn seq_counters(c: &link::LinkCounters) -> [u32; 3] {
@@ -196,6 +200,7 @@ impl LinkState {
             warn: bounded::WarnLimiter::default(),
             uplink: Uplink::new(SETPOINT_MIN_INTERVAL_NS),
             tf_static_due: clock == ClockSource::Mcu,
+            home_published: None,
         }
     }
 
@@ -380,6 +385,11 @@ impl LinkState {
                 out.push(Out::AccelMeasured(meas));
                 if self.clock == ClockSource::Mcu {
                     out.push(Out::Clock(Clock { clock: st }));
+                }
+                let home = (m.home_lat_deg, m.home_lon_deg, m.home_alt_m);
+                if m.home_set && self.home_published != Some(home) {
+                    self.home_published = Some(home);
+                    out.push(Out::Home(convert::home(&m, st, cfg)));
                 }
             }
             link::Message::AltitudeFusion(m) => {

@@ -260,8 +260,8 @@ impl Default for LimitParams {
             max_climb_mps: param_default::MAX_CLIMB_MPS,
             max_descent_mps: param_default::MAX_DESCENT_MPS,
             max_tilt_deg: param_default::MAX_TILT_DEG,
-            fence_radius_m: 200.0,
-            fence_alt_m: 100.0,
+            fence_radius_m: param_default::FENCE_RADIUS_M,
+            fence_alt_m: param_default::FENCE_ALT_M,
             setpoint_lost_land_s: 3.0,
             land_speed_mps: 0.8,
             land_final_speed_mps: 0.3,
@@ -482,8 +482,6 @@ impl Params {
             0.1,
             l.max_horiz_speed_mps,
         )?;
-        check("limits.fence_radius_m", l.fence_radius_m, 5.0, 10_000.0)?;
-        check("limits.fence_alt_m", l.fence_alt_m, 2.0, 1_000.0)?;
         check(
             "limits.setpoint_lost_land_s",
             l.setpoint_lost_land_s,

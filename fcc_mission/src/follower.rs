@@ -158,9 +158,24 @@ pub struct WaypointFollower {
     correction: [f32; 3],
     landed_since: Option<f64>,
     landed: bool,
+    /// See [`WaypointFollower::with_start`].
+    origin: Option<[f32; 3]>,
+    airborne: bool,
 }
 
 impl WaypointFollower {
+    /// A follower for a mission whose waypoints are relative to `origin_ned_m` (the caller's
+    /// frame, e.g. the origin of `map`) instead of home (the first position), and which, when
+    /// `airborne`, starts with leg 0 from the first position (no takeoff: its `takeoff_alt_m`
+    /// is not used). `with_start(m, None, false)` is [`WaypointFollower::new`].
+    pub fn with_start(mission: Mission, origin_ned_m: Option<[f32; 3]>, airborne: bool) -> Self {
+        WaypointFollower {
+            origin: origin_ned_m,
+            airborne,
+            ..Self::new(mission)
+        }
+    }
+
     /// Creates a follower. The mission is not validated here (use
     /// [`try_new`](Self::try_new) or [`Mission::validate`] first); a mission
     /// without waypoints goes from takeoff straight to the end.
@@ -179,6 +194,8 @@ impl WaypointFollower {
             correction: [0.0; 3],
             landed_since: None,
             landed: false,
+            origin: None,
+            airborne: false,
         }
     }
 
@@ -312,8 +329,7 @@ impl WaypointFollower {
             if !inputs_ok {
                 return self.output();
             }
-            self.home = Some(pos_ned_m);
-            self.enter(Phase::Takeoff);
+            self.start_at(pos_ned_m);
         }
         if !inputs_ok {
             self.speed = (self.speed - self.a() * dt).max(0.0);
@@ -331,6 +347,25 @@ impl WaypointFollower {
         self.slew(want_corr, prev_speed, prev_axis, dt);
         self.hold_timer(rel);
         self.output()
+    }
+
+    /// Home is `pos_ned_m`: re-expresses the waypoints from home when they are given from an
+    /// origin, then takes off (or, airborne, starts the first leg from here).
+    fn start_at(&mut self, pos_ned_m: [f32; 3]) {
+        self.home = Some(pos_ned_m);
+        if let Some(o) = self.origin {
+            for w in &mut self.mission.waypoints {
+                let ned = add(w.ned_m(), sub(o, pos_ned_m));
+                (w.north_m, w.east_m, w.alt_m) = (ned[0], ned[1], -ned[2]);
+            }
+        }
+        if self.airborne {
+            self.mission.takeoff_alt_m = 0.0;
+            let first = self.after(None);
+            self.enter(first);
+        } else {
+            self.enter(Phase::Takeoff);
+        }
     }
 
     /// The time step since the last update, s (0 for the first or a non-finite `t_s`, clamped
@@ -857,6 +892,57 @@ mod tests {
         assert!((g.vel_ned_mps[2] - (v0 + 0.05)).abs() < 1e-5);
         let g = f.update(f64::NAN, [0.0; 3], [0.0; 3]);
         assert_eq!(g.phase, Phase::Takeoff);
+    }
+
+    /// From an origin, airborne: no takeoff, leg 0 from where the vehicle is, the waypoints
+    /// where the origin puts them (LegInfo in the caller's frame).
+    #[test]
+    fn airborne_start_from_an_origin() {
+        let mut m = square();
+        m.hold_s = 0.0;
+        m.land_at_end = false;
+        m.waypoints = vec![wp(10.0, 0.0, 5.0), wp(10.0, 10.0, 5.0)];
+        let start = [3.0, -4.0, -6.0];
+        let mut f = WaypointFollower::with_start(m, Some([0.0; 3]), true);
+        let g = f.update(0.0, start, [0.0; 3]);
+        assert_eq!(g.phase, Phase::Leg(0));
+        assert_eq!(g.request, None);
+        assert_eq!(
+            g.leg,
+            Some(LegInfo {
+                from_ned_m: start,
+                to_ned_m: [10.0, 0.0, -5.0]
+            })
+        );
+        let recs = {
+            let mut sim = Sim {
+                pos: start,
+                vel: [0.0; 3],
+                ground_d: 0.0,
+                tau: 0.3,
+            };
+            let mut t = 0.0;
+            let mut last = g;
+            while t < 120.0 && last.phase != Phase::Done {
+                sim.step(&last, 0.05);
+                t += 0.05;
+                last = f.update(t, sim.pos, sim.vel);
+            }
+            (last, sim.pos)
+        };
+        assert_eq!(recs.0.phase, Phase::Done);
+        assert!(norm(sub(recs.1, [10.0, 10.0, -5.0])) < 0.6, "{:?}", recs.1);
+    }
+
+    /// On the ground from an origin: takeoff above the first position, waypoints from the origin.
+    #[test]
+    fn ground_start_from_an_origin() {
+        let mut f = WaypointFollower::with_start(square(), Some([1.0, 1.0, 0.0]), false);
+        let g = f.update(0.0, [2.0, 2.0, 0.0], [0.0; 3]);
+        assert_eq!(g.phase, Phase::Takeoff);
+        assert_eq!(g.request, Some(Request::Arm));
+        let w = square().waypoints[0].ned_m();
+        assert_eq!(f.mission().waypoints[0].ned_m(), add(w, [-1.0, -1.0, 0.0]));
     }
 
     #[test]

@@ -9,8 +9,12 @@
 //! * The mission and its guidance (the simulator uses these too): [`mission`] (the YAML
 //!   file, validation), [`follower`] (the waypoint follower: phases, speed profile, velocity
 //!   command).
-//! * The mission node's sequencing, time passed in, no ROS types (the `fcc-mission` binary,
-//!   feature `ros`, only wires them to topics): [`run`] (one run, cycle by cycle: what to send
+//! * The mission node's goals, time passed in, no ROS types (the `fcc-mission` binary, feature
+//!   `ros`, only wires them to topics and its `FollowWaypoints` action): [`goal`] (an action
+//!   goal — local ENU or lat/lon points — as a mission in metres from home, or why it is
+//!   refused: geofence, no home, bad fields), [`executive`] (one goal at a time: preemption,
+//!   cancel = hold, feedback, results; the mission file is its first goal).
+//! * The mission node's sequencing of one goal: [`run`] (one run, cycle by cycle: what to send
 //!   and log), built from [`arming`] (arm command re-sends and timeout), [`pilot_pause`]
 //!   (pause and resume around an R/C pilot override), [`progress`] (phase names, distance to
 //!   go, cross-track on the legs), [`ending`] (hover in HOLD, then land; the MCU's modes) and
@@ -61,12 +65,15 @@
 //! # Ok::<(), fcc_mission::MissionError>(())
 //! ```
 //!
-//! Not yet supported: lat/lon waypoints (rejected as unknown fields).
+//! Lat/lon waypoints: in action goals ([`goal`]); the YAML mission file still has local metres
+//! only (a `lat_deg` key is rejected as an unknown field).
 
 pub mod arming;
 pub mod cli;
 pub mod ending;
+pub mod executive;
 pub mod follower;
+pub mod goal;
 pub mod launch;
 pub mod mission;
 pub mod node_params;

@@ -49,7 +49,7 @@ pub const NODE_PARAMS: [NodeParam; 7] = [
         kind: Kind::File,
         default: "",
         unit: "",
-        doc: "the mission YAML file (or --mission FILE)",
+        doc: "the mission YAML file (or --mission FILE), flown as the first goal; empty: wait for action goals",
     },
     NodeParam {
         name: "rate_hz",
@@ -74,7 +74,7 @@ pub const NODE_PARAMS: [NodeParam; 7] = [
         kind: seconds(true),
         default: "600",
         unit: "s",
-        doc: "give up (exit 1) this long after start",
+        doc: "a goal fails this long after it started (the mission file's: exit 1)",
     },
     NodeParam {
         name: "arm_timeout_s",

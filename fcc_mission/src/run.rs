@@ -13,7 +13,7 @@ use crate::arming::{ArmAction, ArmRequests};
 use crate::pilot_pause::{PauseEvent, PilotPause};
 use crate::progress::{dist_to_go_m, phase_name, PhaseName, Progress};
 use crate::status_report::{finished_json, ReportClock, StatusReport};
-use crate::{EndPhase, EndSequence, McuMode, Mission, Request, WaypointFollower};
+use crate::{EndPhase, EndSequence, McuMode, Mission, Phase, Request, WaypointFollower};
 
 /// Wall time after the start before the node says what it is still waiting for, s.
 pub const WAITING_NOTE_AFTER_S: f64 = 5.0;
@@ -70,10 +70,46 @@ pub enum Level {
 /// How the run ended.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outcome {
-    /// Every waypoint done, landed and disarmed.
+    /// Every waypoint done, landed and disarmed (an action goal without landing: holding at
+    /// the last waypoint, the MCU asked to HOLD).
     Complete,
     /// The mission failed (timeout, could not arm, disarmed in flight): the message.
     Failed(String),
+    /// [`RunKind::ActionGoal`]: an MCU failsafe became active during the mission (the message).
+    Failsafe(String),
+    /// [`RunKind::ActionGoal`]: the R/C pilot took over (the message).
+    PilotOverride(String),
+}
+
+/// What a run flies, and so how it starts and ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunKind {
+    /// A mission file (`fcc-mission --mission FILE`): waypoints from the position at arming,
+    /// always from the ground; a pilot override pauses it (resumed when the pilot lets go).
+    MissionFile,
+    /// An action goal: waypoints from the origin of `map` (home); in the air it starts from
+    /// where the vehicle is (no takeoff); a pilot override or an MCU failsafe ends it; without
+    /// landing it is complete at the last waypoint (then the MCU holds there).
+    ActionGoal,
+}
+
+/// How far a run has come, for an action's feedback.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunProgress {
+    /// `arming`, `takeoff`, `leg`, `hold`, `landing`, `done`, `hover`, `pilot`.
+    pub phase: &'static str,
+    /// The waypoint flown to (0-based; 0 before the first leg).
+    pub waypoint: usize,
+    /// Waypoints reached so far.
+    pub reached: usize,
+    /// Waypoints of the mission.
+    pub waypoint_count: usize,
+    /// To the current leg's end, m (0 without one).
+    pub distance_to_go_m: f32,
+    /// To the last waypoint at the cruise speed, with the holds, s.
+    pub eta_s: f32,
+    /// Horizontal distance from the current leg's line, m (0 off a leg).
+    pub cross_track_m: f32,
 }
 
 /// What to do after one cycle, in this order: log, arm, mode commands, setpoint, status.
@@ -113,6 +149,7 @@ pub struct RunConfig {
     pub arm_timeout_s: f64,
     /// Seconds of ROS time in HOLD after the last waypoint (see [`EndSequence`]).
     pub hover_s: f64,
+    pub kind: RunKind,
 }
 
 /// The mission node's sequencing: see the [module docs](self).
@@ -134,6 +171,8 @@ pub struct MissionRun {
     /// ROS time of the first complete sample, s (times in messages count from it).
     t_first_s: Option<f64>,
     setpoints: u64,
+    kind: RunKind,
+    progress_now: Option<RunProgress>,
 }
 
 impl MissionRun {
@@ -153,7 +192,19 @@ impl MissionRun {
             waiting_noted: false,
             t_first_s: None,
             setpoints: 0,
+            kind: c.kind,
+            progress_now: None,
         }
+    }
+
+    /// The progress at the latest cycle (None before the first complete sample).
+    pub fn progress(&self) -> Option<RunProgress> {
+        self.progress_now
+    }
+
+    /// The mission flown.
+    pub fn mission(&self) -> &Mission {
+        &self.mission
     }
 
     /// Remarks on the settings, for the log at the start.
@@ -253,13 +304,19 @@ impl MissionRun {
                 return;
             }
         }
+        self.set_progress("arming", 0, None);
         self.report(wall_s, s, ("arming", None), None, out);
     }
 
     /// Armed: home is the position now.
     fn on_armed(&mut self, t_s: f64, tr_s: f64, s: &Sample<'_>, out: &mut Step) {
         self.armed_at_ns = Some(s.now_ns);
-        let mut f = WaypointFollower::new(self.mission.clone());
+        let mut f = match self.kind {
+            RunKind::MissionFile => WaypointFollower::new(self.mission.clone()),
+            RunKind::ActionGoal => {
+                WaypointFollower::with_start(self.mission.clone(), Some([0.0; 3]), !s.mcu.landed)
+            }
+        };
         let _ = f.update(t_s, s.pos_ned_m, s.vel_ned_mps);
         self.follower = Some(f);
         let p = s.pos_ned_m;
@@ -299,12 +356,37 @@ impl MissionRun {
     /// Armed and flying: the pilot's pause, the follower, the end sequence, the setpoint.
     fn fly(&mut self, wall_s: f64, t_s: f64, tr_s: f64, s: &Sample<'_>, out: &mut Step) {
         if self.pilot(t_s, tr_s, s, out) {
+            self.set_progress("pilot", 0, None);
             return self.report(wall_s, s, ("pilot", None), None, out);
+        }
+        // A stale setpoint (a late cycle on a loaded machine) is not an end: the MCU holds and
+        // the next setpoint resumes velocity mode (it lands only once the setpoints are lost).
+        let stale = s.mcu.failsafe_name == fcc_msgs::FailsafeCause::SetpointStale.name();
+        if self.kind == RunKind::ActionGoal
+            && s.mcu.failsafe
+            && !stale
+            && self.end.phase() == EndPhase::Mission
+        {
+            out.outcome = Some(Outcome::Failsafe(format!(
+                "MCU failsafe {} (mode {})",
+                s.mcu.failsafe_name, s.mcu.mode_name
+            )));
+            return;
         }
         let Some(f) = self.follower.as_mut() else {
             return;
         };
         let g = f.update(t_s, s.pos_ned_m, s.vel_ned_mps);
+        let prog = progress_of(f, &g, s.pos_ned_m);
+        self.progress_now = Some(prog);
+        if self.kind == RunKind::ActionGoal && g.phase == Phase::Done && !self.mission.land_at_end {
+            out.info(format!(
+                "t={tr_s:.2} s goal reached: holding (cmd/mode hold)"
+            ));
+            out.mode_commands.push("hold");
+            out.outcome = Some(Outcome::Complete);
+            return;
+        }
         if let Some((name, idx)) = self.progress.update(&g, s.pos_ned_m) {
             let idx = idx.map(|i| format!(" {i}")).unwrap_or_default();
             out.info(format!("t={tr_s:.2} s {name}{idx}"));
@@ -331,6 +413,7 @@ impl MissionRun {
                 EndPhase::Hover => "hover",
                 _ => "landing",
             };
+            self.set_progress(phase, prog.waypoint, Some(prog.reached));
             return self.report(wall_s, s, (phase, None), None, out);
         }
         out.setpoint_ned_mps = Some(g.vel_ned_mps);
@@ -357,7 +440,27 @@ impl MissionRun {
         if p.send_resume {
             out.mode_commands.push("velocity");
         }
+        if p.paused && self.kind == RunKind::ActionGoal {
+            out.outcome = Some(Outcome::PilotOverride(format!(
+                "t={tr_s:.2} s the R/C pilot took over (mode {})",
+                s.mcu.mode_name
+            )));
+        }
         p.paused
+    }
+
+    /// Progress outside the follower's phases (arming, pilot, hover, landing).
+    fn set_progress(&mut self, phase: &'static str, waypoint: usize, reached: Option<usize>) {
+        let reached = reached.unwrap_or(self.progress_now.map_or(0, |p| p.reached));
+        self.progress_now = Some(RunProgress {
+            phase,
+            waypoint,
+            reached,
+            waypoint_count: self.mission.waypoints.len(),
+            distance_to_go_m: 0.0,
+            eta_s: 0.0,
+            cross_track_m: 0.0,
+        });
     }
 
     /// `mission/status`, when one is due: `phase` (name, waypoint), the distance to go.
@@ -385,16 +488,76 @@ impl MissionRun {
     }
 }
 
+/// The progress of a follower's guidance `g` at `pos_ned_m`: the waypoint, the distance to the
+/// leg's end, the ETA to the last waypoint (the rest of this leg and the later legs at the
+/// cruise speed, plus the holds) and the cross-track (horizontal, from the leg's line).
+fn progress_of(f: &WaypointFollower, g: &crate::Guidance, pos_ned_m: [f32; 3]) -> RunProgress {
+    let m = f.mission();
+    let n = m.waypoints.len();
+    let (phase, _) = phase_name(g.phase);
+    let waypoint = match g.phase {
+        Phase::Leg(i) | Phase::Hold(i) => i,
+        Phase::Landing | Phase::Done => n.saturating_sub(1),
+        _ => 0,
+    };
+    let reached = match g.phase {
+        Phase::Leg(i) => i,
+        Phase::Hold(i) => i + 1,
+        Phase::Landing | Phase::Done => n,
+        _ => 0,
+    };
+    let to_go = dist_to_go_m(g, pos_ned_m).unwrap_or(0.0);
+    let later: f32 = (waypoint + 1..n)
+        .map(|i| {
+            let (a, b) = (m.waypoints[i - 1].ned_m(), m.waypoints[i].ned_m());
+            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
+        })
+        .sum();
+    let holds = m.hold_s * (n - reached.min(n)) as f32;
+    let eta_s = match g.phase {
+        Phase::Landing | Phase::Done => 0.0,
+        _ => (to_go + later) / m.speed_mps + holds,
+    };
+    let cross_track_m = match (g.phase, g.leg) {
+        (Phase::Leg(_), Some(l)) => {
+            let (dn, de) = (
+                l.to_ned_m[0] - l.from_ned_m[0],
+                l.to_ned_m[1] - l.from_ned_m[1],
+            );
+            let len = (dn * dn + de * de).sqrt();
+            let (pn, pe) = (
+                pos_ned_m[0] - l.from_ned_m[0],
+                pos_ned_m[1] - l.from_ned_m[1],
+            );
+            if len < 1e-3 {
+                0.0
+            } else {
+                (pn * de - pe * dn).abs() / len
+            }
+        }
+        _ => 0.0,
+    };
+    RunProgress {
+        phase,
+        waypoint,
+        reached,
+        waypoint_count: n,
+        distance_to_go_m: to_go,
+        eta_s,
+        cross_track_m,
+    }
+}
+
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::from_yaml_str;
 
-    const MISSION: &str = "takeoff_alt_m: 2\nspeed_mps: 2\naccel_limit_mps2: 1\n\
+    pub(crate) const MISSION: &str = "takeoff_alt_m: 2\nspeed_mps: 2\naccel_limit_mps2: 1\n\
         accept_radius_m: 0.3\nhold_s: 0.5\nwaypoints: [{north_m: 4, east_m: 0, alt_m: 2}]\n";
     /// ROS time at the first cycle, s (the node's messages count from it).
     const T0_S: f64 = 1000.0;
-    const DT_S: f64 = 0.02;
+    pub(crate) const DT_S: f64 = 0.02;
 
     fn run(arm_timeout_s: f64, hover_s: f64) -> MissionRun {
         MissionRun::new(RunConfig {
@@ -402,25 +565,26 @@ mod tests {
             timeout_s: 600.0,
             arm_timeout_s,
             hover_s,
+            kind: RunKind::MissionFile,
         })
     }
 
     /// A kinematic vehicle and its MCU: arms on `cmd/arm`, follows the setpoints exactly in
     /// velocity mode, stops in HOLD, descends at 1 m/s in land mode and disarms 1 s after
     /// touchdown. `pilot` makes it refuse everything (the pilot flies: it hovers).
-    struct Vehicle {
-        pos: [f32; 3],
-        vel: [f32; 3],
-        armed: bool,
-        landed: bool,
-        mode: McuMode,
-        pilot: bool,
+    pub(crate) struct Vehicle {
+        pub(crate) pos: [f32; 3],
+        pub(crate) vel: [f32; 3],
+        pub(crate) armed: bool,
+        pub(crate) landed: bool,
+        pub(crate) mode: McuMode,
+        pub(crate) pilot: bool,
         refuse_arm: bool,
         on_ground_s: f64,
     }
 
     impl Vehicle {
-        fn new() -> Self {
+        pub(crate) fn new() -> Self {
             Vehicle {
                 pos: [3.0, -2.0, 0.0],
                 vel: [0.0; 3],
@@ -443,7 +607,7 @@ mod tests {
             }
         }
 
-        fn sample(&self, t_s: f64) -> Sample<'static> {
+        pub(crate) fn sample(&self, t_s: f64) -> Sample<'static> {
             Sample {
                 now_ns: ((T0_S + t_s) * 1e9).round() as i64,
                 pos_ned_m: self.pos,
@@ -461,7 +625,7 @@ mod tests {
             }
         }
 
-        fn apply(&mut self, step: &Step) {
+        pub(crate) fn apply(&mut self, step: &Step) {
             if self.pilot {
                 self.vel = [0.0; 3];
             } else {
@@ -475,6 +639,10 @@ mod tests {
                         "velocity" => McuMode::Velocity,
                         other => panic!("unknown command {other}"),
                     };
+                }
+                // The firmware's rule: a fresh setpoint resumes velocity mode from HOLD.
+                if self.mode == McuMode::Hold && step.setpoint_ned_mps.is_some() {
+                    self.mode = McuMode::Velocity;
                 }
                 self.vel = match (self.mode, step.setpoint_ned_mps) {
                     (McuMode::Velocity, Some(v)) => v,
@@ -791,10 +959,86 @@ mod tests {
             timeout_s: 600.0,
             arm_timeout_s: 60.0,
             hover_s: 5.0,
+            kind: RunKind::MissionFile,
         });
         let n = r.notes();
         assert_eq!(n.len(), 1);
         assert_eq!(n[0].0, Level::Warn);
         assert!(n[0].1.starts_with("hover_s is ignored"));
+    }
+
+    fn action_run(mission: &str) -> MissionRun {
+        MissionRun::new(RunConfig {
+            mission: from_yaml_str(mission).unwrap(),
+            timeout_s: 600.0,
+            arm_timeout_s: 60.0,
+            hover_s: 0.0,
+            kind: RunKind::ActionGoal,
+        })
+    }
+
+    const HOLD_AT_END: &str = "takeoff_alt_m: 2\nspeed_mps: 2\naccept_radius_m: 0.3\n\
+        land_at_end: false\nwaypoints: [{north_m: 4, east_m: 0, alt_m: 3}]\n";
+
+    /// An action goal in the air: no arm, no takeoff, leg 0 from where the vehicle is, to the
+    /// point in the map frame (not from the position at the start); complete at the point with
+    /// a hold command; feedback progress along the way.
+    #[test]
+    fn an_action_goal_in_the_air_flies_from_here_and_holds_at_the_end() {
+        let mut r = action_run(HOLD_AT_END);
+        let mut v = Vehicle::new();
+        (v.pos, v.armed, v.landed, v.mode) = ([-2.0, 1.0, -3.0], true, false, McuMode::Hold);
+        let steps = fly(&mut r, &mut v, 60.0, |_, _| {});
+        let (t, last) = steps.last().unwrap();
+        assert_eq!(last.outcome, Some(Outcome::Complete), "{:?}", lines(&steps));
+        assert_eq!(last.mode_commands, ["hold"]);
+        assert!(steps.iter().all(|s| !s.1.arm));
+        let l = lines(&steps);
+        assert!(!l.iter().any(|x| x.contains("takeoff")), "{l:?}");
+        assert!(*t < 10.0, "{t}");
+        let d = ((v.pos[0] - 4.0).powi(2) + v.pos[1].powi(2) + (v.pos[2] + 3.0).powi(2)).sqrt();
+        assert!(d < 0.4, "{:?}", v.pos);
+        let p = r.progress().unwrap();
+        assert_eq!((p.reached, p.waypoint_count), (1, 1));
+    }
+
+    #[test]
+    fn an_action_goal_ends_on_a_pilot_override_and_on_a_failsafe() {
+        let mut r = action_run(MISSION);
+        let mut v = Vehicle::new();
+        let steps = fly(&mut r, &mut v, 60.0, |t, v| v.pilot = t >= 4.0);
+        match &steps.last().unwrap().1.outcome {
+            Some(Outcome::PilotOverride(m)) => assert!(m.contains("pilot took over"), "{m}"),
+            o => panic!("{o:?}"),
+        }
+        let mut r = action_run(MISSION);
+        let mut v = Vehicle::new();
+        let mut steps = Vec::new();
+        for k in 0..1000 {
+            let t = k as f64 * DT_S;
+            let mut sample = v.sample(t);
+            // A stale setpoint from 2 s to 3 s does not end it; the geofence from 4 s does.
+            sample.mcu.failsafe = t >= 4.0 || (2.0..3.0).contains(&t);
+            sample.mcu.failsafe_name = match t {
+                t if t >= 4.0 => "geofence",
+                t if (2.0..3.0).contains(&t) => "setpoint_stale",
+                _ => "none",
+            };
+            let step = r.tick(t, Input::Ready(sample));
+            v.apply(&step);
+            let done = step.outcome.is_some();
+            steps.push(step);
+            if done {
+                break;
+            }
+        }
+        assert_eq!(
+            steps.last().unwrap().outcome,
+            Some(Outcome::Failsafe(
+                "MCU failsafe geofence (mode velocity)".into()
+            ))
+        );
+        // Ended at 4 s (the first geofence cycle), not at 2 s.
+        assert_eq!(steps.len(), 201);
     }
 }

@@ -27,6 +27,8 @@ macro_rules! for_each_mcu_param {
             4, VEL_P_PER_S, control.vel_p_per_s, "1/s", 3.0, 0.05, 10.0, "Horizontal velocity loop: acceleration command per m/s of error";
             5, MAX_CLIMB_MPS, limits.max_climb_mps, "m/s", 2.5, 0.1, 10.0, "Climb speed limit";
             6, MAX_DESCENT_MPS, limits.max_descent_mps, "m/s", 1.5, 0.1, 10.0, "Descent speed limit of commanded velocities";
+            7, FENCE_RADIUS_M, limits.fence_radius_m, "m", 200.0, 5.0, 10000.0, "Geofence: horizontal radius around home (the MCU holds the vehicle inside; the mission node refuses goals outside)";
+            8, FENCE_ALT_M, limits.fence_alt_m, "m", 100.0, 2.0, 1000.0, "Geofence: ceiling above the take-off altitude (the MCU stops climbing; the mission node refuses goals above it)";
             // Telemetry rates (MCU → Linux), one per `Stream`; 0 = off. Applied at once (the
             // streams restart their schedule); the worst-case total must fit the UART
             // (`StreamRates::worst_case_bytes_per_s`, checked by `Params::validate` on the MCU

@@ -301,3 +301,45 @@ class ParticipantEntitiesInfo(IdlStruct,
                               typename="rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_"):
     gid: Gid
     node_entities_info_seq: sequence[NodeEntitiesInfo]
+
+
+# The mission node's action (fcc_msgs/action/FollowWaypoints, issue 17): its two topics, as
+# rmw names them (`_action/feedback`, `_action/status`), written from the .action file and
+# action_msgs/unique_identifier_msgs.
+@dataclass
+class UUID(IdlStruct, typename=_t("unique_identifier_msgs", "UUID")):
+    uuid: array[uint8, 16]
+
+
+@dataclass
+class GoalInfo(IdlStruct, typename=_t("action_msgs", "GoalInfo")):
+    goal_id: UUID
+    stamp: Time
+
+
+@dataclass
+class GoalStatus(IdlStruct, typename=_t("action_msgs", "GoalStatus")):
+    goal_info: GoalInfo
+    status: int8
+
+
+@dataclass
+class GoalStatusArray(IdlStruct, typename=_t("action_msgs", "GoalStatusArray")):
+    status_list: sequence[GoalStatus]
+
+
+@dataclass
+class FollowWaypointsFeedback(IdlStruct, typename="fcc_msgs::action::dds_::FollowWaypoints_Feedback_"):
+    current_waypoint: uint32
+    waypoint_count: uint32
+    phase: str
+    distance_to_go_m: float32
+    eta_s: float32
+    cross_track_m: float32
+
+
+@dataclass
+class FollowWaypointsFeedbackMessage(IdlStruct,
+                                     typename="fcc_msgs::action::dds_::FollowWaypoints_FeedbackMessage_"):
+    goal_id: UUID
+    feedback: FollowWaypointsFeedback

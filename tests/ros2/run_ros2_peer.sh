@@ -11,8 +11,14 @@
 #       rclpy's default QoS, `hold` and `land` services; a restarted peer (`probe`); the flight
 #       checked on the CSV truth (`check-fly`).
 #   (c) Kilted, ROS_DISTRO=kilted: smoke run (node list, topics, a parameter set, a setpoint flown).
+#   (d) Jazzy, the mission node's FollowWaypoints action through rclpy's ActionClient (issue 17;
+#       actions_peer.py), speed 2, ROS time = the simulator's: (d1) the paper-A square as one goal
+#       (fcc-launch tests/ros2/square_action_flight.yaml), its cross-track report against the YAML
+#       flight's (part (a)'s, or flown here when (a) did not run); (d2) on one flight a goal outside
+#       the geofence refused, a lat/lon waypoint goal (feedback, result, the true path through each
+#       point), a cancel mid-leg (hold) and a preemption, judged on the CSV truth.
 # Each run also requires that the stack's output on a clean start has no ERROR line.
-#   usage: tests/ros2/run_ros2_peer.sh [a|b|c]...   (default: all)
+#   usage: tests/ros2/run_ros2_peer.sh [a|b|c|d]...   (default: all)
 # Wall time (2-core machine shared with two other builds, load ~5, November 2026): (a) 55 s,
 # (b) 39–59 s, (c) 8–19 s; a+b+c 1 min 39 s – 2 min 09 s (each graph check waits up to 10 s for
 # unattributed endpoints while any remain).
@@ -23,7 +29,7 @@ root="$(cd "$here/../.." && pwd)"
 loopback_only "$0" "$@"
 bin="${FCC_BIN_DIR:-$root/target/release}"
 ros2="${ROS2_DIR:-$root/target/ros2}"
-parts=("$@"); [ ${#parts[@]} -gt 0 ] || parts=(a b c)
+parts=("$@"); [ ${#parts[@]} -gt 0 ] || parts=(a b c d)
 for d in jazzy kilted; do
   [ -f "$ros2/$d/env.sh" ] || { echo "run_ros2_peer.sh: $ros2/$d/env.sh missing: run scripts/ros2-setup.sh first" >&2; exit 2; }
 done
@@ -125,6 +131,56 @@ part_c() {
   no_error_lines "(c) fcc-sitl + fcc-bridge, ROS_DISTRO=kilted" "$d/sitl.log" "$d/bridge.log"
   [ "$src" = 0 ] || { echo "--- bridge log (tail)"; tail -20 "$d/bridge.log"; }
   echo "(c) $(( $(date +%s) - t0 )) s wall"
+}
+
+# "all 4 legs: cross-track est RMS E m max … | true vs ideal leg RMS T m max …" of a launcher's
+# report → "E T".
+track_rms() { sed -n 's/^all [0-9]* legs: cross-track est RMS \([0-9.]*\) m .* true vs ideal leg RMS \([0-9.]*\) m .*/\1 \2/p' "$1" | tail -1; }
+
+part_d() {
+  local d="$tmp/d" t0 lrc prc crc ref yaml act; mkdir -p "$d"; t0=$(date +%s)
+  echo "=== (d) Jazzy rclpy ActionClient: FollowWaypoints goals through the full stack (speed 2)"
+  echo "--- (d1) the paper-A square as one action goal"
+  set +e
+  ( . "$ros2/jazzy/env.sh"; exec timeout 300 "$bin/fcc-launch" "$here/square_action_flight.yaml" BIN:="$bin" out:="$d" \
+      speed:=2 python:="$ROS2_PYTHON" ) > "$d/launch.log" 2>&1
+  lrc=$?
+  set -e
+  grep -E '^\[peer\]|^(leg|all) ' "$d/launch.log" || true
+  result "(d1) the square through the action: goal SUCCEEDED, feedback ≥ 1 Hz (fcc-launch exit 0)" "$lrc" "exit $lrc"
+  ref="$tmp/a/summary.txt"
+  if [ ! -s "$ref" ]; then  # part (a) did not run: fly the YAML square the same way
+    mkdir -p "$d/yaml"
+    set +e
+    timeout 300 "$bin/fcc-launch" "$root/launch_configs/square_flight.yaml" BIN:="$bin" out:="$d/yaml" speed:=2 hover_s:=0 \
+      > "$d/yaml/launch.log" 2>&1
+    set -e
+    ref="$d/yaml/summary.txt"
+  fi
+  yaml=$(track_rms "$ref" 2>/dev/null || true); act=$(track_rms "$d/summary.txt" 2>/dev/null || true)
+  echo "(d1) cross-track RMS (estimate, truth vs ideal legs): YAML mission file ${yaml:-none} m, action goal ${act:-none} m"
+  # The same figures: within 0.1 m (RMS) of the YAML flight's, estimate and truth (the real-time
+  # stack is not deterministic: two YAML flights differ by a few cm).
+  result "(d1) the action's cross-track RMS within 0.1 m of the YAML flight's (estimate and truth)" \
+    "$(awk -v y="$yaml" -v a="$act" 'BEGIN{split(y,Y," "); split(a,A," "); ok=(y!="" && a!="" && (A[1]-Y[1])^2<=0.01 && (A[2]-Y[2])^2<=0.01); print ok?0:1}')" \
+    "YAML ${yaml:-none}, action ${act:-none}"
+  no_error_lines "(d1) fcc-launch (sitl, bridge, mission, rclpy)" "$d/launch.log"
+  echo "--- (d2) refused, lat/lon, cancel, preemption on one flight"
+  mkdir -p "$d/2"
+  start_sitl_bridge "$d/2" 2 mcu
+  "$bin/fcc-mission" --ros-args -r __ns:=/fcc -p use_sim_time:=true -p timeout_s:=400 > "$d/2/mission.log" 2>&1 &
+  local mission=$!
+  set +e
+  ( . "$ros2/jazzy/env.sh"; exec timeout 300 "$ROS2_PYTHON" "$here/actions_peer.py" goals --events "$d/2/events.json" ); prc=$?
+  kill -TERM "$mission" 2>/dev/null; wait "$mission" 2>/dev/null
+  stop_sitl_bridge
+  ( . "$ros2/jazzy/env.sh"; exec "$ROS2_PYTHON" "$here/actions_peer.py" check --csv "$d/2/fly.csv" --events "$d/2/events.json" ); crc=$?
+  set -e
+  result "(d2) rclpy action client: every check" "$([ $prc = 0 ] && echo 0 || echo 1)" "exit $prc"
+  result "(d2) the goals on the CSV truth: every check" "$([ $crc = 0 ] && echo 0 || echo 1)" "exit $crc"
+  no_error_lines "(d2) fcc-sitl + fcc-bridge + fcc-mission" "$d/2/sitl.log" "$d/2/bridge.log" "$d/2/mission.log"
+  [ "$prc$crc" = 00 ] || { echo "--- mission log (tail)"; tail -20 "$d/2/mission.log"; }
+  echo "(d) $(( $(date +%s) - t0 )) s wall"
 }
 
 for p in "${parts[@]}"; do "part_$p"; done

@@ -19,6 +19,7 @@
 //! | `status` | fcc_msgs/Status | telemetry | published |
 //! | `accel/observer`, `accel/measured` | geometry_msgs/AccelStamped | telemetry | published |
 //! | `/diagnostics` | diagnostic_msgs/DiagnosticArray | telemetry | published |
+//! | `home` | sensor_msgs/NavSatFix | reliable, transient local, depth 1 | published (when set or moved) |
 //! | `/clock` | rosgraph_msgs/Clock | telemetry, depth 1 | published (`clock_source:=mcu`) or read (`sync`) |
 //! | `setpoint/velocity` | geometry_msgs/TwistStamped | best effort | read |
 //! | `setpoint/heading` | geometry_msgs/QuaternionStamped | best effort | read |
@@ -164,6 +165,16 @@ pub const STATUS: Topic<Status> = Topic::new("status", TELEMETRY, P);
 pub const ACCEL_OBSERVER: Topic<AccelStamped> = Topic::new("accel/observer", TELEMETRY, P);
 pub const ACCEL_MEASURED: Topic<AccelStamped> = Topic::new("accel/measured", TELEMETRY, P);
 pub const DIAGNOSTICS: Topic<DiagnosticArray> = Topic::new("/diagnostics", TELEMETRY, P);
+/// The MCU's home, the origin of `map` (latched: a late joiner gets the last one).
+pub const HOME: Topic<NavSatFix> = Topic::new(
+    "home",
+    QosInfo {
+        transient_local: true,
+        depth: 1,
+        ..TELEMETRY
+    },
+    P,
+);
 pub const CLOCK: Topic<Clock> = Topic::new("/clock", TELEMETRY.with_depth(1), PublishedOrRead);
 pub const SETPOINT_VELOCITY: Topic<TwistStamped> = Topic::new("setpoint/velocity", READ, R);
 /// An absolute heading (ENU orientation, only its yaw is used) for the velocity setpoints that
@@ -197,6 +208,7 @@ pub fn table() -> Vec<(&'static str, String, QosInfo, Direction)> {
         ACCEL_OBSERVER,
         ACCEL_MEASURED,
         DIAGNOSTICS,
+        HOME,
         CLOCK,
         SETPOINT_VELOCITY,
         SETPOINT_HEADING,
@@ -230,6 +242,7 @@ mod tests {
             (TF.qos.depth, CLOCK.qos.depth, TF_STATIC.qos.depth),
             (100, 1, 1)
         );
+        assert!(HOME.qos.transient_local && HOME.qos.reliable && HOME.qos.depth == 1);
     }
 
     /// The telemetry publisher profile is the one the bridge always used: reliable (fail when

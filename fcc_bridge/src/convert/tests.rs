@@ -836,3 +836,51 @@ fn state_heading_rides_on_setpoints_until_a_turn_or_its_age() {
     );
     assert_eq!(yaw_of(&mut s, 0.0).0, link::YawSetpoint::Keep);
 }
+
+/// `home` is published once the MCU sets home, again only when it moves (latched topic), in
+/// `map`, with the MCU's latitude, longitude and altitude.
+#[test]
+fn home_published_when_set_and_when_moved() {
+    use crate::state::{ClockSource, LinkState, Out};
+    let mut s = LinkState::new(cfg(), SetpointLimits::default(), ClockSource::Mcu);
+    let mut enc = link::Encoder::new();
+    let mut buf = [0u8; link::MAX_FRAME_LEN];
+    let mut frame = |m: link::Message, t: u64| {
+        let n = enc.encode(&m, t, &mut buf).unwrap();
+        buf[..n].to_vec()
+    };
+    s.on_bytes(
+        &frame(link::Message::Hello(link::Hello::ours([0, 1, 0])), 1),
+        0,
+    )
+    .unwrap();
+    let nav = |home_set: bool, lat: f64| link::NavState {
+        q_body_to_ned: [1.0, 0.0, 0.0, 0.0],
+        home_lat_deg: lat,
+        home_lon_deg: 8.545_594,
+        home_alt_m: 488.5,
+        home_set,
+        ..Default::default()
+    };
+    let mut homes = |m: link::NavState, t: u64| -> Vec<NavSatFix> {
+        let out = s
+            .on_bytes(&frame(link::Message::NavState(m), t), 0)
+            .unwrap();
+        out.into_iter()
+            .filter_map(|o| match o {
+                Out::Home(h) => Some(h),
+                _ => None,
+            })
+            .collect()
+    };
+    assert!(homes(nav(false, 47.0), 10).is_empty(), "not set yet");
+    let h = homes(nav(true, 47.397_742), 20);
+    assert_eq!(h.len(), 1);
+    assert_eq!(h[0].header.frame_id, "map");
+    assert_eq!(
+        (h[0].latitude, h[0].longitude, h[0].altitude),
+        (47.397_742, 8.545_594, 488.5)
+    );
+    assert!(homes(nav(true, 47.397_742), 30).is_empty(), "unchanged");
+    assert_eq!(homes(nav(true, 47.4), 40).len(), 1, "moved");
+}

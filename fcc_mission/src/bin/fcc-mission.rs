@@ -1,7 +1,12 @@
-//! `fcc-mission --mission FILE [--ros-args -r __ns:=/fcc -p name:=value …]`
+//! `fcc-mission [--mission FILE] [--ros-args -r __ns:=/fcc -p name:=value …]`
 //!
-//! The mission node: flies a mission YAML (see `launch_configs/missions/`) through the bridge.
-//! Subscribes `state/odom` (nav_msgs/Odometry, ENU/FLU) and `status` (fcc_msgs/Status),
+//! The mission node: serves the action `follow_waypoints` (`fcc_msgs/action/FollowWaypoints`:
+//! local ENU or lat/lon waypoints, feedback, cancel = hold, a new goal preempts the running
+//! one; `actions.rs`) and, with `--mission FILE`, flies that mission YAML (see
+//! `launch_configs/missions/`) as its first goal through the same logic
+//! (`fcc_mission::executive`), then exits with its result.
+//! Subscribes `state/odom` (nav_msgs/Odometry, ENU/FLU), `status` (fcc_msgs/Status) and `home`
+//! (sensor_msgs/NavSatFix: lat/lon goals are converted against it),
 //! publishes `setpoint/velocity` (geometry_msgs/TwistStamped, frame `map`, ENU) at `rate_hz`,
 //! with the mission's `yaw_deg` (if set) just before each on `setpoint/heading`
 //! (geometry_msgs/QuaternionStamped, frame `map`, an ENU orientation about z),
@@ -19,12 +24,18 @@
 //! stalled on each of 3 attempts: it restarts itself after a stall, see
 //! `fcc_ros::startup`); 2 on a bad mission file or bad arguments.
 
+#[path = "fcc-mission/actions.rs"]
+mod actions;
+
+use actions::{feedback, finish, take_goals, FollowWaypointsServer};
 use clap::Parser;
-use fcc_mission::run::{Input, Level, McuStatus, MissionRun, Outcome, RunConfig, Sample, Step};
+use fcc_mission::executive::{ExecConfig, Executive, Finished, GoalEnd};
+use fcc_mission::goal::{Fence, Home};
+use fcc_mission::run::{Input, Level, McuStatus, RunKind, Sample, Step};
 use fcc_mission::{node_params, McuMode, Mission};
 use fcc_msgs::ros::{
-    Bool, Clock, Header, Odometry, Quaternion, QuaternionStamped, Status, StringMsg, Time, Twist,
-    TwistStamped, Vector3,
+    Bool, Clock, Header, NavSatFix, Odometry, Quaternion, QuaternionStamped, Status, StringMsg,
+    Time, Twist, TwistStamped, Vector3,
 };
 use fcc_ros::frames;
 use fcc_ros::params::{self, parse_bool};
@@ -32,6 +43,7 @@ use fcc_ros::ros_node::{self, DdsEnv, RosClock};
 use fcc_ros::startup;
 use fcc_ros::topics;
 use futures::StreamExt;
+use ros2_client::action::GoalId;
 use ros2_client::log::LogLevel;
 use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType, ParameterValue};
 use ros2_client::{NodeLoggingHandle, NodeOptions, RosoutRaw};
@@ -51,8 +63,9 @@ struct Cli {
 }
 
 struct Options {
+    /// The mission file ("" without one).
     mission_file: String,
-    mission: Mission,
+    mission: Option<Mission>,
     namespace: String,
     node_name: String,
     dds: DdsEnv,
@@ -110,16 +123,13 @@ fn options() -> Options {
     let mission_file = cli
         .mission
         .or_else(|| p.get("mission").cloned())
-        .unwrap_or_else(|| {
-            fail(
-                2,
-                "no mission: use --mission FILE or -p mission:=FILE".into(),
-            )
-        });
-    let text = std::fs::read_to_string(&mission_file)
-        .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
-    let mission = fcc_mission::from_yaml_str(&text)
-        .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
+        .unwrap_or_default();
+    let mission = (!mission_file.is_empty()).then(|| {
+        let text = std::fs::read_to_string(&mission_file)
+            .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")));
+        fcc_mission::from_yaml_str(&text)
+            .unwrap_or_else(|e| fail(2, format!("{mission_file}: {e}")))
+    });
     let use_sim_time = p
         .get("use_sim_time")
         .map(|v| parse_bool(v).unwrap_or_else(|e| fail(2, format!("parameter use_sim_time: {e}"))))
@@ -279,6 +289,8 @@ struct Dds {
     arm_pub: ros2_client::Publisher<Bool>,
     mode_pub: ros2_client::Publisher<StringMsg>,
     status_pub: ros2_client::Publisher<StringMsg>,
+    home_sub: ros2_client::Subscription<NavSatFix>,
+    follow: FollowWaypointsServer,
 }
 
 /// The participant, node, subscriptions and publishers. Blocking (rustdds can deadlock here
@@ -319,6 +331,14 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
         ros_node::publisher::<StringMsg>(&mut node, &o.topics[5], &ros_node::reliable_qos(10))?;
     let status_pub =
         ros_node::publisher::<StringMsg>(&mut node, &o.topics[6], &ros_node::reliable_qos(10))?;
+    // Latched: the reader is reliable and transient local, as the bridge's writer.
+    let home_sub = ros_node::subscription::<NavSatFix>(
+        &mut node,
+        &o.topics[8],
+        &topics::HOME.qos.publisher_profile(),
+    )?;
+    step.set("creating the action server");
+    let follow = FollowWaypointsServer::new(&mut node, &o.follow_waypoints)?;
     Ok(Dds {
         _ctx: ctx,
         node,
@@ -330,6 +350,8 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
         arm_pub,
         mode_pub,
         status_pub,
+        home_sub,
+        follow,
     })
 }
 
@@ -409,6 +431,8 @@ fn descriptor(p: &node_params::NodeParam) -> ParameterDescriptor {
 /// The mission node's own topic (std_msgs/String, JSON): the only name not in the bridge's
 /// topic table ([`fcc_ros::topics`]).
 const MISSION_STATUS_TOPIC: &str = "mission/status";
+/// The mission node's action (`fcc_msgs/action/FollowWaypoints`), under its namespace.
+const FOLLOW_WAYPOINTS_ACTION: &str = "mission/follow_waypoints";
 
 /// What [`setup_dds`] needs (owned: it runs on a thread of its own).
 struct DdsSetup {
@@ -419,8 +443,10 @@ struct DdsSetup {
     node_name: String,
     use_sim_time: bool,
     /// state/odom, status, /clock, setpoint/velocity, cmd/arm, cmd/mode, mission/status,
-    /// setpoint/heading.
-    topics: [String; 8],
+    /// setpoint/heading, home.
+    topics: [String; 9],
+    /// The action's name (after the remaps).
+    follow_waypoints: String,
 }
 
 async fn run(o: Options) -> Result<(), Failure> {
@@ -440,8 +466,10 @@ async fn run(o: Options) -> Result<(), Failure> {
             topics::CMD_MODE.name,
             MISSION_STATUS_TOPIC,
             topics::SETPOINT_HEADING.name,
+            topics::HOME.name,
         ]
         .map(|t| o.name(t)),
+        follow_waypoints: o.name(FOLLOW_WAYPOINTS_ACTION),
     };
     let dds = match APP.setup_dds(move |st| setup_dds(&setup, st)).await {
         Ok(r) => r.map_err(|e| Failure::Exit(1, e))?,
@@ -452,39 +480,67 @@ async fn run(o: Options) -> Result<(), Failure> {
     run_result.map_err(Failure::from)
 }
 
+/// What the loop heard last from the bridge.
+#[derive(Default)]
+struct Heard {
+    odom: Option<Odometry>,
+    status: Option<Status>,
+    home: Option<Home>,
+}
+
 async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
     let log = Log {
         handle: dds.node.logging_handle(),
         name: fcc_ros::logger_name(&o.namespace, &o.node_name),
     };
     log_start(&o, &log);
-    let mut run = MissionRun::new(RunConfig {
-        mission: o.mission.clone(),
+    let mut exec: Executive<GoalId> = Executive::new(ExecConfig {
         timeout_s: o.timeout_s,
         arm_timeout_s: o.arm_timeout_s,
         hover_s: o.hover_s,
     });
-    for (level, line) in run.notes() {
-        log.line(level, None, &line);
+    let started = Instant::now();
+    // The mission file: the first goal, with an id of its own (not an action goal).
+    let file_goal = o.mission.clone().map(|m| {
+        let id = GoalId::new_random();
+        let _ = exec.start(id, m, RunKind::MissionFile, 0.0);
+        id
+    });
+    if let Some(m) = &o.mission {
+        let probe = fcc_mission::MissionRun::new(fcc_mission::RunConfig {
+            mission: m.clone(),
+            timeout_s: o.timeout_s,
+            arm_timeout_s: o.arm_timeout_s,
+            hover_s: o.hover_s,
+            kind: RunKind::MissionFile,
+        });
+        for (level, line) in probe.notes() {
+            log.line(level, None, &line);
+        }
     }
-
+    let mut dds = dds;
     let odom_stream = dds.odom_sub.async_stream();
     let status_stream = dds.status_sub.async_stream();
+    let home_stream = dds.home_sub.async_stream();
     tokio::pin!(odom_stream);
     tokio::pin!(status_stream);
+    tokio::pin!(home_stream);
     let mut clock_stream = dds.clock_sub.as_ref().map(|s| Box::pin(s.async_stream()));
 
     let mut clock = RosClock::new(o.use_sim_time);
-    let mut odom: Option<Odometry> = None;
-    let mut status: Option<Status> = None;
-    let started = Instant::now();
+    let mut heard = Heard::default();
     let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / o.rate_hz));
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let fence = Fence::from_param_table();
 
     loop {
         tokio::select! {
-            Some(r) = odom_stream.next() => { if let Ok((m, _)) = r { odom = Some(m); } continue; }
-            Some(r) = status_stream.next() => { if let Ok((m, _)) = r { status = Some(m); } continue; }
+            Some(r) = odom_stream.next() => { if let Ok((m, _)) = r { heard.odom = Some(m); } continue; }
+            Some(r) = status_stream.next() => { if let Ok((m, _)) = r { heard.status = Some(m); } continue; }
+            Some(r) = home_stream.next() => {
+                if let Ok((m, _)) = r { on_home(&mut heard, &m, &log); }
+                continue;
+            }
             Some(r) = async {
                 match clock_stream.as_mut() {
                     Some(s) => s.next().await,
@@ -494,7 +550,17 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             _ = tick.tick() => {}
         }
         let now_ns = clock.now_ns();
-        let input = match (odom.as_ref(), status.as_ref(), now_ns) {
+        let wall_s = started.elapsed().as_secs_f64();
+        take_goals(
+            &mut dds.follow,
+            &mut exec,
+            &heard,
+            fence,
+            wall_s,
+            &log,
+            now_ns,
+        );
+        let input = match (heard.odom.as_ref(), heard.status.as_ref(), now_ns) {
             (Some(od), Some(st), Some(now_ns)) => {
                 let (pos_ned_m, vel_ned_mps) = odom_to_ned(od);
                 Input::Ready(Sample {
@@ -505,47 +571,112 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
                 })
             }
             _ => Input::Waiting {
-                odom: odom.is_some(),
-                status: status.is_some(),
+                odom: heard.odom.is_some(),
+                status: heard.status.is_some(),
                 clock: now_ns.is_some(),
             },
         };
-        let step = run.tick(started.elapsed().as_secs_f64(), input);
-        if send(&dds, &log, now_ns, &step) {
-            run.setpoint_published();
+        let out = exec.tick(wall_s, input);
+        if send(&dds, &log, now_ns, &out.step) {
+            exec.setpoint_published();
         }
-        match step.outcome {
-            None => {}
-            Some(Outcome::Complete) => {
-                // Stay on the graph a moment so reliable readers get the last messages
-                // (a sample lost on a busy loopback is re-sent only while the writer lives).
-                tokio::time::sleep(LINGER).await;
-                return Ok(());
+        if let Some((id, p)) = out.feedback {
+            dds.follow.feedback(id, feedback(&p));
+        }
+        if let Some(f) = out.finished {
+            if Some(f.id) == file_goal && f.end != GoalEnd::Preempted {
+                return file_goal_end(&f, &log, now_ns).await;
             }
-            Some(Outcome::Failed(msg)) => return Err((1, msg)),
+            if Some(f.id) == file_goal {
+                log.line(Level::Warn, now_ns, "the mission file's goal was preempted by an action goal: serving actions from now on (no exit)");
+            }
+            finish(&mut dds.follow, &f, &log, now_ns);
         }
+        dds.follow.poll_results();
+    }
+}
+
+/// The mission file's goal ended: the node's exit (after a moment on the graph, so reliable
+/// readers get the last messages: a sample lost on a busy loopback is re-sent only while the
+/// writer lives).
+async fn file_goal_end(
+    f: &Finished<GoalId>,
+    log: &Log,
+    now_ns: Option<i64>,
+) -> Result<(), (i32, String)> {
+    match &f.end {
+        GoalEnd::Succeeded => {
+            tokio::time::sleep(LINGER).await;
+            Ok(())
+        }
+        GoalEnd::Failsafe(m) | GoalEnd::PilotOverride(m) => Err((1, m.clone())),
+        // Not reached: a preempted file goal keeps the node serving; only action goals cancel.
+        GoalEnd::Preempted | GoalEnd::Canceled => {
+            log.info(
+                now_ns,
+                &format!("the mission file's goal ended: {:?}", f.end),
+            );
+            Err((1, format!("mission file goal {:?}", f.end).to_lowercase()))
+        }
+    }
+}
+
+/// `home` from the bridge: the origin for lat/lon goals (logged when it is new or moves).
+fn on_home(heard: &mut Heard, m: &NavSatFix, log: &Log) {
+    let h = Home {
+        latitude_deg: m.latitude,
+        longitude_deg: m.longitude,
+        altitude_m: m.altitude,
+    };
+    if heard.home != Some(h) {
+        log.info(
+            None,
+            &format!(
+                "home: {:.7}, {:.7}, {:.1} m (lat/lon goals are converted against it)",
+                h.latitude_deg, h.longitude_deg, h.altitude_m
+            ),
+        );
+        heard.home = Some(h);
     }
 }
 
 /// The first log line: the node, its DDS set-up, the mission and how it ends.
 fn log_start(o: &Options, log: &Log) {
-    log.info(None, &format!(
-        "node {}/{} (DDS domain {}, {}), mission {} ({} waypoints, {} m/s), setpoints at {} Hz, {} time, {}",
-        o.namespace.trim_end_matches('/'),
-        o.node_name,
-        o.dds.domain_id,
-        if o.dds.localhost_only { "loopback only" } else { "all interfaces" },
-        o.mission_file,
-        o.mission.waypoints.len(),
-        o.mission.speed_mps,
-        o.rate_hz,
-        if o.use_sim_time { "sim (/clock)" } else { "system" },
-        if o.hover_s > 0.0 {
-            format!("then {} s in HOLD before landing", o.hover_s)
-        } else {
-            "landing after the last waypoint".into()
-        }
-    ));
+    let mission = match &o.mission {
+        Some(m) => format!(
+            "mission {} ({} waypoints, {} m/s)",
+            o.mission_file,
+            m.waypoints.len(),
+            m.speed_mps
+        ),
+        None => "no mission file".into(),
+    };
+    log.info(
+        None,
+        &format!(
+            "node {}/{} (DDS domain {}, {}), {mission}, action {}, setpoints at {} Hz, {} time, {}",
+            o.namespace.trim_end_matches('/'),
+            o.node_name,
+            o.dds.domain_id,
+            if o.dds.localhost_only {
+                "loopback only"
+            } else {
+                "all interfaces"
+            },
+            o.name(FOLLOW_WAYPOINTS_ACTION),
+            o.rate_hz,
+            if o.use_sim_time {
+                "sim (/clock)"
+            } else {
+                "system"
+            },
+            if o.hover_s > 0.0 {
+                format!("then {} s in HOLD before landing", o.hover_s)
+            } else {
+                "landing after the last waypoint".into()
+            }
+        ),
+    );
 }
 
 /// Does what one cycle of [`MissionRun`] asks: log lines (stamped `now_ns`), `cmd/arm`,

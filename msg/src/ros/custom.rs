@@ -1,4 +1,5 @@
-//! The custom messages of the ROS 2 interface package `fcc_msgs` (`msg/msg/*.msg`).
+//! The custom messages of the ROS 2 interface package `fcc_msgs` (`msg/msg/*.msg`; its actions
+//! are in [`super::action`]).
 //! The `.msg` files are the source of truth: these structs follow their field order (checked by
 //! the `custom_fields_match_msg_files` test against [`Altitude::FIELDS`] etc.), and their
 //! constants (`Status::MODE_HOLD`, `Altitude::SOURCE_LASER`, …) and `FIELDS` are generated
@@ -93,6 +94,25 @@ ros_msg!(
     "LinkFrame",
     include_str!("../../msg/LinkFrame.msg"),
     [Header]
+);
+
+/// fcc_msgs/msg/Waypoint (see `msg/msg/Waypoint.msg`): a goal's point, local ENU metres in
+/// `map` or WGS-84 latitude/longitude; altitude above home in both.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Waypoint {
+    pub frame: u8,
+    pub x_m: f64,
+    pub y_m: f64,
+    pub z_m: f64,
+    pub latitude_deg: f64,
+    pub longitude_deg: f64,
+    pub altitude_m: f64,
+}
+ros_msg!(
+    Waypoint,
+    "fcc_msgs",
+    "Waypoint",
+    include_str!("../../msg/Waypoint.msg")
 );
 
 include!(concat!(env!("OUT_DIR"), "/ros_msg_consts.rs"));

@@ -10,9 +10,11 @@
 //! **Distro**: Jazzy (ros2-client's default). `sensor_msgs/Range` has `float32 variance` after
 //! `range` in Jazzy but not in Humble: a Humble reader misdecodes it.
 
+pub mod action;
 pub mod custom;
 pub mod std_types;
 
+pub use action::*;
 pub use custom::*;
 pub use std_types::*;
 

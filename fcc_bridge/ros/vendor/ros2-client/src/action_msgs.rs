@@ -55,7 +55,7 @@ impl Message for GoalStatusArray {}
 //   goals accepted at or before the timestamp.
 #[derive(Clone, Serialize, Deserialize, Debug)]
 pub struct CancelGoalRequest {
-  pub(crate) goal_info: GoalInfo,
+  pub goal_info: GoalInfo, // fcc (vendored): pub, so a server polling its cancel service can read it
 }
 impl Message for CancelGoalRequest {}
 

@@ -1,0 +1,419 @@
+//! The `follow_waypoints` action server (`fcc_msgs/action/FollowWaypoints`) of the mission node:
+//! ros2-client's [`ActionServer`] (its `_action/send_goal`, `cancel_goal`, `get_result` services
+//! and `feedback`, `status` topics, the names and wrappers rclpy's ActionClient uses), polled
+//! once per cycle. This file keeps the goals' statuses and results and answers the services,
+//! and turns goals into the mission logic's ([`take_goals`], [`finish`], [`feedback`]); what a
+//! goal does is `fcc_mission::executive` and `fcc_mission::goal` (pure). ros2-client's `AsyncActionServer` is not
+//! used: its result call waits for the client's result request, and two goals ending together
+//! (a preemption) can each take the other's request (see the vendored crate's VENDOR.md).
+
+use super::{Heard, Log};
+use fcc_mission::executive::{Executive, Finished, GoalEnd};
+use fcc_mission::goal::{self, Fence, GoalPoint, GoalSpec};
+use fcc_mission::run::{Level, RunKind, RunProgress};
+use fcc_msgs::ros::{
+    FollowWaypointsFeedback, FollowWaypointsGoal, FollowWaypointsResult, Waypoint,
+};
+use ros2_client::action::{
+    ActionServer, ActionServerQosPolicies, GetResultResponse, GoalId, GoalInfo, GoalStatusEnum,
+};
+use ros2_client::action_msgs::{
+    CancelGoalResponse, CancelGoalResponseEnum, GoalStatus, GoalStatusArray,
+};
+use ros2_client::builtin_interfaces::Time as RosTime;
+use ros2_client::qos::{Durability, History};
+use ros2_client::{ActionTypeName, Name, Node, QosProfile, RmwRequestId, ServiceMapping};
+
+type Server = ActionServer<FollowWaypointsGoal, FollowWaypointsResult, FollowWaypointsFeedback>;
+
+/// Finished goals kept for late result requests.
+const KEEP_FINISHED: usize = 16;
+
+struct Entry {
+    id: GoalId,
+    accepted: RosTime,
+    status: GoalStatusEnum,
+    result: Option<FollowWaypointsResult>,
+}
+
+/// A goal request to decide on: accept it ([`FollowWaypointsServer::accept`]) or not.
+pub struct NewGoal {
+    pub id: GoalId,
+    pub goal: FollowWaypointsGoal,
+}
+
+/// The server and its goals.
+pub struct FollowWaypointsServer {
+    server: Server,
+    goals: Vec<Entry>,
+    waiting_results: Vec<(GoalId, RmwRequestId)>,
+}
+
+fn is_terminal(s: GoalStatusEnum) -> bool {
+    matches!(
+        s,
+        GoalStatusEnum::Succeeded | GoalStatusEnum::Canceled | GoalStatusEnum::Aborted
+    )
+}
+
+/// The QoS rclpy's ActionClient uses: services reliable, volatile, keep last 10; feedback the
+/// same; status reliable, transient local, keep last 1 (`qos_profile_action_status_default`).
+fn qos() -> ActionServerQosPolicies {
+    let services = fcc_ros::ros_node::reliable_qos(10);
+    let status = QosProfile::publisher_default()
+        .reliability_reliable(ros2_client::qos::WhenFull::Fail)
+        .durability(Durability::TransientLocal)
+        .history(History::KeepLast { depth: 1 });
+    ActionServerQosPolicies {
+        goal_service: services.clone(),
+        result_service: services.clone(),
+        cancel_service: services.clone(),
+        feedback_publisher: services,
+        status_publisher: status,
+    }
+}
+
+impl FollowWaypointsServer {
+    /// The server on the ROS name `name` (relative: under the node's namespace).
+    pub fn new(node: &mut Node, name: &str) -> Result<Self, String> {
+        let n = Name::parse(name).map_err(|e| format!("action {name}: {e:?}"))?;
+        let (pkg, ty) = fcc_msgs::ros::FOLLOW_WAYPOINTS;
+        let server = node
+            .create_action_server::<FollowWaypointsGoal, FollowWaypointsResult, FollowWaypointsFeedback>(
+                ServiceMapping::Enhanced,
+                &n,
+                &ActionTypeName::new(pkg, ty),
+                qos(),
+            )
+            .map_err(|e| format!("action {name}: {e:?}"))?;
+        Ok(FollowWaypointsServer {
+            server,
+            goals: Vec::new(),
+            waiting_results: Vec::new(),
+        })
+    }
+
+    /// Goal requests received since the last call (each must be accepted: refusals are
+    /// accepted and aborted with the reason, so the client gets it in the result).
+    pub fn new_goals(&mut self) -> Vec<(RmwRequestId, NewGoal)> {
+        let mut out = Vec::new();
+        while let Ok(Some((req, r))) = self.server.receive_goal() {
+            if self.goals.iter().any(|g| g.id == r.goal_id) {
+                continue; // a duplicate id: ignored (its first request was answered)
+            }
+            out.push((
+                req,
+                NewGoal {
+                    id: r.goal_id,
+                    goal: r.goal,
+                },
+            ));
+        }
+        out
+    }
+
+    /// Accepts a goal (status ACCEPTED, then EXECUTING).
+    pub fn accept(&mut self, req: RmwRequestId, id: GoalId) {
+        let accepted = RosTime::now();
+        let _ = self.server.send_goal_response(
+            req,
+            ros2_client::action::SendGoalResponse {
+                accepted: true,
+                stamp: accepted,
+            },
+        );
+        self.goals.push(Entry {
+            id,
+            accepted,
+            status: GoalStatusEnum::Executing,
+            result: None,
+        });
+        self.publish_statuses();
+    }
+
+    /// Cancel requests since the last call: answered here (the running goals they name start
+    /// canceling); returns those goals' ids.
+    pub fn cancel_requests(&mut self) -> Vec<GoalId> {
+        let mut out = Vec::new();
+        while let Ok(Some((req, r))) = self.server.receive_cancel_request() {
+            let GoalInfo { goal_id, stamp } = r.goal_info;
+            let all = goal_id == GoalId::ZERO && stamp == RosTime::ZERO;
+            let named = |g: &Entry| {
+                all || (goal_id != GoalId::ZERO && g.id == goal_id)
+                    || (stamp != RosTime::ZERO && g.accepted <= stamp)
+            };
+            let known = goal_id == GoalId::ZERO || self.goals.iter().any(|g| g.id == goal_id);
+            let canceling: Vec<GoalInfo> = self
+                .goals
+                .iter_mut()
+                .filter(|g| !is_terminal(g.status) && named(g))
+                .map(|g| {
+                    g.status = GoalStatusEnum::Canceling;
+                    GoalInfo {
+                        goal_id: g.id,
+                        stamp: g.accepted,
+                    }
+                })
+                .collect();
+            let return_code = match (canceling.is_empty(), known) {
+                (false, _) => CancelGoalResponseEnum::None,
+                (true, false) => CancelGoalResponseEnum::UnknownGoal,
+                (true, true) if goal_id != GoalId::ZERO => CancelGoalResponseEnum::GoalTerminated,
+                (true, true) => CancelGoalResponseEnum::Rejected,
+            };
+            out.extend(canceling.iter().map(|g| g.goal_id));
+            let _ = self.server.send_cancel_response(
+                req,
+                CancelGoalResponse {
+                    return_code,
+                    goals_canceling: canceling,
+                },
+            );
+            self.publish_statuses();
+        }
+        out
+    }
+
+    /// A goal ended: its status and result (sent to a waiting result request, kept for later).
+    pub fn finish(&mut self, id: GoalId, status: GoalStatusEnum, result: FollowWaypointsResult) {
+        let Some(g) = self.goals.iter_mut().find(|g| g.id == id) else {
+            return; // not an action goal (the mission file's)
+        };
+        g.status = status;
+        g.result = Some(result);
+        self.publish_statuses();
+        self.answer_results();
+        // Forget the oldest finished goals beyond KEEP_FINISHED.
+        while self.goals.iter().filter(|g| is_terminal(g.status)).count() > KEEP_FINISHED {
+            let i = self
+                .goals
+                .iter()
+                .position(|g| is_terminal(g.status))
+                .unwrap();
+            self.goals.remove(i);
+        }
+    }
+
+    /// Result requests since the last call: answered when the goal has ended (an unknown goal:
+    /// status UNKNOWN), else kept until it ends.
+    pub fn poll_results(&mut self) {
+        while let Ok(Some((req, r))) = self.server.receive_result_request() {
+            self.waiting_results.push((r.goal_id, req));
+        }
+        self.answer_results();
+    }
+
+    fn answer_results(&mut self) {
+        let goals = &self.goals;
+        let server = &self.server;
+        self.waiting_results.retain(|(id, req)| {
+            let reply = match goals.iter().find(|g| g.id == *id) {
+                None => Some((GoalStatusEnum::Unknown, FollowWaypointsResult::default())),
+                Some(g) => g.result.clone().map(|r| (g.status, r)),
+            };
+            match reply {
+                Some((status, result)) => {
+                    let _ = server.send_result(*req, GetResultResponse { status, result });
+                    false
+                }
+                None => true,
+            }
+        });
+    }
+
+    /// Feedback of a running goal.
+    pub fn feedback(&self, id: GoalId, f: FollowWaypointsFeedback) {
+        let _ = self.server.send_feedback(id, f);
+    }
+
+    fn publish_statuses(&self) {
+        let status_list = self
+            .goals
+            .iter()
+            .map(|g| GoalStatus {
+                goal_info: GoalInfo {
+                    goal_id: g.id,
+                    stamp: g.accepted,
+                },
+                status: g.status,
+            })
+            .collect();
+        let _ = self
+            .server
+            .send_goal_statuses(GoalStatusArray { status_list });
+    }
+}
+
+// ---- the action's goals ↔ the mission logic (fcc_mission::executive, goal) ----
+
+/// The action's new goals (accepted; refused ones end at once with the reason; a started one
+/// preempts the running goal) and cancel requests (the vehicle holds).
+pub fn take_goals(
+    follow: &mut FollowWaypointsServer,
+    exec: &mut Executive<GoalId>,
+    heard: &Heard,
+    fence: Fence,
+    wall_s: f64,
+    log: &Log,
+    now_ns: Option<i64>,
+) {
+    for (req, g) in follow.new_goals() {
+        follow.accept(req, g.id);
+        match goal::to_mission(&goal_spec(&g.goal), heard.home, fence) {
+            Err(why) => {
+                log.line(
+                    Level::Warn,
+                    now_ns,
+                    &format!("goal {:?} refused: {why}", g.id),
+                );
+                let r = result(FollowWaypointsResult::OUTCOME_REFUSED, why.to_string(), 0);
+                follow.finish(g.id, GoalStatusEnum::Aborted, r);
+            }
+            Ok(m) => {
+                log.info(
+                    now_ns,
+                    &format!(
+                        "goal {:?}: {} waypoints at {} m/s{}",
+                        g.id,
+                        m.waypoints.len(),
+                        m.speed_mps,
+                        if m.land_at_end {
+                            ", then land"
+                        } else {
+                            ", then hold"
+                        }
+                    ),
+                );
+                if let Some(old) = exec.start(g.id, m, RunKind::ActionGoal, wall_s) {
+                    finish(follow, &old, log, now_ns);
+                }
+            }
+        }
+    }
+    for id in follow.cancel_requests() {
+        match exec.cancel(&id, wall_s) {
+            Some(f) => finish(follow, &f, log, now_ns),
+            None => {
+                let r = result(
+                    FollowWaypointsResult::OUTCOME_CANCELED,
+                    "canceled before it ran".into(),
+                    0,
+                );
+                follow.finish(id, GoalStatusEnum::Canceled, r);
+            }
+        }
+    }
+}
+
+/// A goal ended: its result on the action (and a log line).
+pub fn finish(
+    follow: &mut FollowWaypointsServer,
+    f: &Finished<GoalId>,
+    log: &Log,
+    now_ns: Option<i64>,
+) {
+    use FollowWaypointsResult as R;
+    let reached = f.reached as u32;
+    let (status, r) = match &f.end {
+        GoalEnd::Succeeded => (
+            GoalStatusEnum::Succeeded,
+            result(R::OUTCOME_SUCCEEDED, String::new(), reached),
+        ),
+        GoalEnd::Failsafe(m) => (
+            GoalStatusEnum::Aborted,
+            result(R::OUTCOME_FAILSAFE, m.clone(), reached),
+        ),
+        GoalEnd::PilotOverride(m) => (
+            GoalStatusEnum::Aborted,
+            result(R::OUTCOME_PILOT_OVERRIDE, m.clone(), reached),
+        ),
+        GoalEnd::Preempted => (
+            GoalStatusEnum::Aborted,
+            result(
+                R::OUTCOME_PREEMPTED,
+                "preempted by a newer goal".into(),
+                reached,
+            ),
+        ),
+        GoalEnd::Canceled => (
+            GoalStatusEnum::Canceled,
+            result(
+                R::OUTCOME_CANCELED,
+                "canceled: holding at the current point (cmd/mode hold)".into(),
+                reached,
+            ),
+        ),
+    };
+    let line = format!(
+        "goal {:?} ended: {:?}{}{}",
+        f.id,
+        status,
+        if r.reason.is_empty() { "" } else { ": " },
+        r.reason
+    );
+    log.line(
+        if status == GoalStatusEnum::Succeeded {
+            Level::Info
+        } else {
+            Level::Warn
+        },
+        now_ns,
+        &line,
+    );
+    follow.finish(f.id, status, r);
+}
+
+fn result(outcome: u8, reason: String, waypoints_reached: u32) -> FollowWaypointsResult {
+    FollowWaypointsResult {
+        outcome,
+        reason,
+        waypoints_reached,
+    }
+}
+
+/// The action's goal as the plain goal the mission logic checks (the ONE place where
+/// `fcc_msgs/Waypoint` frames are read).
+fn goal_spec(g: &FollowWaypointsGoal) -> GoalSpec {
+    let point = |w: &Waypoint| match w.frame {
+        Waypoint::FRAME_GLOBAL => GoalPoint::Global {
+            latitude_deg: w.latitude_deg,
+            longitude_deg: w.longitude_deg,
+            altitude_m: w.altitude_m,
+        },
+        // An unknown frame reads as NaN: refused as not finite.
+        Waypoint::FRAME_LOCAL_ENU => GoalPoint::LocalEnu {
+            x_m: w.x_m,
+            y_m: w.y_m,
+            z_m: w.z_m,
+        },
+        _ => GoalPoint::LocalEnu {
+            x_m: f64::NAN,
+            y_m: f64::NAN,
+            z_m: f64::NAN,
+        },
+    };
+    GoalSpec {
+        points: g.waypoints.iter().map(point).collect(),
+        speed_mps: g.speed_mps,
+        accept_radius_m: g.accept_radius_m,
+        hold_s: g.hold_s,
+        heading_deg: if g.use_heading {
+            g.heading_deg
+        } else {
+            f32::NAN
+        },
+        takeoff_alt_m: g.takeoff_alt_m,
+        land_at_end: g.land_at_end,
+    }
+}
+
+pub fn feedback(p: &RunProgress) -> FollowWaypointsFeedback {
+    FollowWaypointsFeedback {
+        current_waypoint: p.waypoint as u32,
+        waypoint_count: p.waypoint_count as u32,
+        phase: p.phase.into(),
+        distance_to_go_m: p.distance_to_go_m,
+        eta_s: p.eta_s,
+        cross_track_m: p.cross_track_m,
+    }
+}
