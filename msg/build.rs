@@ -94,6 +94,11 @@ fn action_parts(text: &str) -> Result<[String; 3], String> {
         .map_err(|p: Vec<String>| format!("{} parts (want goal --- result --- feedback)", p.len()))
 }
 
+/// The actions whose result and feedback parts are [`SHARED_BY`]'s, word for word (the mission
+/// executive's result and feedback): they get type aliases instead of structs of their own.
+const SHARING: &[&str] = &["GoTo", "Land", "Takeoff"];
+const SHARED_BY: &str = "FollowWaypoints";
+
 fn main() {
     println!("cargo:rerun-if-changed=msg");
     println!("cargo:rerun-if-changed=action");
@@ -113,12 +118,26 @@ fn main() {
     let dest = Path::new(&std::env::var("OUT_DIR").unwrap()).join("ros_msg_consts.rs");
     std::fs::write(dest, out).expect("write ros_msg_consts.rs");
     let mut out = String::new();
+    let shared = std::fs::read_to_string(format!("action/{SHARED_BY}.action"))
+        .ok()
+        .and_then(|t| action_parts(&t).ok());
     for p in files("action", "action") {
         let name = p.file_stem().unwrap().to_string_lossy().to_string();
         let text = std::fs::read_to_string(&p).expect("read .action file");
         let file = format!("action/{name}.action");
         let parts = action_parts(&text).unwrap_or_else(|e| panic!("{file}: {e}"));
-        for (part, text) in ["Goal", "Result", "Feedback"].iter().zip(parts) {
+        let borrows = SHARING.contains(&name.as_str());
+        for (i, (part, text)) in ["Goal", "Result", "Feedback"].iter().zip(parts).enumerate() {
+            if borrows && i > 0 {
+                // The mission executive's result and feedback: one Rust type for every action.
+                let same = shared.as_ref().is_some_and(|s| s[i] == text);
+                assert!(
+                    same,
+                    "{file}: its {part} part must be the same text as action/{SHARED_BY}.action's"
+                );
+                writeln!(out, "/// `{file}` ({part}): the same fields as `{SHARED_BY}{part}` (checked by `msg/build.rs`).\npub type {name}{part} = {SHARED_BY}{part};").unwrap();
+                continue;
+            }
             match generate(&format!("{name}{part}"), &format!("{file} ({part})"), &text) {
                 Ok(code) => out.push_str(&code),
                 Err(e) => panic!("{e}"),

@@ -98,6 +98,10 @@ pub enum Refusal {
     },
     /// A field out of its range (the mission's own checks).
     Invalid(MissionError),
+    /// Take-off or landing: no odometry from the bridge yet (where the vehicle is).
+    NoPosition,
+    /// Landing: the vehicle is on the ground (disarmed).
+    OnGround,
 }
 
 impl fmt::Display for Refusal {
@@ -118,6 +122,11 @@ impl fmt::Display for Refusal {
                 "waypoints[{index}] is above the geofence: {altitude_m:.1} m above home, limits.fence_alt_m is {ceiling_m:.0} m"
             ),
             Refusal::Invalid(e) => write!(f, "{e}"),
+            Refusal::NoPosition => write!(
+                f,
+                "where the vehicle is is not known yet (no `state/odom` from the bridge)"
+            ),
+            Refusal::OnGround => write!(f, "the vehicle is on the ground (disarmed): nothing to land"),
         }
     }
 }
@@ -205,6 +214,50 @@ pub fn to_mission(g: &GoalSpec, home: Option<Home>, fence: Fence) -> Result<Miss
     Ok(m)
 }
 
+/// The `takeoff` action as a goal: the point above where the vehicle is (`here_enu_m`, `map`),
+/// at `altitude_m` above home; taking off to that height when on the ground; then holding.
+/// Refused without a position; the height is checked by [`to_mission`] (range, fence ceiling).
+pub fn takeoff_spec(altitude_m: f32, here_enu_m: Option<[f64; 3]>) -> Result<GoalSpec, Refusal> {
+    let [x_m, y_m, _] = here_enu_m.ok_or(Refusal::NoPosition)?;
+    Ok(GoalSpec {
+        points: vec![GoalPoint::LocalEnu {
+            x_m,
+            y_m,
+            z_m: f64::from(altitude_m),
+        }],
+        speed_mps: 0.0,
+        accept_radius_m: 0.0,
+        hold_s: 0.0,
+        heading_deg: f32::NAN,
+        takeoff_alt_m: altitude_m,
+        land_at_end: false,
+    })
+}
+
+/// The `land` action as a goal: land where the vehicle is (`here_enu_m`), or at home after
+/// flying there at its current height. Refused on the ground (not `armed`) or without a
+/// position.
+pub fn land_spec(
+    at_home: bool,
+    here_enu_m: Option<[f64; 3]>,
+    armed: bool,
+) -> Result<GoalSpec, Refusal> {
+    if !armed {
+        return Err(Refusal::OnGround);
+    }
+    let [x_m, y_m, z_m] = here_enu_m.ok_or(Refusal::NoPosition)?;
+    let (x_m, y_m) = if at_home { (0.0, 0.0) } else { (x_m, y_m) };
+    Ok(GoalSpec {
+        points: vec![GoalPoint::LocalEnu { x_m, y_m, z_m }],
+        speed_mps: 0.0,
+        accept_radius_m: 0.0,
+        hold_s: 0.0,
+        heading_deg: f32::NAN,
+        takeoff_alt_m: 0.0,
+        land_at_end: true,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -229,6 +282,39 @@ mod tests {
 
     fn local(x_m: f64, y_m: f64, z_m: f64) -> GoalPoint {
         GoalPoint::LocalEnu { x_m, y_m, z_m }
+    }
+
+    /// Take-off: straight up where the vehicle stands, to the asked height, then hold; the
+    /// fence ceiling and the height range still apply. Land: where it is or at home, at its
+    /// height; refused on the ground and without a position.
+    #[test]
+    fn takeoff_and_land_goals() {
+        let fence = Fence::from_param_table();
+        let t = takeoff_spec(4.0, Some([3.0, -2.0, 0.1])).unwrap();
+        assert_eq!(t.points, vec![local(3.0, -2.0, 4.0)]);
+        assert_eq!((t.takeoff_alt_m, t.land_at_end), (4.0, false));
+        let m = to_mission(&t, None, fence).unwrap();
+        assert_eq!(m.takeoff_alt_m, 4.0);
+        assert_eq!(takeoff_spec(4.0, None), Err(Refusal::NoPosition));
+        let high = takeoff_spec(150.0, Some([0.0; 3])).unwrap();
+        assert!(matches!(
+            to_mission(&high, None, fence),
+            Err(Refusal::AboveFence { .. })
+        ));
+        let l = land_spec(false, Some([3.0, -2.0, 6.0]), true).unwrap();
+        assert_eq!(
+            (l.points.clone(), l.land_at_end),
+            (vec![local(3.0, -2.0, 6.0)], true)
+        );
+        let h = land_spec(true, Some([3.0, -2.0, 6.0]), true).unwrap();
+        assert_eq!(h.points, vec![local(0.0, 0.0, 6.0)]);
+        assert!(to_mission(&h, None, fence).is_ok());
+        assert_eq!(
+            land_spec(false, Some([0.0; 3]), false),
+            Err(Refusal::OnGround)
+        );
+        assert_eq!(land_spec(false, None, true), Err(Refusal::NoPosition));
+        assert!(Refusal::OnGround.to_string().contains("on the ground"));
     }
 
     /// A point 20 m north and 10 m east of home, by its latitude/longitude (the inverse

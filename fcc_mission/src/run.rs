@@ -752,6 +752,7 @@ pub(crate) mod tests {
             timeout_s: 600.0,
             arm_timeout_s: 60.0,
             hover_s: 0.0,
+            kind: RunKind::MissionFile,
         });
         let steps = fly(&mut r, &mut Vehicle::new(), 120.0, |_, _| {});
         let with_sp: Vec<&Step> = steps

@@ -303,7 +303,8 @@ class ParticipantEntitiesInfo(IdlStruct,
     node_entities_info_seq: sequence[NodeEntitiesInfo]
 
 
-# The mission node's action (fcc_msgs/action/FollowWaypoints, issue 17): its two topics, as
+# The mission node's actions (fcc_msgs/action/FollowWaypoints, GoTo, Takeoff, Land; issue 17):
+# their topics, as
 # rmw names them (`_action/feedback`, `_action/status`), written from the .action file and
 # action_msgs/unique_identifier_msgs.
 @dataclass
@@ -343,3 +344,53 @@ class FollowWaypointsFeedbackMessage(IdlStruct,
                                      typename="fcc_msgs::action::dds_::FollowWaypoints_FeedbackMessage_"):
     goal_id: UUID
     feedback: FollowWaypointsFeedback
+
+
+# GoTo, Takeoff and Land share FollowWaypoints' feedback fields (msg/build.rs checks the .action
+# files) under their own type names.
+@dataclass
+class GoToFeedback(IdlStruct, typename="fcc_msgs::action::dds_::GoTo_Feedback_"):
+    current_waypoint: uint32
+    waypoint_count: uint32
+    phase: str
+    distance_to_go_m: float32
+    eta_s: float32
+    cross_track_m: float32
+
+
+@dataclass
+class GoToFeedbackMessage(IdlStruct, typename="fcc_msgs::action::dds_::GoTo_FeedbackMessage_"):
+    goal_id: UUID
+    feedback: GoToFeedback
+
+
+@dataclass
+class TakeoffFeedback(IdlStruct, typename="fcc_msgs::action::dds_::Takeoff_Feedback_"):
+    current_waypoint: uint32
+    waypoint_count: uint32
+    phase: str
+    distance_to_go_m: float32
+    eta_s: float32
+    cross_track_m: float32
+
+
+@dataclass
+class TakeoffFeedbackMessage(IdlStruct, typename="fcc_msgs::action::dds_::Takeoff_FeedbackMessage_"):
+    goal_id: UUID
+    feedback: TakeoffFeedback
+
+
+@dataclass
+class LandFeedback(IdlStruct, typename="fcc_msgs::action::dds_::Land_Feedback_"):
+    current_waypoint: uint32
+    waypoint_count: uint32
+    phase: str
+    distance_to_go_m: float32
+    eta_s: float32
+    cross_track_m: float32
+
+
+@dataclass
+class LandFeedbackMessage(IdlStruct, typename="fcc_msgs::action::dds_::Land_FeedbackMessage_"):
+    goal_id: UUID
+    feedback: LandFeedback

@@ -255,8 +255,10 @@ def observe(a):
     # Every topic of every vehicle: the known ones and every one discovered.
     for v in vehicles:
         # An action's topics carry messages only while a goal runs (none here: the missions
-        # are files): discovered and typed, not required to carry data.
-        missing = [n for n in names if count.get((v, n), 0) == 0 and "/_action/" not in n]
+        # are files), `setpoint/heading` only with a mission heading (`yaw_deg`, none here):
+        # discovered and typed, not required to carry data.
+        on_demand = lambda n: "/_action/" in n or n == "setpoint/heading"  # noqa: E731
+        missing = [n for n in names if count.get((v, n), 0) == 0 and not on_demand(n)]
         c.check(f"/uav{v}: every topic received ({sum(1 for n in names if (v, n) in readers)} topics)",
                 not missing, f"none on {missing}" if missing else "")
         discovered = {t[len(f"rt/uav{v}/"):] for (pk, t, ty, kind) in endpoints.values()

@@ -66,6 +66,9 @@ class Client:
         self.peer = Peer("rclpy_actions", use_sim_time=True)
         self.node = self.peer.main
         self.client = ActionClient(self.node, FollowWaypoints, ACTION)
+        from fcc_msgs.action import GoTo, Land, Takeoff
+        self.other = {k: (T, ActionClient(self.node, T, f"{NS}/mission/{k}"))
+                      for k, T in (("go_to", GoTo), ("takeoff", Takeoff), ("land", Land))}
         self.status = None
         self.home = None
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -82,6 +85,8 @@ class Client:
 
     def ready(self, secs=60):
         self.peer.wait(lambda: self.client.server_is_ready(), secs, f"the action server {ACTION}")
+        for k, (_, cl) in self.other.items():
+            self.peer.wait(cl.server_is_ready, secs, f"the action server {NS}/mission/{k}")
         self.peer.wait(lambda: self.status is not None and self.now() > 0, secs, "status and /clock")
 
     def goal(self, points, speed=3.0, radius=0.0, hold=0.0, takeoff=0.0, land=False, heading=math.nan):
@@ -102,11 +107,20 @@ class Client:
         g.heading_deg = 0.0 if math.isnan(heading) else float(heading)
         return g
 
-    def send(self, goal, name):
-        """Sends a goal: a record with its handle, feedback [(wall, sim, fb)] and result."""
+    def other_goal(self, action, **fields):
+        """A goal of `go_to`, `takeoff` or `land` with these fields."""
+        g = self.other[action][0].Goal()
+        for k, v in fields.items():
+            setattr(g, k, v)
+        return g
+
+    def send(self, goal, name, action=None):
+        """Sends a goal (of FollowWaypoints, or of `action`): a record with its handle, feedback
+        [(wall, sim, fb)] and result."""
         rec = {"name": name, "feedback": [], "result": None, "sent_sim": self.now(), "handle": None}
         fb = lambda m: rec["feedback"].append((time.monotonic(), self.now(), m.feedback))  # noqa: E731
-        fut = self.client.send_goal_async(goal, feedback_callback=fb)
+        client = self.other[action][1] if action else self.client
+        fut = client.send_goal_async(goal, feedback_callback=fb)
         self.peer.wait(fut.done, 20, f"goal '{name}' answered")
         rec["handle"] = fut.result()
         if not rec["handle"].accepted:
@@ -246,9 +260,59 @@ def goals(a):
             describe(res_b))
     ev["preempt"] = {"at": rec_b["sent_sim"], "point": b_point, "first_result": rec_a["result_sim"],
                      "done": rec_b.get("result_sim")}
+    takeoff_go_to_land(c, cl, ev)
     json.dump(ev, open(a.events, "w"))
     cl.peer.shutdown()
     return c.done()
+
+
+def takeoff_go_to_land(c, cl, ev):
+    """(e) `land` on the ground: refused; (f) `takeoff` to 4 m; (g) `go_to` a point; (h) `land`
+    at home: each SUCCEEDED (judged on the truth by `check`)."""
+    rec = cl.send(cl.other_goal("land"), "land on the ground", "land")
+    res = cl.wait_result(rec, 20)
+    print(f"(e) land while disarmed: {describe(res)}", flush=True)
+    c.check("(e) land on the ground: refused with the reason", res.status == 6 and res.result.outcome == 1
+            and "on the ground" in res.result.reason, describe(res))
+    steps = [("takeoff", "(f) takeoff to 4 m", {"altitude_m": 4.0}),
+             ("go_to", "(g) go_to (8, 8, 4) m", {"target": None, "speed_mps": 3.0, "accept_radius_m": 0.5}),
+             ("land", "(h) land at home", {"at_home": True})]
+    for action, name, fields in steps:
+        if action == "go_to":
+            from fcc_msgs.msg import Waypoint
+            fields["target"] = Waypoint(frame=Waypoint.FRAME_LOCAL_ENU, x_m=8.0, y_m=8.0, z_m=4.0)
+        rec = cl.send(cl.other_goal(action, **fields), name, action)
+        res = cl.wait_result(rec, 120)
+        n, hz_w, _, gap = feedback_rates(rec)
+        print(f"{name}: {describe(res)}; feedback {n} messages, {hz_w:.1f} Hz wall", flush=True)
+        c.check(f"{name}: SUCCEEDED, feedback ≥ 1 Hz", res.status == 4 and res.result.outcome == 0
+                and hz_w >= 1.0 and gap <= 1.0, f"{describe(res)}; {hz_w:.1f} Hz, gap {gap:.2f} s")
+        ev[action] = {"from": rec["sent_sim"], "to": rec.get("result_sim")}
+    cl.peer.wait(lambda: not cl.status.armed, 30, "disarmed after the landing")
+    c.check("(h) disarmed after land", not cl.status.armed, cl.status.mode_name)
+
+
+def check_takeoff_go_to_land(c, log, ev, home_ne):
+    """(f)-(h) on the truth: the take-off climbs where it stands to 4 m, go_to reaches its point,
+    the landing at home ends on the ground within 2 m of home (the GPS error of the map frame)."""
+    ts = log["t_s"]
+    rows = lambda t0, t1: [i for i, t in enumerate(ts) if t0 <= t <= t1]  # noqa: E731
+    pos = lambda i: (log["true_n_m"][i], log["true_e_m"][i], -log["true_d_m"][i])  # noqa: E731
+    t = ev["takeoff"]
+    up = rows(t["from"], t["to"])
+    drift = max(math.dist(pos(i)[:2], pos(up[0])[:2]) for i in up)
+    alt = pos(up[-1])[2]
+    print(f"(f) takeoff: true height {alt:.2f} m at the result (asked 4 m above home), horizontal drift {drift:.2f} m", flush=True)
+    c.check("(f) takeoff: true height at the result within 0.5 m of 4 m, straight up (drift ≤ 2 m: the GPS error of the hold)",
+            abs(alt - 4.0) <= 0.5 and drift <= 2.0, f"{alt:.2f} m, drift {drift:.2f} m")
+    g = ev["go_to"]
+    d = min(math.dist(pos(i), (8.0 + home_ne[0], 8.0 + home_ne[1], 4.0)) for i in rows(g["from"], g["to"]))
+    c.check("(g) go_to: the true path reaches the point (≤ 2 m)", d <= 2.0, f"closest {d:.2f} m")
+    last = len(ts) - 1
+    dh = math.dist(pos(last)[:2], home_ne)
+    print(f"(h) land at home: {dh:.2f} m from home, mode {log['mode'][last]}", flush=True)
+    c.check("(h) land at home: on the ground within 2 m of home, disarmed", dh <= 2.0 and pos(last)[2] < 0.3
+            and log["mode"][last] == "Disarmed", f"{dh:.2f} m, height {pos(last)[2]:.2f} m, {log['mode'][last]}")
 
 
 # -------------------------------------------------------------------------------------- check
@@ -308,7 +372,9 @@ def check(a):
     flown = rows(pr["at"], pr["done"] or ts[-1])
     d = min(math.dist(pos(i), (y + home_ne[0], x + home_ne[1], z)) for i in flown)
     c.check("(c) after the preemption the true path reaches the second goal's point (≤ 2 m)", d <= 2.0, f"closest {d:.2f} m")
-    c.check("(c) landed and disarmed at the end (CSV)", log["mode"][-1] == "Disarmed", log["mode"][-1])
+    c.check("(c) landed and disarmed at the end of its goal (CSV)",
+            log["mode"][flown[-1]] == "Disarmed", log["mode"][flown[-1]])
+    check_takeoff_go_to_land(c, log, ev, home_ne)
     return c.done()
 
 

@@ -1,8 +1,9 @@
 //! `fcc-mission [--mission FILE] [--ros-args -r __ns:=/fcc -p name:=value …]`
 //!
-//! The mission node: serves the action `follow_waypoints` (`fcc_msgs/action/FollowWaypoints`:
-//! local ENU or lat/lon waypoints, feedback, cancel = hold, a new goal preempts the running
-//! one; `actions.rs`) and, with `--mission FILE`, flies that mission YAML (see
+//! The mission node: serves the actions `mission/follow_waypoints`, `mission/go_to`,
+//! `mission/takeoff` and `mission/land` (`fcc_msgs/action/*`, the table `actions::ACTIONS`:
+//! local ENU or lat/lon waypoints, feedback, cancel = hold, a new goal of any of them preempts
+//! the running one; `actions.rs`) and, with `--mission FILE`, flies that mission YAML (see
 //! `launch_configs/missions/`) as its first goal through the same logic
 //! (`fcc_mission::executive`), then exits with its result.
 //! Subscribes `state/odom` (nav_msgs/Odometry, ENU/FLU), `status` (fcc_msgs/Status) and `home`
@@ -27,7 +28,7 @@
 #[path = "fcc-mission/actions.rs"]
 mod actions;
 
-use actions::{feedback, finish, take_goals, FollowWaypointsServer};
+use actions::{GoalContext, Servers, ACTIONS};
 use clap::Parser;
 use fcc_mission::executive::{ExecConfig, Executive, Finished, GoalEnd};
 use fcc_mission::goal::{Fence, Home};
@@ -290,7 +291,7 @@ struct Dds {
     mode_pub: ros2_client::Publisher<StringMsg>,
     status_pub: ros2_client::Publisher<StringMsg>,
     home_sub: ros2_client::Subscription<NavSatFix>,
-    follow: FollowWaypointsServer,
+    actions: Servers,
 }
 
 /// The participant, node, subscriptions and publishers. Blocking (rustdds can deadlock here
@@ -338,7 +339,7 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
         &topics::HOME.qos.publisher_profile(),
     )?;
     step.set("creating the action server");
-    let follow = FollowWaypointsServer::new(&mut node, &o.follow_waypoints)?;
+    let actions = Servers::new(&mut node, &o.actions)?;
     Ok(Dds {
         _ctx: ctx,
         node,
@@ -351,7 +352,7 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
         mode_pub,
         status_pub,
         home_sub,
-        follow,
+        actions,
     })
 }
 
@@ -431,8 +432,6 @@ fn descriptor(p: &node_params::NodeParam) -> ParameterDescriptor {
 /// The mission node's own topic (std_msgs/String, JSON): the only name not in the bridge's
 /// topic table ([`fcc_ros::topics`]).
 const MISSION_STATUS_TOPIC: &str = "mission/status";
-/// The mission node's action (`fcc_msgs/action/FollowWaypoints`), under its namespace.
-const FOLLOW_WAYPOINTS_ACTION: &str = "mission/follow_waypoints";
 
 /// What [`setup_dds`] needs (owned: it runs on a thread of its own).
 struct DdsSetup {
@@ -445,8 +444,8 @@ struct DdsSetup {
     /// state/odom, status, /clock, setpoint/velocity, cmd/arm, cmd/mode, mission/status,
     /// setpoint/heading, home.
     topics: [String; 9],
-    /// The action's name (after the remaps).
-    follow_waypoints: String,
+    /// The actions' names (after the remaps), in the order of `actions::ACTIONS`.
+    actions: [String; 4],
 }
 
 async fn run(o: Options) -> Result<(), Failure> {
@@ -469,7 +468,7 @@ async fn run(o: Options) -> Result<(), Failure> {
             topics::HOME.name,
         ]
         .map(|t| o.name(t)),
-        follow_waypoints: o.name(FOLLOW_WAYPOINTS_ACTION),
+        actions: ACTIONS.map(|(name, _)| o.name(name)),
     };
     let dds = match APP.setup_dds(move |st| setup_dds(&setup, st)).await {
         Ok(r) => r.map_err(|e| Failure::Exit(1, e))?,
@@ -551,15 +550,14 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
         }
         let now_ns = clock.now_ns();
         let wall_s = started.elapsed().as_secs_f64();
-        take_goals(
-            &mut dds.follow,
-            &mut exec,
-            &heard,
+        dds.actions.take_goals(&mut GoalContext {
+            exec: &mut exec,
+            heard: &heard,
             fence,
             wall_s,
-            &log,
+            log: &log,
             now_ns,
-        );
+        });
         let input = match (heard.odom.as_ref(), heard.status.as_ref(), now_ns) {
             (Some(od), Some(st), Some(now_ns)) => {
                 let (pos_ned_m, vel_ned_mps) = odom_to_ned(od);
@@ -581,7 +579,7 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             exec.setpoint_published();
         }
         if let Some((id, p)) = out.feedback {
-            dds.follow.feedback(id, feedback(&p));
+            dds.actions.feedback(id, &p);
         }
         if let Some(f) = out.finished {
             if Some(f.id) == file_goal && f.end != GoalEnd::Preempted {
@@ -590,9 +588,9 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             if Some(f.id) == file_goal {
                 log.line(Level::Warn, now_ns, "the mission file's goal was preempted by an action goal: serving actions from now on (no exit)");
             }
-            finish(&mut dds.follow, &f, &log, now_ns);
+            dds.actions.finish(&f, &log, now_ns);
         }
-        dds.follow.poll_results();
+        dds.actions.poll_results();
     }
 }
 
@@ -654,7 +652,7 @@ fn log_start(o: &Options, log: &Log) {
     log.info(
         None,
         &format!(
-            "node {}/{} (DDS domain {}, {}), {mission}, action {}, setpoints at {} Hz, {} time, {}",
+            "node {}/{} (DDS domain {}, {}), {mission}, actions {}, setpoints at {} Hz, {} time, {}",
             o.namespace.trim_end_matches('/'),
             o.node_name,
             o.dds.domain_id,
@@ -663,7 +661,7 @@ fn log_start(o: &Options, log: &Log) {
             } else {
                 "all interfaces"
             },
-            o.name(FOLLOW_WAYPOINTS_ACTION),
+            ACTIONS.map(|(name, _)| o.name(name)).join(", "),
             o.rate_hz,
             if o.use_sim_time {
                 "sim (/clock)"

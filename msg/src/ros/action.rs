@@ -50,4 +50,40 @@ pub struct FollowWaypointsFeedback {
 }
 impl ros2_client::Message for FollowWaypointsFeedback {}
 
+/// `fcc_msgs/action/GoTo` (result and feedback: FollowWaypoints', as [`GoToResult`] and
+/// [`GoToFeedback`] say).
+pub const GO_TO: (&str, &str) = ("fcc_msgs", "GoTo");
+/// `fcc_msgs/action/Takeoff`.
+pub const TAKEOFF: (&str, &str) = ("fcc_msgs", "Takeoff");
+/// `fcc_msgs/action/Land`.
+pub const LAND: (&str, &str) = ("fcc_msgs", "Land");
+
+/// The goal of fcc_msgs/action/GoTo: FollowWaypoints' fields for one point.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GoToGoal {
+    pub target: Waypoint,
+    pub speed_mps: f32,
+    pub accept_radius_m: f32,
+    pub hold_s: f32,
+    pub use_heading: bool,
+    pub heading_deg: f32,
+    pub takeoff_alt_m: f32,
+    pub land_at_end: bool,
+}
+impl ros2_client::Message for GoToGoal {}
+
+/// The goal of fcc_msgs/action/Takeoff.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TakeoffGoal {
+    pub altitude_m: f32,
+}
+impl ros2_client::Message for TakeoffGoal {}
+
+/// The goal of fcc_msgs/action/Land.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LandGoal {
+    pub at_home: bool,
+}
+impl ros2_client::Message for LandGoal {}
+
 include!(concat!(env!("OUT_DIR"), "/ros_action_consts.rs"));

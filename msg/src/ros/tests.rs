@@ -130,4 +130,14 @@ fn action_fields_match_action_files() {
     assert_eq!(FollowWaypointsResult::OUTCOME_CANCELED, 5);
     assert_eq!(Waypoint::FRAME_GLOBAL, 1);
     assert_eq!(FOLLOW_WAYPOINTS_DEFINITION.matches("\n---\n").count(), 2);
+    assert_eq!(struct_fields::<GoToGoal>(), GoToGoal::FIELDS);
+    assert_eq!(struct_fields::<TakeoffGoal>(), TakeoffGoal::FIELDS);
+    assert_eq!(struct_fields::<LandGoal>(), LandGoal::FIELDS);
+    // GoTo's goal is FollowWaypoints' with one `target` for the `waypoints`.
+    assert_eq!(GoToGoal::FIELDS[1..], FollowWaypointsGoal::FIELDS[1..]);
+    // The aliases: one result and one feedback type for the four actions.
+    let r: GoToResult = FollowWaypointsResult::default();
+    let f: LandFeedback = FollowWaypointsFeedback::default();
+    let _: (TakeoffResult, TakeoffFeedback, LandResult, GoToFeedback) =
+        (r.clone(), f.clone(), r, f);
 }

@@ -1,5 +1,5 @@
-//! The `follow_waypoints` action server (`fcc_msgs/action/FollowWaypoints`) of the mission node:
-//! ros2-client's [`ActionServer`] (its `_action/send_goal`, `cancel_goal`, `get_result` services
+//! The action servers of the mission node — `follow_waypoints`, `go_to`, `takeoff`, `land`
+//! ([`ACTIONS`]; `fcc_msgs/action/*`): each is ros2-client's [`ActionServer`] (its `_action/send_goal`, `cancel_goal`, `get_result` services
 //! and `feedback`, `status` topics, the names and wrappers rclpy's ActionClient uses), polled
 //! once per cycle. This file keeps the goals' statuses and results and answers the services,
 //! and turns goals into the mission logic's ([`take_goals`], [`finish`], [`feedback`]); what a
@@ -12,7 +12,8 @@ use fcc_mission::executive::{Executive, Finished, GoalEnd};
 use fcc_mission::goal::{self, Fence, GoalPoint, GoalSpec};
 use fcc_mission::run::{Level, RunKind, RunProgress};
 use fcc_msgs::ros::{
-    FollowWaypointsFeedback, FollowWaypointsGoal, FollowWaypointsResult, Waypoint,
+    FollowWaypointsFeedback, FollowWaypointsGoal, FollowWaypointsResult, GoToGoal, LandGoal,
+    TakeoffGoal, Waypoint,
 };
 use ros2_client::action::{
     ActionServer, ActionServerQosPolicies, GetResultResponse, GoalId, GoalInfo, GoalStatusEnum,
@@ -24,7 +25,8 @@ use ros2_client::builtin_interfaces::Time as RosTime;
 use ros2_client::qos::{Durability, History};
 use ros2_client::{ActionTypeName, Name, Node, QosProfile, RmwRequestId, ServiceMapping};
 
-type Server = ActionServer<FollowWaypointsGoal, FollowWaypointsResult, FollowWaypointsFeedback>;
+/// Every action has FollowWaypoints' result and feedback (the mission executive's).
+type Server<G> = ActionServer<G, FollowWaypointsResult, FollowWaypointsFeedback>;
 
 /// Finished goals kept for late result requests.
 const KEEP_FINISHED: usize = 16;
@@ -36,15 +38,15 @@ struct Entry {
     result: Option<FollowWaypointsResult>,
 }
 
-/// A goal request to decide on: accept it ([`FollowWaypointsServer::accept`]) or not.
-pub struct NewGoal {
+/// A goal request to decide on: accept it ([`GoalServer::accept`]) or not.
+pub struct NewGoal<G> {
     pub id: GoalId,
-    pub goal: FollowWaypointsGoal,
+    pub goal: G,
 }
 
-/// The server and its goals.
-pub struct FollowWaypointsServer {
-    server: Server,
+/// One action's server and its goals.
+pub struct GoalServer<G: ros2_client::Message + Clone> {
+    server: Server<G>,
     goals: Vec<Entry>,
     waiting_results: Vec<(GoalId, RmwRequestId)>,
 }
@@ -73,20 +75,24 @@ fn qos() -> ActionServerQosPolicies {
     }
 }
 
-impl FollowWaypointsServer {
-    /// The server on the ROS name `name` (relative: under the node's namespace).
-    pub fn new(node: &mut Node, name: &str) -> Result<Self, String> {
+impl<G> GoalServer<G>
+where
+    G: ros2_client::Message + Clone + 'static,
+{
+    /// The server of the action type `(package, name)` on the ROS name `name` (relative: under
+    /// the node's namespace).
+    pub fn new(node: &mut Node, name: &str, action_type: (&str, &str)) -> Result<Self, String> {
         let n = Name::parse(name).map_err(|e| format!("action {name}: {e:?}"))?;
-        let (pkg, ty) = fcc_msgs::ros::FOLLOW_WAYPOINTS;
+        let (pkg, ty) = action_type;
         let server = node
-            .create_action_server::<FollowWaypointsGoal, FollowWaypointsResult, FollowWaypointsFeedback>(
+            .create_action_server::<G, FollowWaypointsResult, FollowWaypointsFeedback>(
                 ServiceMapping::Enhanced,
                 &n,
                 &ActionTypeName::new(pkg, ty),
                 qos(),
             )
             .map_err(|e| format!("action {name}: {e:?}"))?;
-        Ok(FollowWaypointsServer {
+        Ok(GoalServer {
             server,
             goals: Vec::new(),
             waiting_results: Vec::new(),
@@ -95,7 +101,7 @@ impl FollowWaypointsServer {
 
     /// Goal requests received since the last call (each must be accepted: refusals are
     /// accepted and aborted with the reason, so the client gets it in the result).
-    pub fn new_goals(&mut self) -> Vec<(RmwRequestId, NewGoal)> {
+    pub fn new_goals(&mut self) -> Vec<(RmwRequestId, NewGoal<G>)> {
         let mut out = Vec::new();
         while let Ok(Some((req, r))) = self.server.receive_goal() {
             if self.goals.iter().any(|g| g.id == r.goal_id) {
@@ -221,9 +227,11 @@ impl FollowWaypointsServer {
         });
     }
 
-    /// Feedback of a running goal.
+    /// Feedback of a running goal of this action (others' are not sent here).
     pub fn feedback(&self, id: GoalId, f: FollowWaypointsFeedback) {
-        let _ = self.server.send_feedback(id, f);
+        if self.goals.iter().any(|g| g.id == id) {
+            let _ = self.server.send_feedback(id, f);
+        }
     }
 
     fn publish_statuses(&self) {
@@ -244,77 +252,180 @@ impl FollowWaypointsServer {
     }
 }
 
-// ---- the action's goals ↔ the mission logic (fcc_mission::executive, goal) ----
+// ---- the actions' goals ↔ the mission logic (fcc_mission::executive, goal) ----
 
-/// The action's new goals (accepted; refused ones end at once with the reason; a started one
-/// preempts the running goal) and cancel requests (the vehicle holds).
-pub fn take_goals(
-    follow: &mut FollowWaypointsServer,
-    exec: &mut Executive<GoalId>,
-    heard: &Heard,
-    fence: Fence,
-    wall_s: f64,
-    log: &Log,
-    now_ns: Option<i64>,
-) {
-    for (req, g) in follow.new_goals() {
-        follow.accept(req, g.id);
-        match goal::to_mission(&goal_spec(&g.goal), heard.home, fence) {
+/// The mission node's actions, ONE table: (ROS name relative to the node's namespace,
+/// `fcc_msgs/action` type). [`Servers`] holds one server per row, in this order.
+pub const ACTIONS: [(&str, (&str, &str)); 4] = [
+    ("mission/follow_waypoints", fcc_msgs::ros::FOLLOW_WAYPOINTS),
+    ("mission/go_to", fcc_msgs::ros::GO_TO),
+    ("mission/takeoff", fcc_msgs::ros::TAKEOFF),
+    ("mission/land", fcc_msgs::ros::LAND),
+];
+
+/// The servers of [`ACTIONS`]. Every goal becomes a FollowWaypoints goal of the one
+/// executive (goal ids are UUIDs: each server answers for its own).
+pub struct Servers {
+    follow: GoalServer<FollowWaypointsGoal>,
+    go_to: GoalServer<GoToGoal>,
+    takeoff: GoalServer<TakeoffGoal>,
+    land: GoalServer<LandGoal>,
+}
+
+/// What turning goals into missions needs.
+pub struct GoalContext<'a> {
+    pub exec: &'a mut Executive<GoalId>,
+    pub heard: &'a Heard,
+    pub fence: Fence,
+    pub wall_s: f64,
+    pub log: &'a Log,
+    pub now_ns: Option<i64>,
+}
+
+impl Servers {
+    /// One server per row of [`ACTIONS`], on `names` (the rows' names after the remaps).
+    pub fn new(node: &mut Node, names: &[String; 4]) -> Result<Self, String> {
+        Ok(Servers {
+            follow: GoalServer::new(node, &names[0], ACTIONS[0].1)?,
+            go_to: GoalServer::new(node, &names[1], ACTIONS[1].1)?,
+            takeoff: GoalServer::new(node, &names[2], ACTIONS[2].1)?,
+            land: GoalServer::new(node, &names[3], ACTIONS[3].1)?,
+        })
+    }
+
+    /// New goals (accepted; refused ones end at once with the reason; a started one preempts
+    /// the running goal, whichever action it came from) and cancel requests (the vehicle holds).
+    pub fn take_goals(&mut self, c: &mut GoalContext) {
+        let here = c.heard.odom.as_ref().map(|o| {
+            let p = &o.pose.pose.position;
+            [p.x, p.y, p.z]
+        });
+        let armed = c.heard.status.as_ref().is_some_and(|s| s.armed);
+        let mut ended = Vec::new();
+        take(&mut self.follow, c, &mut ended, |g| Ok(goal_spec(g)));
+        take(&mut self.go_to, c, &mut ended, |g| {
+            let f = FollowWaypointsGoal {
+                waypoints: vec![g.target.clone()],
+                speed_mps: g.speed_mps,
+                accept_radius_m: g.accept_radius_m,
+                hold_s: g.hold_s,
+                use_heading: g.use_heading,
+                heading_deg: g.heading_deg,
+                takeoff_alt_m: g.takeoff_alt_m,
+                land_at_end: g.land_at_end,
+            };
+            Ok(goal_spec(&f))
+        });
+        take(&mut self.takeoff, c, &mut ended, |g| {
+            goal::takeoff_spec(g.altitude_m, here)
+        });
+        take(&mut self.land, c, &mut ended, |g| {
+            goal::land_spec(g.at_home, here, armed)
+        });
+        for f in ended {
+            self.finish(&f, c.log, c.now_ns);
+        }
+    }
+
+    /// A goal ended: its result on its action (and a log line).
+    pub fn finish(&mut self, f: &Finished<GoalId>, log: &Log, now_ns: Option<i64>) {
+        let (status, r) = end_result(f);
+        let line = format!(
+            "goal {:?} ended: {:?}{}{}",
+            f.id,
+            status,
+            if r.reason.is_empty() { "" } else { ": " },
+            r.reason
+        );
+        let level = if status == GoalStatusEnum::Succeeded {
+            Level::Info
+        } else {
+            Level::Warn
+        };
+        log.line(level, now_ns, &line);
+        self.follow.finish(f.id, status, r.clone());
+        self.go_to.finish(f.id, status, r.clone());
+        self.takeoff.finish(f.id, status, r.clone());
+        self.land.finish(f.id, status, r);
+    }
+
+    /// Feedback of the running goal, on its action.
+    pub fn feedback(&self, id: GoalId, p: &RunProgress) {
+        let f = feedback(p);
+        self.follow.feedback(id, f.clone());
+        self.go_to.feedback(id, f.clone());
+        self.takeoff.feedback(id, f.clone());
+        self.land.feedback(id, f);
+    }
+
+    /// Result requests of every action (see [`GoalServer::poll_results`]).
+    pub fn poll_results(&mut self) {
+        self.follow.poll_results();
+        self.go_to.poll_results();
+        self.takeoff.poll_results();
+        self.land.poll_results();
+    }
+}
+
+/// One server's new goals and cancel requests; `spec` reads a goal (or refuses it). Goals it
+/// ends elsewhere (preempted, canceled) go to `ended`, for [`Servers::finish`].
+fn take<G>(
+    srv: &mut GoalServer<G>,
+    c: &mut GoalContext,
+    ended: &mut Vec<Finished<GoalId>>,
+    spec: impl Fn(&G) -> Result<GoalSpec, goal::Refusal>,
+) where
+    G: ros2_client::Message + Clone + 'static,
+{
+    for (req, g) in srv.new_goals() {
+        srv.accept(req, g.id);
+        match spec(&g.goal).and_then(|s| goal::to_mission(&s, c.heard.home, c.fence)) {
             Err(why) => {
-                log.line(
+                c.log.line(
                     Level::Warn,
-                    now_ns,
+                    c.now_ns,
                     &format!("goal {:?} refused: {why}", g.id),
                 );
                 let r = result(FollowWaypointsResult::OUTCOME_REFUSED, why.to_string(), 0);
-                follow.finish(g.id, GoalStatusEnum::Aborted, r);
+                srv.finish(g.id, GoalStatusEnum::Aborted, r);
             }
             Ok(m) => {
-                log.info(
-                    now_ns,
-                    &format!(
-                        "goal {:?}: {} waypoints at {} m/s{}",
-                        g.id,
-                        m.waypoints.len(),
-                        m.speed_mps,
-                        if m.land_at_end {
-                            ", then land"
-                        } else {
-                            ", then hold"
-                        }
-                    ),
+                let then = if m.land_at_end {
+                    ", then land"
+                } else {
+                    ", then hold"
+                };
+                let line = format!(
+                    "goal {:?}: {} waypoints at {} m/s{then}",
+                    g.id,
+                    m.waypoints.len(),
+                    m.speed_mps
                 );
-                if let Some(old) = exec.start(g.id, m, RunKind::ActionGoal, wall_s) {
-                    finish(follow, &old, log, now_ns);
-                }
+                c.log.info(c.now_ns, &line);
+                ended.extend(c.exec.start(g.id, m, RunKind::ActionGoal, c.wall_s));
             }
         }
     }
-    for id in follow.cancel_requests() {
-        match exec.cancel(&id, wall_s) {
-            Some(f) => finish(follow, &f, log, now_ns),
+    for id in srv.cancel_requests() {
+        match c.exec.cancel(&id, c.wall_s) {
+            Some(f) => ended.push(f),
             None => {
                 let r = result(
                     FollowWaypointsResult::OUTCOME_CANCELED,
                     "canceled before it ran".into(),
                     0,
                 );
-                follow.finish(id, GoalStatusEnum::Canceled, r);
+                srv.finish(id, GoalStatusEnum::Canceled, r);
             }
         }
     }
 }
 
-/// A goal ended: its result on the action (and a log line).
-pub fn finish(
-    follow: &mut FollowWaypointsServer,
-    f: &Finished<GoalId>,
-    log: &Log,
-    now_ns: Option<i64>,
-) {
+/// The status and result of an ended goal.
+fn end_result(f: &Finished<GoalId>) -> (GoalStatusEnum, FollowWaypointsResult) {
     use FollowWaypointsResult as R;
     let reached = f.reached as u32;
-    let (status, r) = match &f.end {
+    match &f.end {
         GoalEnd::Succeeded => (
             GoalStatusEnum::Succeeded,
             result(R::OUTCOME_SUCCEEDED, String::new(), reached),
@@ -343,24 +454,7 @@ pub fn finish(
                 reached,
             ),
         ),
-    };
-    let line = format!(
-        "goal {:?} ended: {:?}{}{}",
-        f.id,
-        status,
-        if r.reason.is_empty() { "" } else { ": " },
-        r.reason
-    );
-    log.line(
-        if status == GoalStatusEnum::Succeeded {
-            Level::Info
-        } else {
-            Level::Warn
-        },
-        now_ns,
-        &line,
-    );
-    follow.finish(f.id, status, r);
+    }
 }
 
 fn result(outcome: u8, reason: String, waypoints_reached: u32) -> FollowWaypointsResult {
@@ -407,7 +501,7 @@ fn goal_spec(g: &FollowWaypointsGoal) -> GoalSpec {
     }
 }
 
-pub fn feedback(p: &RunProgress) -> FollowWaypointsFeedback {
+fn feedback(p: &RunProgress) -> FollowWaypointsFeedback {
     FollowWaypointsFeedback {
         current_waypoint: p.waypoint as u32,
         waypoint_count: p.waypoint_count as u32,
