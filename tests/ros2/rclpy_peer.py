@@ -584,14 +584,16 @@ def check_link_rates(c, peer, node):
     t = now()
     before = hz(t - 1.5, t)
     ok, why = param_set(peer, node, BRIDGE, "rates.imu_hz", 50)
+    # From the answer on (the set is in force then; a fresh service client's DDS matching, up to
+    # ~3 s on a loaded machine, is not the link's doing).
     t_ack = now()
-    peer.spin(max(0.1, t + 2.6 - now()))
-    after = hz(t + 1.0, t + 2.5)
-    print(f"imu/data_raw: {before:.1f} Hz before `param set rates.imu_hz 50`, {after:.1f} Hz from 1 s after the "
-          f"call on (acknowledged after {t_ack - t:.2f} s)", flush=True)
+    peer.spin(2.6)
+    after = hz(t_ack + 1.0, t_ack + 2.5)
+    print(f"imu/data_raw: {before:.1f} Hz before `param set rates.imu_hz 50`, {after:.1f} Hz from 1 s after its "
+          f"answer on (the call took {t_ack - t:.2f} s)", flush=True)
     c.check("param set rates.imu_hz 50: accepted", ok, why)
     c.check("imu/data_raw at the default 200 Hz before (±10 %)", abs(before - 200) <= 20, f"{before:.1f} Hz")
-    c.check("imu/data_raw at 50 Hz from 1 s after the set on (±10 %)", abs(after - 50) <= 5, f"{after:.1f} Hz")
+    c.check("imu/data_raw at 50 Hz from 1 s after the set's answer on (±10 %)", abs(after - 50) <= 5, f"{after:.1f} Hz")
     ok, why = param_set(peer, node, BRIDGE, "rates.imu_hz", 1000)
     c.check("param set rates.imu_hz 1000: within the link budget, accepted", ok, why)
     ok, why = param_set(peer, node, BRIDGE, "rates.nav_state_hz", 500)

@@ -34,7 +34,8 @@ for d in jazzy kilted; do
   [ -f "$ros2/$d/env.sh" ] || { echo "run_ros2_peer.sh: $ros2/$d/env.sh missing: run scripts/ros2-setup.sh first" >&2; exit 2; }
 done
 tmp="$(mktemp -d)"
-trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$tmp"' EXIT
+# FCC_KEEP_LOGS=1 keeps the logs (the directory is printed).
+trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; if [ -n "${FCC_KEEP_LOGS:-}" ]; then echo "logs kept in $tmp"; else rm -rf "$tmp"; fi' EXIT
 passed=0; failed=0
 result() {  # NAME OK(0/1) [DETAIL]
   if [ "$2" = 0 ]; then passed=$((passed + 1)); echo "PASS $1${3:+: $3}"; else failed=$((failed + 1)); echo "FAIL $1${3:+: $3}"; fi
@@ -92,6 +93,7 @@ part_a() {
   result "(a) rclpy observer: every check" "$([ $prc = 0 ] && echo 0 || echo 1)" "exit $prc"
   no_error_lines "(a) fcc-launch (sitl, bridge, mission), ROS_DISTRO unset" "$d/launch.log"
   [ "$lrc" = 0 ] || tail -30 "$d/launch.log"
+  [ "$prc" = 0 ] || { echo "--- (a) the bridge's lines of the launch log (head)"; grep -a '^\[bridge\]' "$d/launch.log" | head -20; }
   echo "(a) $(( $(date +%s) - t0 )) s wall"
 }
 
