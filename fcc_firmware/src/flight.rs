@@ -64,7 +64,7 @@ const PILOT_LOCK_SPEED_MPS: f32 = 0.5;
 /// Pilot mode and velocity-mode yaw-rate setpoints: the heading command, advanced at the
 /// commanded yaw rate, leads the heading by at most this much, rad (so a vehicle that cannot
 /// turn as fast does not wind up a command far ahead of it).
-const YAW_LEAD_RAD: f32 = 0.5;
+pub const YAW_LEAD_RAD: f32 = 0.5;
 
 pub use crate::control::cascade::StepTelemetry;
 

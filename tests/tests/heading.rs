@@ -68,7 +68,9 @@ fn square_with_heading_east_holds_90_deg_on_truth() {
 #[test]
 fn yaw_rate_setpoint_turns_at_the_commanded_rate_on_truth() {
     let p = fcc_firmware::params::Params::default().control;
-    let clamp = p.yaw_rate_limit_radps.min(p.yaw_p_per_s * 0.5);
+    let clamp = p
+        .yaw_rate_limit_radps
+        .min(p.yaw_p_per_s * fcc_firmware::flight::YAW_LEAD_RAD);
     for (cmd, expect) in [(0.4_f32, 0.4_f32), (-0.6, -0.6), (1.0, clamp)] {
         let rate = true_yaw_rate_radps(cmd);
         let err = (rate - expect as f64) / expect as f64;
