@@ -91,6 +91,10 @@ tests/e2e/command_safety.sh "$FCC_DDS_PYTHON"
 # commanded rate ±10 % and a setpoint/heading of east is held within 3° RMS on a leg, on the CSV
 # truth; bad headings refused and counted; fcc-mission's yaw_deg 90 held on a leg. ~50 s.
 tests/e2e/heading.sh "$FCC_DDS_PYTHON"
+# The slow-link profile (issue 20): the square over a 115200-baud UART (fcc-wire-fault, 115200 baud
+# in simulated time) with launch_configs/slow_link_115200.yaml's rates: cross-track RMS ≤ 0.3 m,
+# ≤ 80 % of the line after start-up, the profile's rates in the bag, no CRC error, no failsafe. ~45 s.
+tests/e2e/slow_link.sh "$FCC_DDS_PYTHON"
 # --- step "real ROS 2 peer" (issue 16) ----------------------------------------------------------
 # rclpy (Jazzy, and a Kilted smoke run) against the whole stack, in ONE loopback-only namespace:
 # node/topic list (one type per topic), echo of every topic with the CLI's and sensor-data QoS

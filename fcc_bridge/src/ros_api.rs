@@ -342,6 +342,25 @@ pub fn check_bridge_param(name: &str, v: &ParameterValue, live: bool) -> Result<
     }
 }
 
+/// A telemetry rate set live: a lower rate is always taken (it only frees the line); a higher one
+/// must keep the worst case within the budget of `--baud`, the other streams at the MCU's values.
+fn check_rate_budget(
+    shared: &ParamShared,
+    id: u16,
+    value: f32,
+) -> Result<(), mcu_params::OverBudget> {
+    let values = shared.mcu_values.lock().unwrap().clone();
+    let current = values
+        .get(&id)
+        .copied()
+        .or_else(|| mcu_params::by_id(id).map(|p| p.default));
+    if current.is_some_and(|c| value <= c) {
+        return Ok(());
+    }
+    let with_new = |i: u16| if i == id { Some(value) } else { values.get(&i).copied() };
+    mcu_params::check_link_budget(with_new, shared.baud).map(|_| ())
+}
+
 /// The ros2-client validator: range checks; an MCU parameter that differs from the MCU's
 /// value is sent to the MCU and the set succeeds only when the MCU accepts it (this blocks the
 /// spinner thread for at most [`ACK_TIMEOUT`]).
@@ -353,23 +372,17 @@ pub fn validate(shared: &ParamShared, name: &str, v: &ParameterValue) -> Result<
     let x = as_f64(v).ok_or_else(|| format!("{name}: expected a number"))?;
     p.check(x).map_err(|e| e.to_string())?;
     let value = x as f32;
-    if fcc_msgs::Stream::by_param_id(p.id).is_some() {
-        let values = shared.mcu_values.lock().unwrap().clone();
-        let with_new = |id: u16| {
-            if id == p.id {
-                Some(value)
-            } else {
-                values.get(&id).copied()
-            }
-        };
-        mcu_params::check_link_budget(with_new, shared.baud)
-            .map_err(|e| format!("{name} {x} refused: {e}"))?;
-    }
+    // At start-up (not live) the node declares its parameters one by one; the start-up rates
+    // were checked as one set against --baud before (`main.rs`).
     if !live {
         return Ok(());
     }
+    // The MCU's own value (the bridge mirroring an acknowledgement, or a set to what is in use).
     if shared.mcu_values.lock().unwrap().get(&p.id) == Some(&value) {
         return Ok(());
+    }
+    if fcc_msgs::Stream::by_param_id(p.id).is_some() {
+        check_rate_budget(shared, p.id, value).map_err(|e| format!("{name} {x} refused: {e}"))?;
     }
     let (tx, rx) = std::sync::mpsc::channel();
     shared
@@ -452,6 +465,28 @@ pub type Shared = Arc<ParamShared>;
 mod tests {
     use super::*;
 
+    /// The slow-link start-up (launch_configs/slow_link_115200.yaml at --baud 115200): the MCU
+    /// acknowledges the profile's rates one by one while the others are still at their
+    /// defaults (far over the budget). Lowering a rate is always taken, the bridge's mirror of
+    /// an acknowledged value too; raising one over the budget is refused.
+    #[test]
+    fn lower_rates_pass_the_budget_one_by_one() {
+        let (tx, _rx) = mpsc::channel(4);
+        let sh = ParamShared {
+            live: AtomicBool::new(true),
+            mcu_values: Mutex::new(BTreeMap::new()),
+            link: tx,
+            baud: 115_200,
+        };
+        let id = |n: &str| mcu_params::by_name(n).unwrap().id;
+        for (name, hz) in [("rates.gps_hz", 5.0), ("rates.battery_hz", 2.0)] {
+            assert!(check_rate_budget(&sh, id(name), hz).is_ok(), "{name} {hz}");
+            sh.mcu_values.lock().unwrap().insert(id(name), hz);
+            assert!(validate(&sh, name, &ParameterValue::Integer(hz as i64)).is_ok(), "{name} mirror");
+        }
+        assert!(check_rate_budget(&sh, id("rates.imu_hz"), 400.0).is_err());
+    }
+
     #[test]
     fn validator_ranges_and_read_only() {
         let (tx, mut rx) = mpsc::channel(4);
@@ -466,12 +501,12 @@ mod tests {
         let e = validate(&sh, "limits.max_tilt_deg", &d(80.0)).unwrap_err();
         assert!(e.contains("out of range"), "{e}");
         assert!(validate(&sh, "ttl_ms", &ParameterValue::Integer(0)).is_err());
-        // A rate the link can carry passes; one it cannot is refused with the budget.
-        assert!(validate(&sh, "rates.imu_hz", &ParameterValue::Integer(1000)).is_ok());
-        sh.mcu_values
-            .lock()
-            .unwrap()
-            .insert(fcc_msgs::param_id::RATES_IMU_HZ, 1000.0);
+        assert!(validate(&sh, "clock_source", &ParameterValue::String("mcu".into())).is_ok());
+        sh.live.store(true, Ordering::SeqCst);
+        // Live: a rate the link can carry passes the budget; one it cannot is refused with it.
+        let imu = fcc_msgs::param_id::RATES_IMU_HZ;
+        assert!(check_rate_budget(&sh, imu, 1000.0).is_ok());
+        sh.mcu_values.lock().unwrap().insert(imu, 1000.0);
         let e = validate(&sh, "rates.nav_state_hz", &ParameterValue::Integer(500)).unwrap_err();
         assert!(
             e.starts_with("rates.nav_state_hz 500 refused: the telemetry would need up to "),
@@ -481,8 +516,6 @@ mod tests {
             e.contains("% of the 92160 B/s a 921600-baud link carries (budget 90 %)"),
             "{e}"
         );
-        assert!(validate(&sh, "clock_source", &ParameterValue::String("mcu".into())).is_ok());
-        sh.live.store(true, Ordering::SeqCst);
         assert!(validate(&sh, "clock_source", &ParameterValue::String("mcu".into())).is_err());
         // Live: the same value as the MCU's passes without a link round trip …
         sh.mcu_values
