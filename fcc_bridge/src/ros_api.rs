@@ -357,7 +357,13 @@ fn check_rate_budget(
     if current.is_some_and(|c| value <= c) {
         return Ok(());
     }
-    let with_new = |i: u16| if i == id { Some(value) } else { values.get(&i).copied() };
+    let with_new = |i: u16| {
+        if i == id {
+            Some(value)
+        } else {
+            values.get(&i).copied()
+        }
+    };
     mcu_params::check_link_budget(with_new, shared.baud).map(|_| ())
 }
 
@@ -482,7 +488,10 @@ mod tests {
         for (name, hz) in [("rates.gps_hz", 5.0), ("rates.battery_hz", 2.0)] {
             assert!(check_rate_budget(&sh, id(name), hz).is_ok(), "{name} {hz}");
             sh.mcu_values.lock().unwrap().insert(id(name), hz);
-            assert!(validate(&sh, name, &ParameterValue::Integer(hz as i64)).is_ok(), "{name} mirror");
+            assert!(
+                validate(&sh, name, &ParameterValue::Integer(hz as i64)).is_ok(),
+                "{name} mirror"
+            );
         }
         assert!(check_rate_budget(&sh, id("rates.imu_hz"), 400.0).is_err());
     }
