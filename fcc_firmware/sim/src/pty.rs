@@ -2,8 +2,10 @@
 //! behind a fixed symlink) the bridge opens exactly like a real serial port.
 //!
 //! The simulator keeps the master side, non-blocking: bytes the Linux side wrote are read each
-//! tick; telemetry that does not fit in the pty's buffer (nobody reading) is dropped and counted,
-//! as bytes are lost on a real UART with no listener. The slave is set to raw mode at once, so
+//! tick. Telemetry goes through a transmit ring of [`TX_RING_BYTES`] (an MCU's UART DMA ring)
+//! into the pty; a frame that does not fit in the ring (nobody reading, or a reader slower than
+//! the MCU writes) is dropped whole and counted, as a UART driver with a full ring does: the wire
+//! never carries a cut frame, so the bridge sees lost frames (sequence gaps), not CRC errors. The slave is set to raw mode at once, so
 //! nothing written before the bridge opens it is cooked or echoed.
 
 use nix::fcntl::{fcntl, FcntlArg, OFlag};
@@ -20,9 +22,16 @@ pub struct PtyLink {
     _slave: OwnedFd,
     slave_path: PathBuf,
     symlink: Option<PathBuf>,
-    /// Bytes of telemetry dropped because the pty buffer was full.
+    /// Frames queued for the pty (whole frames, at most [`TX_RING_BYTES`]).
+    ring: Vec<u8>,
+    /// Bytes of telemetry dropped (whole frames) because the ring was full.
     pub tx_dropped_bytes: u64,
+    /// Frames dropped because the ring was full.
+    pub tx_dropped_frames: u64,
 }
+
+/// The transmit ring: bytes of whole frames waiting for the pty (a 4 KiB DMA ring).
+pub const TX_RING_BYTES: usize = 4096;
 
 impl PtyLink {
     /// Open a pty pair; if `symlink` is given, (re)create it pointing at the slave.
@@ -58,7 +67,9 @@ impl PtyLink {
             _slave: pty.slave,
             slave_path,
             symlink,
+            ring: Vec::with_capacity(TX_RING_BYTES),
             tx_dropped_bytes: 0,
+            tx_dropped_frames: 0,
         })
     }
 
@@ -80,14 +91,35 @@ impl PtyLink {
         }
     }
 
-    /// Write without blocking; what does not fit is dropped and counted.
-    pub fn write_or_drop(&mut self, bytes: &[u8]) -> usize {
-        let n = match self.master.write(bytes) {
-            Ok(n) => n,
+    /// Queue whole frames (each ending in 0x00) in the transmit ring and hand the pty what it
+    /// takes, without blocking; a frame that does not fit in the ring is dropped whole and
+    /// counted. Returns the bytes the pty took.
+    pub fn send_frames(&mut self, bytes: &[u8]) -> usize {
+        let mut taken = self.flush_ring();
+        for f in bytes.split_inclusive(|b| *b == 0) {
+            if self.ring.len() + f.len() <= TX_RING_BYTES {
+                self.ring.extend_from_slice(f);
+            } else {
+                self.tx_dropped_bytes += f.len() as u64;
+                self.tx_dropped_frames += 1;
+            }
+        }
+        taken += self.flush_ring();
+        taken
+    }
+
+    /// Move what the pty takes from the ring (0 while it is full or nobody has it open).
+    fn flush_ring(&mut self) -> usize {
+        if self.ring.is_empty() {
+            return 0;
+        }
+        match self.master.write(&self.ring) {
+            Ok(n) => {
+                self.ring.drain(..n);
+                n
+            }
             Err(_) => 0,
-        };
-        self.tx_dropped_bytes += (bytes.len() - n) as u64;
-        n
+        }
     }
 }
 
@@ -125,21 +157,29 @@ mod tests {
             std::thread::sleep(std::time::Duration::from_millis(2));
         }
         assert_eq!(got, all);
-        assert_eq!(link.write_or_drop(&all), all.len());
+        assert_eq!(link.send_frames(&all), all.len());
         let mut back = vec![0u8; all.len()];
         client.read_exact(&mut back).unwrap();
         assert_eq!(back, all);
     }
 
     #[test]
-    fn a_full_buffer_drops_instead_of_blocking() {
+    fn a_full_buffer_drops_whole_frames_instead_of_blocking() {
         let mut link = PtyLink::open(None).unwrap();
-        let chunk = [0x55u8; 4096];
-        let mut written = 0;
+        let mut frame = [0x55u8; 100];
+        frame[99] = 0;
+        let frames: Vec<u8> = frame.iter().copied().cycle().take(40 * frame.len()).collect();
+        let mut taken = 0;
         for _ in 0..1000 {
-            written += link.write_or_drop(&chunk);
+            taken += link.send_frames(&frames);
         }
-        assert!(written < 1000 * chunk.len());
-        assert_eq!(link.tx_dropped_bytes as usize + written, 1000 * chunk.len());
+        let sent = 1000 * frames.len();
+        assert!(link.tx_dropped_frames > 0);
+        assert_eq!(link.tx_dropped_bytes, link.tx_dropped_frames * frame.len() as u64);
+        // Every byte was taken by the pty, waits in the ring, or belongs to a dropped frame.
+        assert_eq!(taken + link.ring.len() + link.tx_dropped_bytes as usize, sent);
+        // Only whole frames entered the ring (the pty takes them in order, the last one perhaps
+        // in part, its rest still in the ring).
+        assert_eq!((taken + link.ring.len()) % frame.len(), 0);
     }
 }

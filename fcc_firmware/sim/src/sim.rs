@@ -536,7 +536,7 @@ impl Sim {
                 &mut tx,
             );
             if linux_on {
-                pty.write_or_drop(&tx[..n]);
+                pty.send_frames(&tx[..n]);
             }
         } else {
             // The in-process Linux computer runs at 20 Hz, before the MCU's tick at the same

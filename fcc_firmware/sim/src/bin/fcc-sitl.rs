@@ -112,8 +112,14 @@ fn main() -> ExitCode {
     }
     sim.finish();
     let wall_s = wall.elapsed().as_secs_f64();
+    let link = sim.link().map_or(String::new(), |(_, pty)| {
+        format!(
+            "pty link: {} frames ({} bytes) dropped whole with the transmit ring full\n",
+            pty.tx_dropped_frames, pty.tx_dropped_bytes
+        )
+    });
     let report = format!(
-        "scenario {name}: {:.1} s simulated in {:.2} s wall ({:.0}× real time)\n{}",
+        "scenario {name}: {:.1} s simulated in {:.2} s wall ({:.0}× real time)\n{link}{}",
         sim.t_s(),
         wall_s,
         sim.t_s() / wall_s,
