@@ -231,8 +231,11 @@ def observe(a):
         for s in disc.take(N=50):
             if type(s).__name__ == "InvalidSample":
                 continue
-            for ne in s.node_entities_info_seq:
-                nodes.add((ne.node_namespace, ne.node_name))
+            seen = sorted((ne.node_namespace, ne.node_name) for ne in s.node_entities_info_seq)
+            if not set(seen) <= nodes:  # each node's first announcement, with its time
+                print(f"peer: t={now - t0:.2f} s ros_discovery_info {bytes(s.gid.data[:12]).hex()}: {seen}",
+                      flush=True)
+            nodes.update(seen)
         time.sleep(0.005)
     # The launcher has stopped everything and fcc-sitl has written its CSV.
     c = Checks()
