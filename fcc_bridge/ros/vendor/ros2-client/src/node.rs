@@ -70,6 +70,28 @@ fn guid_entity(kind: EntityKind, guid: GUID) -> GraphEntity {
   }
 }
 
+type MatchedEndpoints = Arc<Mutex<BTreeMap<GUID, BTreeSet<GUID>>>>;
+
+/// fcc (vendored): forget a lost DomainParticipant (`of_lost` tells its GUIDs):
+/// its readers and writers matched to our writers and readers, and its
+/// `ros_discovery_info` record (keyed by the participant's Gid).
+fn forget_participant(
+  of_lost: &dyn Fn(&GUID) -> bool,
+  readers_to_remote_writers: &MatchedEndpoints,
+  writers_to_remote_readers: &MatchedEndpoints,
+  external_nodes: &Mutex<BTreeMap<Gid, Vec<NodeEntitiesInfo>>>,
+) {
+  for matched in [readers_to_remote_writers, writers_to_remote_readers] {
+    for remotes in matched.lock().unwrap().values_mut() {
+      remotes.retain(|g| !of_lost(g));
+    }
+  }
+  external_nodes
+    .lock()
+    .unwrap()
+    .retain(|gid, _| !of_lost(&GUID::from(*gid)));
+}
+
 /// Best-effort mangling of a fully-qualified ROS 2 topic name (e.g.
 /// `/chatter`) into the DDS wire-level topic name (`rt/chatter`), mirroring
 /// [`Name::to_dds_name`] for the `"rt"` (ROS Topic) prefix. Used by
@@ -387,6 +409,18 @@ impl Spinner {
                 writers.remove(&guid);
               }
               Some(GraphEvent::EntityUndeclared(guid_entity(EntityKind::Publisher, guid)))
+            }
+            // fcc (vendored): a lost participant's endpoints are not disposed
+            // one by one (rustdds reports only the participant), so drop them
+            // here, and its ros_discovery_info record; they were kept for good.
+            DomainParticipantStatusEvent::ParticipantLost { id, .. } => {
+              forget_participant(
+                &|g: &GUID| g.prefix == id,
+                &self.readers_to_remote_writers,
+                &self.writers_to_remote_readers,
+                &self.external_nodes,
+              );
+              None
             }
 
             _ => None,
