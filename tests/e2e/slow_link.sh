@@ -15,11 +15,9 @@ root="$(cd "$here/../.." && pwd)"
 py="${1:-${FCC_DDS_PYTHON:-python3}}"
 . "$root/tests/lib/loopback_only.sh"
 loopback_only "$0" "$py"
-bin="${FCC_BIN_DIR:-$root/target/release}"
+. "$root/tests/lib/scratch.sh"
 speed="${FCC_E2E_SPEED:-2}"
 baud=115200
-tmp="$(mktemp -d)"
-trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$tmp"' EXIT
 echo "=== the square over a $baud-baud UART, slow-link profile (speed $speed, relay at $((baud * speed)) baud)"
 set +e
 "$bin/fcc-launch" "$root/launch_configs/square_slow_link.yaml" BIN:="$bin" out:="$tmp" speed:="$speed" \

@@ -3,9 +3,7 @@
 # Sets `bin` (the release binaries, or $FCC_BIN_DIR), `tmp` (a scratch directory removed at exit,
 # with every background job killed) and `pty` (the fake MCU's serial device); the fake MCU's
 # stdout is "$tmp/fake.out", its stderr "$tmp/fake.err". Needs `$root`.
-bin="${FCC_BIN_DIR:-$root/target/release}"
-tmp="$(mktemp -d)"
-trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$tmp"' EXIT
+. "$root/tests/lib/scratch.sh"
 start_fake_mcu() {
   local secs="$1"; shift
   "$bin/fcc-fake-mcu" --duration "$secs" "$@" > "$tmp/fake.out" 2> "$tmp/fake.err" &

@@ -510,7 +510,6 @@ pub fn write_options(zstd: bool, chunk_bytes: u64) -> mcap::WriteOptions {
 /// One open MCAP file with its channel mapping.
 pub struct BagWriter<W: Write + Seek> {
     pub writer: mcap::Writer<W>,
-    /// Our channel id → (mcap channel id, next sequence number).
     /// Tap channel id → (MCAP channel id, next sequence number).
     map: Vec<Option<(u16, u32)>>,
     schemas: HashMap<String, u16>,

@@ -5,8 +5,9 @@
 //! tick. Telemetry goes through a transmit ring of [`TX_RING_BYTES`] (an MCU's UART DMA ring)
 //! into the pty; a frame that does not fit in the ring (nobody reading, or a reader slower than
 //! the MCU writes) is dropped whole and counted, as a UART driver with a full ring does: the wire
-//! never carries a cut frame, so the bridge sees lost frames (sequence gaps), not CRC errors. The slave is set to raw mode at once, so
-//! nothing written before the bridge opens it is cooked or echoed.
+//! never carries a cut frame, so the bridge sees lost frames (sequence gaps), not CRC errors.
+//! The slave is set to raw mode at once, so nothing written before the bridge opens it is cooked
+//! or echoed.
 
 use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::pty::openpty;
@@ -168,16 +169,27 @@ mod tests {
         let mut link = PtyLink::open(None).unwrap();
         let mut frame = [0x55u8; 100];
         frame[99] = 0;
-        let frames: Vec<u8> = frame.iter().copied().cycle().take(40 * frame.len()).collect();
+        let frames: Vec<u8> = frame
+            .iter()
+            .copied()
+            .cycle()
+            .take(40 * frame.len())
+            .collect();
         let mut taken = 0;
         for _ in 0..1000 {
             taken += link.send_frames(&frames);
         }
         let sent = 1000 * frames.len();
         assert!(link.tx_dropped_frames > 0);
-        assert_eq!(link.tx_dropped_bytes, link.tx_dropped_frames * frame.len() as u64);
+        assert_eq!(
+            link.tx_dropped_bytes,
+            link.tx_dropped_frames * frame.len() as u64
+        );
         // Every byte was taken by the pty, waits in the ring, or belongs to a dropped frame.
-        assert_eq!(taken + link.ring.len() + link.tx_dropped_bytes as usize, sent);
+        assert_eq!(
+            taken + link.ring.len() + link.tx_dropped_bytes as usize,
+            sent
+        );
         // Only whole frames entered the ring (the pty takes them in order, the last one perhaps
         // in part, its rest still in the ring).
         assert_eq!((taken + link.ring.len()) % frame.len(), 0);

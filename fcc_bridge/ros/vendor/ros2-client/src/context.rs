@@ -310,16 +310,6 @@ impl Context {
     self.inner.lock().unwrap().remove_node(node_name);
   }
 
-  /// fcc (vendored): the GUID of this participant's `ros_discovery_info` writer.
-  pub(crate) fn ros_discovery_writer_guid(&self) -> GUID {
-    self.inner.lock().unwrap().node_writer.guid()
-  }
-
-  /// fcc (vendored): publish this participant's node list again (see `Spinner::spin`).
-  pub(crate) fn rebroadcast_node_infos(&self) {
-    self.inner.lock().unwrap().broadcast_node_infos();
-  }
-
   fn get_ros_default_publisher(&self) -> rustdds::Publisher {
     self.inner.lock().unwrap().ros_default_publisher.clone()
   }

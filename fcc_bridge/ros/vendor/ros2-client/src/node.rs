@@ -182,7 +182,6 @@ impl Spinner {
     let dds_status_stream = dds_status_listener.as_async_status_stream();
     pin_mut!(dds_status_stream);
 
-    let discovery_writer = self.ros_context.ros_discovery_writer_guid();
     let ros_discovery_topic = self.ros_context.ros_discovery_topic();
     let ros_discovery_reader = self
       .ros_context
@@ -376,13 +375,6 @@ impl Spinner {
           // names).
           let graph_event = match dp_status_event {
             DomainParticipantStatusEvent::RemoteReaderMatched { local_writer, remote_reader } => {
-              // fcc (vendored): a new reader of `ros_discovery_info` gets our node list as
-              // a fresh sample, not only from the transient-local history (a peer that
-              // matched during start-up sometimes never showed our node: `ros2 node list`).
-              if local_writer == discovery_writer {
-                debug!("ros_discovery_info: new reader {remote_reader:?}, publishing the node list again");
-                self.ros_context.rebroadcast_node_infos();
-              }
               self.writers_to_remote_readers.lock().unwrap()
                 .entry(local_writer)
                 .and_modify(|s| {s.insert(remote_reader);} )
