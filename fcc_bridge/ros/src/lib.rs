@@ -14,8 +14,11 @@
 //!   publishers, subscriptions and recorder read; [`topics::QosInfo`].
 //! - [`startup`]: start-up protection — the DDS set-up under a watchdog with a restart, and
 //!   SIGTERM/SIGINT on a thread of their own.
+//! - [`heap`]: the allocator's free pages handed back to the OS every 30 s (a flat RSS over
+//!   hours; each node's `main` starts it).
 
 pub mod frames;
+pub mod heap;
 pub mod params;
 pub mod ros_node;
 pub mod startup;

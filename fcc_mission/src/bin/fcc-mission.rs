@@ -242,6 +242,8 @@ const APP: startup::App = startup::App {
 #[tokio::main(flavor = "current_thread")]
 async fn main() {
     let o = options();
+    // Free heap pages back to the OS every 30 s: a flat RSS over hours (fcc_ros::heap).
+    fcc_ros::heap::spawn_trimmer();
     // SIGTERM / SIGINT from now on, whatever the DDS start-up does.
     let stop = startup::Stop::install(APP)
         .unwrap_or_else(|e| fail(1, format!("cannot install the signal handlers: {e}")));
