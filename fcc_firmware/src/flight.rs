@@ -34,15 +34,15 @@ const WIND_LEAK: f32 = 0.5;
 const WIND_VEL_ERR_MPS: f32 = 1.0;
 /// Estimator fault (not horizontal): hold this long before landing, s.
 const FAULT_HOLD_S: f32 = 2.0;
-/// LAND: below this height of the gear over the ground the tilt is limited to
-/// [`LAND_LEVEL_TILT_DEG`], m.
+/// LAND, descent committed by the touchdown gate: below this height of the gear over the
+/// ground the tilt is limited to [`LAND_LEVEL_TILT_DEG`], m.
 const LAND_LEVEL_HEIGHT_M: f32 = 0.15;
 /// LAND: the level limit applies only while slower than this over the ground: a gust that
 /// drives the vehicle sideways near the ground is braked with the full tilt (sliding into the
 /// ground tips a vehicle over sooner than a tilted gear does), m/s.
 const LAND_LEVEL_MAX_SPEED_MPS: f32 = 0.4;
 /// LAND: the tilt limit just before touchdown, deg.
-const LAND_LEVEL_TILT_DEG: f32 = 4.5;
+const LAND_LEVEL_TILT_DEG: f32 = crate::touchdown_gate::LEVEL_TILT_DEG;
 /// Velocity mode: command reduction per m/s of estimated speed over the limit.
 const SPEED_LIMIT_GAIN: f32 = 2.0;
 /// Velocity mode: largest rate of change of the horizontal velocity command, m/s².
@@ -93,6 +93,9 @@ pub struct FlightCore {
     /// On the ground or in the air ([`crate::land_detector`]).
     land: LandDetector,
     touchdown_gate: TouchdownGate,
+    /// Last step's tilt demand of the horizontal loops (`|θ_cmd|` before the tilt limit), rad:
+    /// the touchdown gate's measure of the gust.
+    tilt_demand_rad: f32,
     /// The control cascade ([`crate::control::cascade`]): velocity → acceleration → attitude
     /// → vertical → mixer.
     cascade: Cascade,
@@ -126,6 +129,7 @@ impl FlightCore {
             takeoff_alt_m: 0.0,
             land: LandDetector::new(),
             touchdown_gate: TouchdownGate::new(),
+            tilt_demand_rad: 0.0,
             cascade: Cascade::from_params(&params),
             last_step_us: None,
             motors: [0.0; MOTOR_COUNT],
@@ -160,6 +164,12 @@ impl FlightCore {
         self.params = p;
         self.cascade.set_params(&p);
         Ok(())
+    }
+
+    /// LAND's touchdown gate ([`crate::touchdown_gate`]): how long the landing waited for a
+    /// lull, whether it was committed by the timeout.
+    pub fn touchdown_gate(&self) -> &TouchdownGate {
+        &self.touchdown_gate
     }
 
     /// Current value of a tunable parameter (ids: `fcc_msgs::param_id`).
@@ -593,8 +603,14 @@ impl FlightCore {
         (v_ne, vz_down, yaw)
     }
 
-    /// LAND's final descent (NED down, m/s): the final speed, except that the gear waits at
-    /// the touchdown gate's clearance for a lull ([`crate::touchdown_gate`]).
+    /// LAND's final descent (NED down, m/s): the gear waits at the touchdown gate's clearance
+    /// for a lull ([`crate::touchdown_gate`]), then descends at the final speed `v_f`.
+    /// The gate judges the tilt demand `d = max(tilt, |θ_cmd|)`, `θ_cmd` last step's tilt
+    /// command before the limit (the lean the wind of the moment asks for), and the estimated
+    /// ground speed. Waiting (and approaching), the height loop holds the gate clearance, never
+    /// descending faster than `v_f`. Committed: `v = max(v_f − (v_down − v_f)⁺, v_f/2)`, with
+    /// `v_down` the descent rate over the ground — a brake on the overshoot of the step from
+    /// the hold (to 0.40 m/s at contact without it).
     fn final_descent(&mut self, dt_s: f32, nav: &NavState) -> f32 {
         let l = self.params.limits;
         if !self.ground_usable(nav) {
@@ -603,13 +619,17 @@ impl FlightCore {
         let clearance_m =
             self.height_above_ground_m(nav) - self.params.airframe.sensor_height_on_ground_m;
         let tilt_rad =
-            fcc_nav::ground_altitude::tilt_angle_rad(nav.euler.roll_rad, nav.euler.pitch_rad);
+            fcc_nav::ground_altitude::tilt_angle_rad(nav.euler.roll_rad, nav.euler.pitch_rad)
+                .max(self.tilt_demand_rad);
         let speed_mps = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
         match self
             .touchdown_gate
             .update(dt_s, clearance_m, tilt_rad, speed_mps)
         {
-            GateAction::Descend => l.land_final_speed_mps,
+            GateAction::Descend => {
+                let over = (-nav.ground_rate_up_mps - l.land_final_speed_mps).max(0.0);
+                (l.land_final_speed_mps - over).max(0.5 * l.land_final_speed_mps)
+            }
             // The height loop on the gear's clearance, never descending faster than the final
             // speed.
             GateAction::Hold => self
@@ -701,11 +721,16 @@ impl FlightCore {
 
     /// The tilt limit: `limits.max_tilt_deg`, and in LAND's last [`LAND_LEVEL_HEIGHT_M`] above
     /// the gear no more than [`LAND_LEVEL_TILT_DEG`] while slower than
-    /// [`LAND_LEVEL_MAX_SPEED_MPS`] (touch down level: a tilted gear catches a foot).
+    /// [`LAND_LEVEL_MAX_SPEED_MPS`] (touch down level: a tilted gear catches a foot) — once
+    /// the touchdown gate has committed. Waiting at the gate the vehicle leans as far as the
+    /// wind needs to stay put (the level limit there let every gust slide it, and at 0.15 m the
+    /// limit switched on and off with the height noise); a commit whose command the level
+    /// limit clips goes back to the gate.
     fn tilt_limit_rad(&self, nav: &NavState) -> f32 {
         let on_ground_m = self.params.airframe.sensor_height_on_ground_m;
         let speed = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
         let level = self.mode == Mode::Land
+            && self.touchdown_gate.committed()
             && self.ground_usable(nav)
             && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M
             && speed < LAND_LEVEL_MAX_SPEED_MPS;
@@ -752,6 +777,7 @@ impl FlightCore {
         self.count_wind_saturation(dt_s, airborne, out.tilt_limited, out.vel_err_mps);
         self.motors = out.motors;
         self.telemetry = out.telemetry;
+        self.tilt_demand_rad = out.tilt_demand_rad;
     }
 
     /// The wind limit's count: time at the tilt limit with the velocity command missed by

@@ -14,7 +14,9 @@
 //!
 //! Every flying family also checks: no crash or tip-over, no unplanned ground contact, no
 //! flyaway, touchdown ≤ 0.5 m/s down, ≤ 0.3 m/s horizontal, ≤ 5° tilt, and no time truly
-//! airborne with the attitude loops off.
+//! airborne with the attitude loops off; and measures how long LAND's touchdown gate waited
+//! for a lull (`touchdown_gate_wait_s`) and whether its timeout committed the touchdown
+//! (`touchdown_gate_forced`).
 
 use super::log::FlightLog;
 use super::metrics;
@@ -61,9 +63,9 @@ pub struct Outcome {
 /// the gale hover (8 m/s + W20 30 kt). Its [`OPEN_CHECKS`] are measured, printed and listed as
 /// failures by `fcc-campaign`, but the test command's short campaign does not assert them; every
 /// other family's touchdown checks are asserted. Why they stay open: near the ground the gusts
-/// keep σ_u ≈ 3 m/s while the mean drops, so even the touchdown gate's lull
-/// (`fcc_firmware::touchdown_gate`) does not last through the last 0.15 m on every
-/// landing; and the 2 m true excursion is GPS-limited: `hold_nav_drift_m`, the drift of the
+/// keep σ_u ≈ 3 m/s while the mean drops, so the lull the touchdown gate
+/// (`fcc_firmware::touchdown_gate`) waits for comes late (median wait 26 s; 9 of 72 landings
+/// committed by its timeout) or does not last through the last 0.15 m; and the 2 m true excursion is GPS-limited: `hold_nav_drift_m`, the drift of the
 /// navigation error (true − estimate) over the hold, is as large as the excursion itself, in the
 /// gale and in the 3 m/s hover alike (the GPS model's error wanders with σ 1 m, τ 60 s, after
 /// PX4's Gazebo plugin), while the estimate's own box is ≈ 0.3 m.
@@ -269,6 +271,11 @@ fn score_safety(o: &mut Outcome, log: &FlightLog, t: &TruthReport, still_armed: 
             figure(o, "touchdown_down_mps", w[0], Some(0.5));
             figure(o, "touchdown_horiz_mps", w[1], Some(0.3));
             figure(o, "touchdown_tilt_deg", w[2], Some(5.0));
+            let planned = || t.contacts.iter().filter(|c| c.planned);
+            let wait_s = planned().map(|c| c.gate_wait_s).fold(0.0, f64::max);
+            figure(o, "touchdown_gate_wait_s", wait_s, None);
+            let forced = planned().any(|c| c.gate_forced);
+            figure(o, "touchdown_gate_forced", forced as u8 as f64, None);
         }
         None => o.failures.push(("landed", "never landed".into())),
     }

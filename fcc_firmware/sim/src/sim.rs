@@ -401,6 +401,8 @@ impl Sim {
             mode,
             planned: matches!(mode, Mode::Land | Mode::Pilot),
             outcome,
+            gate_wait_s: self.fc.core.touchdown_gate().wait_s() as f64,
+            gate_forced: self.fc.core.touchdown_gate().forced(),
         });
         if outcome != super::truth::ContactOutcome::Landed {
             self.crashed = true;

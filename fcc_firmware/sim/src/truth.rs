@@ -54,6 +54,10 @@ pub struct Contact {
     /// In LAND (or the R/C pilot's hands): a landing, not a strike.
     pub planned: bool,
     pub outcome: ContactOutcome,
+    /// LAND's touchdown gate at contact: seconds waited for a lull, and whether the timeout
+    /// (not a lull) committed the descent.
+    pub gate_wait_s: f64,
+    pub gate_forced: bool,
 }
 
 /// The crash / tip-over model (module doc). `cg_height_m`: centre of mass above the contact
@@ -232,14 +236,21 @@ impl fmt::Display for TruthReport {
         for c in &self.contacts {
             writeln!(
                 f,
-                "    t={:7.2} s {:?}{}: down {:.2} m/s, horizontal {:.2} m/s, tilt {:.1}° → {:?}",
+                "    t={:7.2} s {:?}{}: down {:.2} m/s, horizontal {:.2} m/s, tilt {:.1}° → {:?} \
+                 (touchdown gate: waited {:.1} s{})",
                 c.t_s,
                 c.mode,
                 if c.planned { "" } else { " UNPLANNED" },
                 c.vz_down_mps,
                 c.v_horiz_mps,
                 c.tilt_deg,
-                c.outcome
+                c.outcome,
+                c.gate_wait_s,
+                if c.gate_forced {
+                    ", committed by the timeout"
+                } else {
+                    ""
+                }
             )?;
         }
         writeln!(

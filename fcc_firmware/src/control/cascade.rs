@@ -89,6 +89,9 @@ pub struct CascadeOutput {
     pub telemetry: StepTelemetry,
     /// The tilt command was over [`Demand::tilt_limit_rad`] (and was scaled to it).
     pub tilt_limited: bool,
+    /// The tilt the horizontal loops asked for before the limit, `|θ_cmd|`, rad: how far the
+    /// vehicle has to lean to follow the velocity command (against the wind, in a gust).
+    pub tilt_demand_rad: f32,
     /// `|v_cmd' − v|`, the horizontal velocity error after cross-track compensation, m/s.
     pub vel_err_mps: f32,
 }
@@ -105,6 +108,8 @@ struct Horizontal {
     /// Tilt command (forward, right), rad: pitch = −forward, roll = right.
     tilt_cmd_fr_rad: [f32; 2],
     tilt_limited: bool,
+    /// `|θ_cmd|` before the limit, rad.
+    tilt_demand_rad: f32,
     vel_err_mps: f32,
 }
 
@@ -300,6 +305,7 @@ impl Cascade {
             motors,
             telemetry,
             tilt_limited: h.tilt_limited,
+            tilt_demand_rad: h.tilt_demand_rad,
             vel_err_mps: h.vel_err_mps,
         }
     }
@@ -361,6 +367,7 @@ impl Cascade {
             a_meas_fr_mps2,
             tilt_cmd_fr_rad: tilt_cmd,
             tilt_limited,
+            tilt_demand_rad: n,
             vel_err_mps,
         }
     }
@@ -562,6 +569,7 @@ mod tests {
         let t = out.telemetry;
         let tilt = fcc_nav::math::hypotf(t.roll_cmd_rad, t.pitch_cmd_rad);
         assert!(out.tilt_limited && (tilt - 0.1).abs() < 1e-6, "tilt {tilt}");
+        assert!(out.tilt_demand_rad > 0.1, "the demand before the limit");
         assert!(t.pitch_cmd_rad < 0.0, "nose down to fly north");
         assert!((out.vel_err_mps - 8.0).abs() < 1e-4);
     }
