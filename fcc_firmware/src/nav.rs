@@ -9,8 +9,7 @@ use crate::nav_health::{Innovations, NavHealth};
 use crate::params::NavParams;
 use crate::sensors::{BaroSample, GpsFix, ImuSample, SensorInputs};
 use fcc_nav::attitude::{
-    accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, rot_body_to_ned, AttitudeEstimator,
-    Euler,
+    accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, AttitudeEstimator, Euler,
 };
 use fcc_nav::geodesy::{Lla, LocalNed};
 use fcc_nav::ground_altitude::{GroundAltitude, GroundAltitudeFilter, GroundAltitudeParams};
@@ -163,6 +162,17 @@ impl Navigator {
         (self.att.mag_disturbed(), self.att.mag_rejects())
     }
 
+    /// The manoeuvre acceleration (NED, m/s²) the next IMU step removes from the specific
+    /// force before the tilt correction: the smoothed GPS-differenced acceleration while GPS is
+    /// fed, else zero.
+    pub fn tilt_accel_comp_ned_mps2(&self) -> [f32; 3] {
+        if self.state.gps_ok {
+            self.gps_accel_ned_mps2
+        } else {
+            [0.0; 3]
+        }
+    }
+
     pub fn home(&self) -> Option<Lla> {
         self.home.as_ref().map(|h| h.origin())
     }
@@ -263,22 +273,14 @@ impl Navigator {
         ];
         // Remove the manoeuvre acceleration (GPS-derived, NED → body) from the specific
         // force before it is read as a gravity direction.
-        let r = rot_body_to_ned(&self.att.euler());
-        let a = if self.state.gps_ok {
-            self.gps_accel_ned_mps2
-        } else {
-            [0.0; 3]
-        };
-        let mut f_tilt = f_lp;
-        for (i, ft) in f_tilt.iter_mut().enumerate() {
-            *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
-        }
+        let a = self.tilt_accel_comp_ned_mps2();
         self.att.mag_realign_allowed = on_ground_disarmed;
         let euler = if self.calibrated {
-            self.att.update(gyro, Some(f_tilt), mag, dt_s)
+            self.att.update_compensated(gyro, f_lp, a, mag, dt_s)
         } else {
             self.att.euler()
         };
+        let f_tilt = self.att.tilt_specific_force_frd_mps2();
         // The tilt monitor samples at 50 Hz (its hold time is seconds; asin/atan2 at 500 Hz
         // would cost the MCU ~10 % of a step).
         self.tilt_check_tick = (self.tilt_check_tick + 1) % TILT_CHECK_EVERY;

@@ -72,9 +72,16 @@ pub fn mag_norm_dip(m_frd: [f32; 3], roll_rad: f32, pitch_rad: f32) -> (f32, f32
 /// Euler-angle rates `[φ̇, θ̇, ψ̇]` \[rad/s] from body rates `[p, q, r]` \[rad/s] (FRD).
 /// `cos θ` is limited to ±1e−3 near ±90° pitch (gimbal lock).
 pub fn euler_rates(gyro_frd_radps: [f32; 3], roll_rad: f32, pitch_rad: f32) -> [f32; 3] {
-    let [p, q, r] = gyro_frd_radps;
     let (sp, cp) = sincosf(roll_rad);
-    let (st, mut ct) = sincosf(pitch_rad);
+    let (st, ct) = sincosf(pitch_rad);
+    euler_rates_trig(gyro_frd_radps, (sp, cp), (st, ct))
+}
+
+/// [`euler_rates`] from the sines and cosines of roll and pitch.
+fn euler_rates_trig(gyro_frd_radps: [f32; 3], roll: (f32, f32), pitch: (f32, f32)) -> [f32; 3] {
+    let [p, q, r] = gyro_frd_radps;
+    let (sp, cp) = roll;
+    let (st, mut ct) = pitch;
     const MIN_COS: f32 = 1e-3;
     if ct.abs() < MIN_COS {
         ct = if ct < 0.0 { -MIN_COS } else { MIN_COS };
@@ -85,9 +92,14 @@ pub fn euler_rates(gyro_frd_radps: [f32; 3], roll_rad: f32, pitch_rad: f32) -> [
 
 /// Rotation matrix body (FRD) → NED, `R = Rz(ψ)·Ry(θ)·Rx(φ)`, row-major.
 pub fn rot_body_to_ned(e: &Euler) -> [[f32; 3]; 3] {
-    let (sp, cp) = sincosf(e.roll_rad);
-    let (st, ct) = sincosf(e.pitch_rad);
-    let (ss, cs) = sincosf(e.yaw_rad);
+    let roll = sincosf(e.roll_rad);
+    let pitch = sincosf(e.pitch_rad);
+    rot_trig(roll, pitch, sincosf(e.yaw_rad))
+}
+
+/// [`rot_body_to_ned`] from the sines and cosines `(sin, cos)` of roll, pitch and yaw.
+fn rot_trig(roll: (f32, f32), pitch: (f32, f32), yaw: (f32, f32)) -> [[f32; 3]; 3] {
+    let ((sp, cp), (st, ct), (ss, cs)) = (roll, pitch, yaw);
     [
         [ct * cs, sp * st * cs - cp * ss, cp * st * cs + sp * ss],
         [ct * ss, sp * st * ss + cp * cs, cp * st * ss - sp * cs],
@@ -162,6 +174,8 @@ pub struct AttitudeEstimator {
     mag_realigns: u32,
     mag_rejected_s: f32,
     mag_rejects: u32,
+    /// The specific force the last [`Self::update_compensated`] read as tilt (compensated).
+    tilt_f_frd_mps2: [f32; 3],
 }
 
 impl AttitudeEstimator {
@@ -184,6 +198,7 @@ impl AttitudeEstimator {
             mag_realigns: 0,
             mag_rejected_s: 0.0,
             mag_rejects: 0,
+            tilt_f_frd_mps2: [0.0; 3],
         }
     }
 
@@ -229,11 +244,54 @@ impl AttitudeEstimator {
         mag_frd_ut: Option<[f32; 3]>,
         dt_s: f32,
     ) -> Euler {
-        let rates = euler_rates(
-            gyro_frd_radps,
-            self.roll.angle_rad(),
-            self.pitch.angle_rad(),
-        );
+        let roll = sincosf(self.roll.angle_rad());
+        let pitch = sincosf(self.pitch.angle_rad());
+        let rates = euler_rates_trig(gyro_frd_radps, roll, pitch);
+        self.correct(rates, accel_frd_mps2, mag_frd_ut, dt_s)
+    }
+
+    /// [`Self::update`] with the vehicle's manoeuvre acceleration `accel_ned_mps2` (NED, e.g.
+    /// from differenced GPS velocities) first removed from the specific force `f_frd_mps2`,
+    /// rotated into the body with the current estimate, so that it is not read as tilt. The
+    /// same result as `update(gyro, Some(f − Rᵀ·a), mag, dt)` with `R` =
+    /// [`rot_body_to_ned`] of [`Self::euler`], sharing the roll and pitch trigonometry with the
+    /// propagation (and skipping the rotation when `a` is zero).
+    pub fn update_compensated(
+        &mut self,
+        gyro_frd_radps: [f32; 3],
+        f_frd_mps2: [f32; 3],
+        accel_ned_mps2: [f32; 3],
+        mag_frd_ut: Option<[f32; 3]>,
+        dt_s: f32,
+    ) -> Euler {
+        let roll = sincosf(self.roll.angle_rad());
+        let pitch = sincosf(self.pitch.angle_rad());
+        let mut f = f_frd_mps2;
+        let a = accel_ned_mps2;
+        if a != [0.0; 3] {
+            let r = rot_trig(roll, pitch, sincosf(self.yaw.angle_rad()));
+            for (i, fi) in f.iter_mut().enumerate() {
+                *fi -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
+            }
+        }
+        self.tilt_f_frd_mps2 = f;
+        let rates = euler_rates_trig(gyro_frd_radps, roll, pitch);
+        self.correct(rates, Some(f), mag_frd_ut, dt_s)
+    }
+
+    /// The compensated specific force the last [`Self::update_compensated`] used (FRD, m/s²).
+    pub fn tilt_specific_force_frd_mps2(&self) -> [f32; 3] {
+        self.tilt_f_frd_mps2
+    }
+
+    /// The correction half of a step, from the Euler rates.
+    fn correct(
+        &mut self,
+        rates: [f32; 3],
+        accel_frd_mps2: Option<[f32; 3]>,
+        mag_frd_ut: Option<[f32; 3]>,
+        dt_s: f32,
+    ) -> Euler {
         let tilt = accel_frd_mps2.and_then(|f| {
             let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
             if (n - GRAVITY_MPS2).abs() <= self.accel_gate_mps2 {
@@ -504,6 +562,33 @@ mod tests {
         let want = euler_rates(bias, truth.roll_rad, truth.pitch_rad);
         for i in 0..3 {
             assert!((b[i] + want[i]).abs() < 3e-3, "{b:?} vs {want:?}");
+        }
+    }
+
+    #[test]
+    fn compensated_update_equals_update_of_the_compensated_force() {
+        let mut rng = Rng::new(21);
+        let gains = (CfGains::new(1.0, 0.7), CfGains::new(0.5, 0.7));
+        let mut a_est = AttitudeEstimator::new(gains.0, gains.1, 0.1);
+        a_est.reset(e(0.2, -0.1, 2.5));
+        let mut b_est = a_est;
+        for k in 0..2000 {
+            let gyro = [rng.normal(0.2), rng.normal(0.2), rng.normal(0.3)];
+            let f = [rng.normal(1.0), rng.normal(1.0), -G + rng.normal(1.0)];
+            // Zero (no GPS) half of the time: then no rotation at all.
+            let a = if k % 2 == 0 {
+                [rng.normal(1.0), rng.normal(1.0), rng.normal(0.3)]
+            } else {
+                [0.0; 3]
+            };
+            let m = (k % 5 == 0).then(|| M_NED.map(|x| x + rng.normal(0.5)));
+            let r = rot_body_to_ned(&b_est.euler());
+            let f_c: [f32; 3] =
+                core::array::from_fn(|i| f[i] - (r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2]));
+            let got = a_est.update_compensated(gyro, f, a, m, DT);
+            let want = b_est.update(gyro, Some(f_c), m, DT);
+            assert_eq!(got, want, "step {k}");
+            assert_eq!(a_est.tilt_specific_force_frd_mps2(), f_c);
         }
     }
 
