@@ -29,7 +29,13 @@ pub struct Euler {
 /// acceleration: `θ = asin(f_x/|f|)`, `φ = atan2(−f_y, −f_z)`. Returns `(0, 0)` for `f = 0`.
 pub fn accel_tilt_rad(f_frd_mps2: [f32; 3]) -> (f32, f32) {
     let [fx, fy, fz] = f_frd_mps2;
-    let norm = sqrtf(fx * fx + fy * fy + fz * fz);
+    accel_tilt_norm_rad(f_frd_mps2, sqrtf(fx * fx + fy * fy + fz * fz))
+}
+
+/// [`accel_tilt_rad`] with the norm `|f|` already computed.
+#[inline]
+fn accel_tilt_norm_rad(f_frd_mps2: [f32; 3], norm: f32) -> (f32, f32) {
+    let [fx, fy, fz] = f_frd_mps2;
     if norm < 1e-6 {
         return (0.0, 0.0);
     }
@@ -48,22 +54,38 @@ pub fn mag_heading_rad(
     pitch_rad: f32,
     declination_rad: f32,
 ) -> f32 {
+    let (mx_h, my_h) = mag_horizontal(m_frd, sincosf(roll_rad), sincosf(pitch_rad));
+    wrap_pi(atan2f(-my_h, mx_h) + declination_rad)
+}
+
+/// The field's horizontal components `(north-ish, east-ish)` in the heading frame, from the
+/// `(sin, cos)` of roll and pitch.
+#[inline]
+fn mag_horizontal(m_frd: [f32; 3], roll: (f32, f32), pitch: (f32, f32)) -> (f32, f32) {
     let [mx, my, mz] = m_frd;
-    let (sp, cp) = sincosf(roll_rad);
-    let (st, ct) = sincosf(pitch_rad);
+    let ((sp, cp), (st, ct)) = (roll, pitch);
     let mx_h = mx * ct + my * sp * st + mz * cp * st;
     let my_h = my * cp - mz * sp;
-    wrap_pi(atan2f(-my_h, mx_h) + declination_rad)
+    (mx_h, my_h)
 }
 
 /// Magnitude \[µT] and dip (inclination, down positive) \[rad] of a body-frame field at the
 /// given roll and pitch.
 pub fn mag_norm_dip(m_frd: [f32; 3], roll_rad: f32, pitch_rad: f32) -> (f32, f32) {
+    let (roll, pitch) = (sincosf(roll_rad), sincosf(pitch_rad));
+    mag_norm_dip_h(m_frd, roll, pitch, mag_horizontal(m_frd, roll, pitch))
+}
+
+/// [`mag_norm_dip`] from the trigonometry and the horizontal components already computed.
+#[inline]
+fn mag_norm_dip_h(
+    m_frd: [f32; 3],
+    roll: (f32, f32),
+    pitch: (f32, f32),
+    (mx_h, my_h): (f32, f32),
+) -> (f32, f32) {
     let [mx, my, mz] = m_frd;
-    let (sp, cp) = sincosf(roll_rad);
-    let (st, ct) = sincosf(pitch_rad);
-    let mx_h = mx * ct + my * sp * st + mz * cp * st;
-    let my_h = my * cp - mz * sp;
+    let ((sp, cp), (st, ct)) = (roll, pitch);
     let mz_v = -mx * st + my * sp * ct + mz * cp * ct;
     let h = sqrtf(mx_h * mx_h + my_h * my_h);
     (sqrtf(h * h + mz_v * mz_v), atan2f(mz_v, h))
@@ -176,6 +198,9 @@ pub struct AttitudeEstimator {
     mag_rejects: u32,
     /// The specific force the last [`Self::update_compensated`] read as tilt (compensated).
     tilt_f_frd_mps2: [f32; 3],
+    /// `(sin, cos)` of the current roll and pitch when a magnetometer step already computed
+    /// them (the next step's propagation reuses them); `None` otherwise.
+    trig: Option<((f32, f32), (f32, f32))>,
 }
 
 impl AttitudeEstimator {
@@ -199,6 +224,7 @@ impl AttitudeEstimator {
             mag_rejected_s: 0.0,
             mag_rejects: 0,
             tilt_f_frd_mps2: [0.0; 3],
+            trig: None,
         }
     }
 
@@ -230,6 +256,7 @@ impl AttitudeEstimator {
 
     /// Set the attitude (rate-bias estimates zeroed).
     pub fn reset(&mut self, e: Euler) {
+        self.trig = None;
         self.roll.reset(e.roll_rad);
         self.pitch.reset(e.pitch_rad);
         self.yaw.reset(e.yaw_rad);
@@ -244,8 +271,7 @@ impl AttitudeEstimator {
         mag_frd_ut: Option<[f32; 3]>,
         dt_s: f32,
     ) -> Euler {
-        let roll = sincosf(self.roll.angle_rad());
-        let pitch = sincosf(self.pitch.angle_rad());
+        let (roll, pitch) = self.roll_pitch_trig();
         let rates = euler_rates_trig(gyro_frd_radps, roll, pitch);
         self.correct(rates, accel_frd_mps2, mag_frd_ut, dt_s)
     }
@@ -264,8 +290,7 @@ impl AttitudeEstimator {
         mag_frd_ut: Option<[f32; 3]>,
         dt_s: f32,
     ) -> Euler {
-        let roll = sincosf(self.roll.angle_rad());
-        let pitch = sincosf(self.pitch.angle_rad());
+        let (roll, pitch) = self.roll_pitch_trig();
         let mut f = f_frd_mps2;
         let a = accel_ned_mps2;
         if a != [0.0; 3] {
@@ -284,6 +309,18 @@ impl AttitudeEstimator {
         self.tilt_f_frd_mps2
     }
 
+    /// `(sin, cos)` of the current roll and pitch (reused from the last magnetometer step).
+    #[inline]
+    fn roll_pitch_trig(&mut self) -> ((f32, f32), (f32, f32)) {
+        match self.trig.take() {
+            Some(t) => t,
+            None => (
+                sincosf(self.roll.angle_rad()),
+                sincosf(self.pitch.angle_rad()),
+            ),
+        }
+    }
+
     /// The correction half of a step, from the Euler rates.
     fn correct(
         &mut self,
@@ -295,20 +332,25 @@ impl AttitudeEstimator {
         let tilt = accel_frd_mps2.and_then(|f| {
             let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
             if (n - GRAVITY_MPS2).abs() <= self.accel_gate_mps2 {
-                Some(accel_tilt_rad(f))
+                Some(accel_tilt_norm_rad(f, n))
             } else {
                 None
             }
         });
         let roll = self.roll.update(rates[0], tilt.map(|t| t.0), dt_s);
         let pitch = self.pitch.update(rates[1], tilt.map(|t| t.1), dt_s);
-        let mut heading = mag_frd_ut.map(|m| mag_heading_rad(m, roll, pitch, self.declination_rad));
-        if let (Some(h), Some(m)) = (heading, mag_frd_ut) {
+        let mut heading = None;
+        if let Some(m) = mag_frd_ut {
+            let trig = (sincosf(roll), sincosf(pitch));
+            self.trig = Some(trig);
+            let horiz = mag_horizontal(m, trig.0, trig.1);
+            let h = wrap_pi(atan2f(-horiz.1, horiz.0) + self.declination_rad);
+            heading = Some(h);
             let innov = crate::complementary::wrap_pi(h - self.yaw.angle_rad());
             let field_ok = match self.mag_ref {
                 None => true,
                 Some((n0, d0)) => {
-                    let (n, d) = mag_norm_dip(m, roll, pitch);
+                    let (n, d) = mag_norm_dip_h(m, trig.0, trig.1, horiz);
                     fabsf(n - n0) <= self.mag_norm_gate_ut && fabsf(d - d0) <= self.mag_dip_gate_rad
                 }
             };
