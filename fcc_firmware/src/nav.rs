@@ -75,6 +75,10 @@ pub struct Navigator {
     cal_gyro_sum: [f32; 3],
     cal_accel_sum: [f32; 3],
     cal_baro_sum: f32,
+    /// Magnetometer (offsets removed) summed over the calibration: the initial heading and the
+    /// field reference come from the mean, not from one noisy sample.
+    cal_mag_sum: [f32; 3],
+    cal_mag_n: u32,
     cal_imu_n: u32,
     cal_baro_n: u32,
     cal_start_us: Option<u64>,
@@ -130,6 +134,8 @@ impl Navigator {
             cal_gyro_sum: [0.0; 3],
             cal_accel_sum: [0.0; 3],
             cal_baro_sum: 0.0,
+            cal_mag_sum: [0.0; 3],
+            cal_mag_n: 0,
             cal_imu_n: 0,
             cal_baro_n: 0,
             cal_start_us: None,
@@ -465,6 +471,12 @@ impl Navigator {
             self.cal_baro_sum += b.pressure_pa;
             self.cal_baro_n += 1;
         }
+        if let Some(m) = s.mag {
+            for i in 0..3 {
+                self.cal_mag_sum[i] += m.mag_frd_ut[i];
+            }
+            self.cal_mag_n += 1;
+        }
         let elapsed_s = now_us.saturating_sub(start) as f32 * 1e-6;
         if elapsed_s >= self.params.calibration_s && self.cal_imu_n > 100 && self.cal_baro_n > 5 {
             let n = self.cal_imu_n as f32;
@@ -480,7 +492,13 @@ impl Navigator {
             ];
             self.p0_pa = self.cal_baro_sum / self.cal_baro_n as f32;
             let (roll, pitch) = accel_tilt_rad(f);
-            let yaw = match self.last_mag_frd {
+            let mag = if self.cal_mag_n > 0 {
+                let n = self.cal_mag_n as f32;
+                Some(self.cal_mag_sum.map(|x| x / n))
+            } else {
+                self.last_mag_frd
+            };
+            let yaw = match mag {
                 Some(m) => {
                     self.att.set_mag_reference(m, roll, pitch);
                     mag_heading_rad(m, roll, pitch, self.params.declination_deg.to_radians())

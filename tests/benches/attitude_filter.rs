@@ -9,8 +9,8 @@
 //! The samples the flight core received (captured exactly, see `common/mod.rs`), with the
 //! calibration the firmware applies: gyro bias = mean gyro over the core's ground calibration,
 //! accelerometer and magnetometer offsets from the calibrated `Params`. Every filter starts at
-//! the core's initial attitude (accelerometer tilt + tilt-compensated magnetic heading at the
-//! end of the calibration) and runs at 500 Hz with the core's IMU period.
+//! the core's initial attitude (tilt of the mean accelerometer + tilt-compensated heading of the
+//! mean magnetometer over the calibration) and runs at 500 Hz with the core's IMU period.
 //!
 //! The firmware removes the manoeuvre acceleration (GPS-differenced velocity, smoothed, NED)
 //! from the low-passed specific force before reading it as a gravity direction. The peers get
@@ -210,8 +210,8 @@ fn prepare(name: &'static str) -> Flight {
         .position(|t| t.calibrated)
         .expect("the core calibrates");
     assert!(n_cal > 100, "calibration window too short");
-    let (mut gyro_sum, mut acc_sum) = ([0.0f32; 3], [0.0f32; 3]);
-    let mut last_mag = None;
+    let (mut gyro_sum, mut acc_sum, mut mag_sum) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
+    let mut mag_n = 0u32;
     let off = |m: [f32; 3], o: [f32; 3]| -> [f32; 3] { std::array::from_fn(|i| m[i] - o[i]) };
     for t in &cap.ticks[..=n_cal] {
         let imu = t.inputs.imu.unwrap();
@@ -221,13 +221,18 @@ fn prepare(name: &'static str) -> Flight {
             acc_sum[i] += acc[i];
         }
         if let Some(m) = t.inputs.mag {
-            last_mag = Some(off(m.mag_frd_ut, nav.mag_offset_frd_ut));
+            let m = off(m.mag_frd_ut, nav.mag_offset_frd_ut);
+            for i in 0..3 {
+                mag_sum[i] += m[i];
+            }
+            mag_n += 1;
         }
     }
     let n = (n_cal + 1) as f32;
     let bias = gyro_sum.map(|s| s / n);
     let (r0, p0) = accel_tilt_rad(acc_sum.map(|s| s / n));
-    let m0 = last_mag.expect("mag during calibration");
+    assert!(mag_n > 0, "mag during calibration");
+    let m0 = mag_sum.map(|s| s / mag_n as f32);
     let init = Euler {
         roll_rad: r0,
         pitch_rad: p0,
