@@ -286,6 +286,7 @@ impl Navigator {
         } else {
             self.att.euler()
         };
+        // The compensated specific force of the estimator's latest tilt correction (100 Hz).
         let f_tilt = self.att.tilt_specific_force_frd_mps2();
         // The tilt monitor samples at 50 Hz (its hold time is seconds; asin/atan2 at 500 Hz
         // would cost the MCU ~10 % of a step).

@@ -169,6 +169,14 @@ pub struct AttitudeEstimator {
     pub declination_rad: f32,
     /// Accelerometer correction is skipped when `| |f| − g | >` this \[m/s²] (default 2.0).
     pub accel_gate_mps2: f32,
+    /// Roll and pitch are corrected from the accelerometer on every this-many steps (default
+    /// 5: 100 Hz at 500 Hz), with the gains of the time since the last correction; the gyro
+    /// propagates every step. The (low-passed, 5 Hz) specific force carries nothing faster, and
+    /// the tilt measurement (norm, asin, atan2, the compensation's rotation) is most of a
+    /// step's cost.
+    pub tilt_every: u8,
+    tilt_tick: u8,
+    tilt_dt_s: f32,
     /// Magnetometer innovation gate \[rad]: a heading that disagrees with the gyro-propagated
     /// yaw by more than this is treated as a magnetic disturbance and not fused (default 10°).
     pub mag_gate_rad: f32,
@@ -196,7 +204,8 @@ pub struct AttitudeEstimator {
     mag_realigns: u32,
     mag_rejected_s: f32,
     mag_rejects: u32,
-    /// The specific force the last [`Self::update_compensated`] read as tilt (compensated).
+    /// The specific force the last tilt correction of [`Self::update_compensated`] read
+    /// (compensated).
     tilt_f_frd_mps2: [f32; 3],
     /// `(sin, cos)` of the current roll and pitch when a magnetometer step already computed
     /// them (the next step's propagation reuses them); `None` otherwise.
@@ -212,6 +221,9 @@ impl AttitudeEstimator {
             yaw: AngleCf::new(yaw, true),
             declination_rad,
             accel_gate_mps2: 2.0,
+            tilt_every: 5,
+            tilt_tick: 0,
+            tilt_dt_s: 0.0,
             mag_gate_rad: 10.0 * core::f32::consts::PI / 180.0,
             mag_norm_gate_ut: 4.0,
             mag_dip_gate_rad: 4.0 * core::f32::consts::PI / 180.0,
@@ -257,6 +269,8 @@ impl AttitudeEstimator {
     /// Set the attitude (rate-bias estimates zeroed).
     pub fn reset(&mut self, e: Euler) {
         self.trig = None;
+        self.tilt_tick = 0;
+        self.tilt_dt_s = 0.0;
         self.roll.reset(e.roll_rad);
         self.pitch.reset(e.pitch_rad);
         self.yaw.reset(e.yaw_rad);
@@ -291,20 +305,30 @@ impl AttitudeEstimator {
         dt_s: f32,
     ) -> Euler {
         let (roll, pitch) = self.roll_pitch_trig();
-        let mut f = f_frd_mps2;
-        let a = accel_ned_mps2;
-        if a != [0.0; 3] {
-            let r = rot_trig(roll, pitch, sincosf(self.yaw.angle_rad()));
-            for (i, fi) in f.iter_mut().enumerate() {
-                *fi -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
-            }
-        }
-        self.tilt_f_frd_mps2 = f;
         let rates = euler_rates_trig(gyro_frd_radps, roll, pitch);
-        self.correct(rates, Some(f), mag_frd_ut, dt_s)
+        let mut f = None;
+        if self.tilt_due() {
+            let mut fc = f_frd_mps2;
+            let a = accel_ned_mps2;
+            if a != [0.0; 3] {
+                let r = rot_trig(roll, pitch, sincosf(self.yaw.angle_rad()));
+                for (i, fi) in fc.iter_mut().enumerate() {
+                    *fi -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
+                }
+            }
+            self.tilt_f_frd_mps2 = fc;
+            f = Some(fc);
+        }
+        self.correct(rates, f, mag_frd_ut, dt_s)
     }
 
-    /// The compensated specific force the last [`Self::update_compensated`] used (FRD, m/s²).
+    /// Whether this step (the next call of `correct`) corrects the tilt.
+    #[inline]
+    fn tilt_due(&self) -> bool {
+        self.tilt_tick.saturating_add(1) >= self.tilt_every
+    }
+
+    /// The compensated specific force the last tilt correction used (FRD, m/s²).
     pub fn tilt_specific_force_frd_mps2(&self) -> [f32; 3] {
         self.tilt_f_frd_mps2
     }
@@ -329,16 +353,27 @@ impl AttitudeEstimator {
         mag_frd_ut: Option<[f32; 3]>,
         dt_s: f32,
     ) -> Euler {
-        let tilt = accel_frd_mps2.and_then(|f| {
-            let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-            if (n - GRAVITY_MPS2).abs() <= self.accel_gate_mps2 {
-                Some(accel_tilt_norm_rad(f, n))
-            } else {
-                None
+        let mut roll = self.roll.predict(rates[0], dt_s);
+        let mut pitch = self.pitch.predict(rates[1], dt_s);
+        self.tilt_dt_s += dt_s;
+        if self.tilt_due() {
+            let tilt = accel_frd_mps2.and_then(|f| {
+                let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+                if (n - GRAVITY_MPS2).abs() <= self.accel_gate_mps2 {
+                    Some(accel_tilt_norm_rad(f, n))
+                } else {
+                    None
+                }
+            });
+            if let Some((r, p)) = tilt {
+                roll = self.roll.correct(r, self.tilt_dt_s);
+                pitch = self.pitch.correct(p, self.tilt_dt_s);
             }
-        });
-        let roll = self.roll.update(rates[0], tilt.map(|t| t.0), dt_s);
-        let pitch = self.pitch.update(rates[1], tilt.map(|t| t.1), dt_s);
+            self.tilt_tick = 0;
+            self.tilt_dt_s = 0.0;
+        } else {
+            self.tilt_tick += 1;
+        }
         let mut heading = None;
         if let Some(m) = mag_frd_ut {
             let trig = (sincosf(roll), sincosf(pitch));
@@ -630,7 +665,10 @@ mod tests {
             let got = a_est.update_compensated(gyro, f, a, m, DT);
             let want = b_est.update(gyro, Some(f_c), m, DT);
             assert_eq!(got, want, "step {k}");
-            assert_eq!(a_est.tilt_specific_force_frd_mps2(), f_c);
+            if k % 5 == 4 {
+                // A tilt-correction step (every 5th): the compensated force it read.
+                assert_eq!(a_est.tilt_specific_force_frd_mps2(), f_c);
+            }
         }
     }
 
