@@ -9,8 +9,7 @@ use crate::nav_health::{Innovations, NavHealth};
 use crate::params::NavParams;
 use crate::sensors::{BaroSample, GpsFix, ImuSample, SensorInputs};
 use fcc_nav::attitude::{
-    accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, rot_body_to_ned, AttitudeEstimator,
-    Euler,
+    accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, AttitudeEstimator, Euler,
 };
 use fcc_nav::geodesy::{Lla, LocalNed};
 use fcc_nav::ground_altitude::{GroundAltitude, GroundAltitudeFilter, GroundAltitudeParams};
@@ -76,6 +75,10 @@ pub struct Navigator {
     cal_gyro_sum: [f32; 3],
     cal_accel_sum: [f32; 3],
     cal_baro_sum: f32,
+    /// Magnetometer (offsets removed) summed over the calibration: the initial heading and the
+    /// field reference come from the mean, not from one noisy sample.
+    cal_mag_sum: [f32; 3],
+    cal_mag_n: u32,
     cal_imu_n: u32,
     cal_baro_n: u32,
     cal_start_us: Option<u64>,
@@ -131,6 +134,8 @@ impl Navigator {
             cal_gyro_sum: [0.0; 3],
             cal_accel_sum: [0.0; 3],
             cal_baro_sum: 0.0,
+            cal_mag_sum: [0.0; 3],
+            cal_mag_n: 0,
             cal_imu_n: 0,
             cal_baro_n: 0,
             cal_start_us: None,
@@ -161,6 +166,17 @@ impl Navigator {
     /// innovation gate (a magnetic disturbance is suspected), and how many were rejected so far.
     pub fn mag_disturbance(&self) -> (bool, u32) {
         (self.att.mag_disturbed(), self.att.mag_rejects())
+    }
+
+    /// The manoeuvre acceleration (NED, m/s²) the next IMU step removes from the specific
+    /// force before the tilt correction: the smoothed GPS-differenced acceleration while GPS is
+    /// fed, else zero.
+    pub fn tilt_accel_comp_ned_mps2(&self) -> [f32; 3] {
+        if self.state.gps_ok {
+            self.gps_accel_ned_mps2
+        } else {
+            [0.0; 3]
+        }
     }
 
     pub fn home(&self) -> Option<Lla> {
@@ -263,22 +279,15 @@ impl Navigator {
         ];
         // Remove the manoeuvre acceleration (GPS-derived, NED → body) from the specific
         // force before it is read as a gravity direction.
-        let r = rot_body_to_ned(&self.att.euler());
-        let a = if self.state.gps_ok {
-            self.gps_accel_ned_mps2
-        } else {
-            [0.0; 3]
-        };
-        let mut f_tilt = f_lp;
-        for (i, ft) in f_tilt.iter_mut().enumerate() {
-            *ft -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
-        }
+        let a = self.tilt_accel_comp_ned_mps2();
         self.att.mag_realign_allowed = on_ground_disarmed;
         let euler = if self.calibrated {
-            self.att.update(gyro, Some(f_tilt), mag, dt_s)
+            self.att.update_compensated(gyro, f_lp, a, mag, dt_s)
         } else {
             self.att.euler()
         };
+        // The compensated specific force of the estimator's latest tilt correction (100 Hz).
+        let f_tilt = self.att.tilt_specific_force_frd_mps2();
         // The tilt monitor samples at 50 Hz (its hold time is seconds; asin/atan2 at 500 Hz
         // would cost the MCU ~10 % of a step).
         self.tilt_check_tick = (self.tilt_check_tick + 1) % TILT_CHECK_EVERY;
@@ -463,6 +472,12 @@ impl Navigator {
             self.cal_baro_sum += b.pressure_pa;
             self.cal_baro_n += 1;
         }
+        if let Some(m) = s.mag {
+            for i in 0..3 {
+                self.cal_mag_sum[i] += m.mag_frd_ut[i];
+            }
+            self.cal_mag_n += 1;
+        }
         let elapsed_s = now_us.saturating_sub(start) as f32 * 1e-6;
         if elapsed_s >= self.params.calibration_s && self.cal_imu_n > 100 && self.cal_baro_n > 5 {
             let n = self.cal_imu_n as f32;
@@ -478,7 +493,13 @@ impl Navigator {
             ];
             self.p0_pa = self.cal_baro_sum / self.cal_baro_n as f32;
             let (roll, pitch) = accel_tilt_rad(f);
-            let yaw = match self.last_mag_frd {
+            let mag = if self.cal_mag_n > 0 {
+                let n = self.cal_mag_n as f32;
+                Some(self.cal_mag_sum.map(|x| x / n))
+            } else {
+                self.last_mag_frd
+            };
+            let yaw = match mag {
                 Some(m) => {
                     self.att.set_mag_reference(m, roll, pitch);
                     mag_heading_rad(m, roll, pitch, self.params.declination_deg.to_radians())

@@ -29,7 +29,13 @@ pub struct Euler {
 /// acceleration: `θ = asin(f_x/|f|)`, `φ = atan2(−f_y, −f_z)`. Returns `(0, 0)` for `f = 0`.
 pub fn accel_tilt_rad(f_frd_mps2: [f32; 3]) -> (f32, f32) {
     let [fx, fy, fz] = f_frd_mps2;
-    let norm = sqrtf(fx * fx + fy * fy + fz * fz);
+    accel_tilt_norm_rad(f_frd_mps2, sqrtf(fx * fx + fy * fy + fz * fz))
+}
+
+/// [`accel_tilt_rad`] with the norm `|f|` already computed.
+#[inline]
+fn accel_tilt_norm_rad(f_frd_mps2: [f32; 3], norm: f32) -> (f32, f32) {
+    let [fx, fy, fz] = f_frd_mps2;
     if norm < 1e-6 {
         return (0.0, 0.0);
     }
@@ -48,22 +54,38 @@ pub fn mag_heading_rad(
     pitch_rad: f32,
     declination_rad: f32,
 ) -> f32 {
+    let (mx_h, my_h) = mag_horizontal(m_frd, sincosf(roll_rad), sincosf(pitch_rad));
+    wrap_pi(atan2f(-my_h, mx_h) + declination_rad)
+}
+
+/// The field's horizontal components `(north-ish, east-ish)` in the heading frame, from the
+/// `(sin, cos)` of roll and pitch.
+#[inline]
+fn mag_horizontal(m_frd: [f32; 3], roll: (f32, f32), pitch: (f32, f32)) -> (f32, f32) {
     let [mx, my, mz] = m_frd;
-    let (sp, cp) = sincosf(roll_rad);
-    let (st, ct) = sincosf(pitch_rad);
+    let ((sp, cp), (st, ct)) = (roll, pitch);
     let mx_h = mx * ct + my * sp * st + mz * cp * st;
     let my_h = my * cp - mz * sp;
-    wrap_pi(atan2f(-my_h, mx_h) + declination_rad)
+    (mx_h, my_h)
 }
 
 /// Magnitude \[µT] and dip (inclination, down positive) \[rad] of a body-frame field at the
 /// given roll and pitch.
 pub fn mag_norm_dip(m_frd: [f32; 3], roll_rad: f32, pitch_rad: f32) -> (f32, f32) {
+    let (roll, pitch) = (sincosf(roll_rad), sincosf(pitch_rad));
+    mag_norm_dip_h(m_frd, roll, pitch, mag_horizontal(m_frd, roll, pitch))
+}
+
+/// [`mag_norm_dip`] from the trigonometry and the horizontal components already computed.
+#[inline]
+fn mag_norm_dip_h(
+    m_frd: [f32; 3],
+    roll: (f32, f32),
+    pitch: (f32, f32),
+    (mx_h, my_h): (f32, f32),
+) -> (f32, f32) {
     let [mx, my, mz] = m_frd;
-    let (sp, cp) = sincosf(roll_rad);
-    let (st, ct) = sincosf(pitch_rad);
-    let mx_h = mx * ct + my * sp * st + mz * cp * st;
-    let my_h = my * cp - mz * sp;
+    let ((sp, cp), (st, ct)) = (roll, pitch);
     let mz_v = -mx * st + my * sp * ct + mz * cp * ct;
     let h = sqrtf(mx_h * mx_h + my_h * my_h);
     (sqrtf(h * h + mz_v * mz_v), atan2f(mz_v, h))
@@ -72,9 +94,16 @@ pub fn mag_norm_dip(m_frd: [f32; 3], roll_rad: f32, pitch_rad: f32) -> (f32, f32
 /// Euler-angle rates `[φ̇, θ̇, ψ̇]` \[rad/s] from body rates `[p, q, r]` \[rad/s] (FRD).
 /// `cos θ` is limited to ±1e−3 near ±90° pitch (gimbal lock).
 pub fn euler_rates(gyro_frd_radps: [f32; 3], roll_rad: f32, pitch_rad: f32) -> [f32; 3] {
-    let [p, q, r] = gyro_frd_radps;
     let (sp, cp) = sincosf(roll_rad);
-    let (st, mut ct) = sincosf(pitch_rad);
+    let (st, ct) = sincosf(pitch_rad);
+    euler_rates_trig(gyro_frd_radps, (sp, cp), (st, ct))
+}
+
+/// [`euler_rates`] from the sines and cosines of roll and pitch.
+fn euler_rates_trig(gyro_frd_radps: [f32; 3], roll: (f32, f32), pitch: (f32, f32)) -> [f32; 3] {
+    let [p, q, r] = gyro_frd_radps;
+    let (sp, cp) = roll;
+    let (st, mut ct) = pitch;
     const MIN_COS: f32 = 1e-3;
     if ct.abs() < MIN_COS {
         ct = if ct < 0.0 { -MIN_COS } else { MIN_COS };
@@ -85,9 +114,14 @@ pub fn euler_rates(gyro_frd_radps: [f32; 3], roll_rad: f32, pitch_rad: f32) -> [
 
 /// Rotation matrix body (FRD) → NED, `R = Rz(ψ)·Ry(θ)·Rx(φ)`, row-major.
 pub fn rot_body_to_ned(e: &Euler) -> [[f32; 3]; 3] {
-    let (sp, cp) = sincosf(e.roll_rad);
-    let (st, ct) = sincosf(e.pitch_rad);
-    let (ss, cs) = sincosf(e.yaw_rad);
+    let roll = sincosf(e.roll_rad);
+    let pitch = sincosf(e.pitch_rad);
+    rot_trig(roll, pitch, sincosf(e.yaw_rad))
+}
+
+/// [`rot_body_to_ned`] from the sines and cosines `(sin, cos)` of roll, pitch and yaw.
+fn rot_trig(roll: (f32, f32), pitch: (f32, f32), yaw: (f32, f32)) -> [[f32; 3]; 3] {
+    let ((sp, cp), (st, ct), (ss, cs)) = (roll, pitch, yaw);
     [
         [ct * cs, sp * st * cs - cp * ss, cp * st * cs + sp * ss],
         [ct * ss, sp * st * ss + cp * cs, cp * st * ss - sp * cs],
@@ -135,6 +169,14 @@ pub struct AttitudeEstimator {
     pub declination_rad: f32,
     /// Accelerometer correction is skipped when `| |f| − g | >` this \[m/s²] (default 2.0).
     pub accel_gate_mps2: f32,
+    /// Roll and pitch are corrected from the accelerometer on every this-many steps (default
+    /// 5: 100 Hz at 500 Hz), with the gains of the time since the last correction; the gyro
+    /// propagates every step. The (low-passed, 5 Hz) specific force carries nothing faster, and
+    /// the tilt measurement (norm, asin, atan2, the compensation's rotation) is most of a
+    /// step's cost.
+    pub tilt_every: u8,
+    tilt_tick: u8,
+    tilt_dt_s: f32,
     /// Magnetometer innovation gate \[rad]: a heading that disagrees with the gyro-propagated
     /// yaw by more than this is treated as a magnetic disturbance and not fused (default 10°).
     pub mag_gate_rad: f32,
@@ -162,6 +204,12 @@ pub struct AttitudeEstimator {
     mag_realigns: u32,
     mag_rejected_s: f32,
     mag_rejects: u32,
+    /// The specific force the last tilt correction of [`Self::update_compensated`] read
+    /// (compensated).
+    tilt_f_frd_mps2: [f32; 3],
+    /// `(sin, cos)` of the current roll and pitch when a magnetometer step already computed
+    /// them (the next step's propagation reuses them); `None` otherwise.
+    trig: Option<((f32, f32), (f32, f32))>,
 }
 
 impl AttitudeEstimator {
@@ -173,6 +221,9 @@ impl AttitudeEstimator {
             yaw: AngleCf::new(yaw, true),
             declination_rad,
             accel_gate_mps2: 2.0,
+            tilt_every: 5,
+            tilt_tick: 0,
+            tilt_dt_s: 0.0,
             mag_gate_rad: 10.0 * core::f32::consts::PI / 180.0,
             mag_norm_gate_ut: 4.0,
             mag_dip_gate_rad: 4.0 * core::f32::consts::PI / 180.0,
@@ -184,6 +235,8 @@ impl AttitudeEstimator {
             mag_realigns: 0,
             mag_rejected_s: 0.0,
             mag_rejects: 0,
+            tilt_f_frd_mps2: [0.0; 3],
+            trig: None,
         }
     }
 
@@ -215,6 +268,9 @@ impl AttitudeEstimator {
 
     /// Set the attitude (rate-bias estimates zeroed).
     pub fn reset(&mut self, e: Euler) {
+        self.trig = None;
+        self.tilt_tick = 0;
+        self.tilt_dt_s = 0.0;
         self.roll.reset(e.roll_rad);
         self.pitch.reset(e.pitch_rad);
         self.yaw.reset(e.yaw_rad);
@@ -229,28 +285,107 @@ impl AttitudeEstimator {
         mag_frd_ut: Option<[f32; 3]>,
         dt_s: f32,
     ) -> Euler {
-        let rates = euler_rates(
-            gyro_frd_radps,
-            self.roll.angle_rad(),
-            self.pitch.angle_rad(),
-        );
-        let tilt = accel_frd_mps2.and_then(|f| {
-            let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-            if (n - GRAVITY_MPS2).abs() <= self.accel_gate_mps2 {
-                Some(accel_tilt_rad(f))
-            } else {
-                None
+        let (roll, pitch) = self.roll_pitch_trig();
+        let rates = euler_rates_trig(gyro_frd_radps, roll, pitch);
+        self.correct(rates, accel_frd_mps2, mag_frd_ut, dt_s)
+    }
+
+    /// [`Self::update`] with the vehicle's manoeuvre acceleration `accel_ned_mps2` (NED, e.g.
+    /// from differenced GPS velocities) first removed from the specific force `f_frd_mps2`,
+    /// rotated into the body with the current estimate, so that it is not read as tilt. The
+    /// same result as `update(gyro, Some(f − Rᵀ·a), mag, dt)` with `R` =
+    /// [`rot_body_to_ned`] of [`Self::euler`], sharing the roll and pitch trigonometry with the
+    /// propagation (and skipping the rotation when `a` is zero).
+    pub fn update_compensated(
+        &mut self,
+        gyro_frd_radps: [f32; 3],
+        f_frd_mps2: [f32; 3],
+        accel_ned_mps2: [f32; 3],
+        mag_frd_ut: Option<[f32; 3]>,
+        dt_s: f32,
+    ) -> Euler {
+        let (roll, pitch) = self.roll_pitch_trig();
+        let rates = euler_rates_trig(gyro_frd_radps, roll, pitch);
+        let mut f = None;
+        if self.tilt_due() {
+            let mut fc = f_frd_mps2;
+            let a = accel_ned_mps2;
+            if a != [0.0; 3] {
+                let r = rot_trig(roll, pitch, sincosf(self.yaw.angle_rad()));
+                for (i, fi) in fc.iter_mut().enumerate() {
+                    *fi -= r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2];
+                }
             }
-        });
-        let roll = self.roll.update(rates[0], tilt.map(|t| t.0), dt_s);
-        let pitch = self.pitch.update(rates[1], tilt.map(|t| t.1), dt_s);
-        let mut heading = mag_frd_ut.map(|m| mag_heading_rad(m, roll, pitch, self.declination_rad));
-        if let (Some(h), Some(m)) = (heading, mag_frd_ut) {
+            self.tilt_f_frd_mps2 = fc;
+            f = Some(fc);
+        }
+        self.correct(rates, f, mag_frd_ut, dt_s)
+    }
+
+    /// Whether this step (the next call of `correct`) corrects the tilt.
+    #[inline]
+    fn tilt_due(&self) -> bool {
+        self.tilt_tick.saturating_add(1) >= self.tilt_every
+    }
+
+    /// The compensated specific force the last tilt correction used (FRD, m/s²).
+    pub fn tilt_specific_force_frd_mps2(&self) -> [f32; 3] {
+        self.tilt_f_frd_mps2
+    }
+
+    /// `(sin, cos)` of the current roll and pitch (reused from the last magnetometer step).
+    #[inline]
+    fn roll_pitch_trig(&mut self) -> ((f32, f32), (f32, f32)) {
+        match self.trig.take() {
+            Some(t) => t,
+            None => (
+                sincosf(self.roll.angle_rad()),
+                sincosf(self.pitch.angle_rad()),
+            ),
+        }
+    }
+
+    /// The correction half of a step, from the Euler rates.
+    fn correct(
+        &mut self,
+        rates: [f32; 3],
+        accel_frd_mps2: Option<[f32; 3]>,
+        mag_frd_ut: Option<[f32; 3]>,
+        dt_s: f32,
+    ) -> Euler {
+        let mut roll = self.roll.predict(rates[0], dt_s);
+        let mut pitch = self.pitch.predict(rates[1], dt_s);
+        self.tilt_dt_s += dt_s;
+        if self.tilt_due() {
+            let tilt = accel_frd_mps2.and_then(|f| {
+                let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+                if (n - GRAVITY_MPS2).abs() <= self.accel_gate_mps2 {
+                    Some(accel_tilt_norm_rad(f, n))
+                } else {
+                    None
+                }
+            });
+            if let Some((r, p)) = tilt {
+                roll = self.roll.correct(r, self.tilt_dt_s);
+                pitch = self.pitch.correct(p, self.tilt_dt_s);
+            }
+            self.tilt_tick = 0;
+            self.tilt_dt_s = 0.0;
+        } else {
+            self.tilt_tick += 1;
+        }
+        let mut heading = None;
+        if let Some(m) = mag_frd_ut {
+            let trig = (sincosf(roll), sincosf(pitch));
+            self.trig = Some(trig);
+            let horiz = mag_horizontal(m, trig.0, trig.1);
+            let h = wrap_pi(atan2f(-horiz.1, horiz.0) + self.declination_rad);
+            heading = Some(h);
             let innov = crate::complementary::wrap_pi(h - self.yaw.angle_rad());
             let field_ok = match self.mag_ref {
                 None => true,
                 Some((n0, d0)) => {
-                    let (n, d) = mag_norm_dip(m, roll, pitch);
+                    let (n, d) = mag_norm_dip_h(m, trig.0, trig.1, horiz);
                     fabsf(n - n0) <= self.mag_norm_gate_ut && fabsf(d - d0) <= self.mag_dip_gate_rad
                 }
             };
@@ -504,6 +639,36 @@ mod tests {
         let want = euler_rates(bias, truth.roll_rad, truth.pitch_rad);
         for i in 0..3 {
             assert!((b[i] + want[i]).abs() < 3e-3, "{b:?} vs {want:?}");
+        }
+    }
+
+    #[test]
+    fn compensated_update_equals_update_of_the_compensated_force() {
+        let mut rng = Rng::new(21);
+        let gains = (CfGains::new(1.0, 0.7), CfGains::new(0.5, 0.7));
+        let mut a_est = AttitudeEstimator::new(gains.0, gains.1, 0.1);
+        a_est.reset(e(0.2, -0.1, 2.5));
+        let mut b_est = a_est;
+        for k in 0..2000 {
+            let gyro = [rng.normal(0.2), rng.normal(0.2), rng.normal(0.3)];
+            let f = [rng.normal(1.0), rng.normal(1.0), -G + rng.normal(1.0)];
+            // Zero (no GPS) half of the time: then no rotation at all.
+            let a = if k % 2 == 0 {
+                [rng.normal(1.0), rng.normal(1.0), rng.normal(0.3)]
+            } else {
+                [0.0; 3]
+            };
+            let m = (k % 5 == 0).then(|| M_NED.map(|x| x + rng.normal(0.5)));
+            let r = rot_body_to_ned(&b_est.euler());
+            let f_c: [f32; 3] =
+                core::array::from_fn(|i| f[i] - (r[0][i] * a[0] + r[1][i] * a[1] + r[2][i] * a[2]));
+            let got = a_est.update_compensated(gyro, f, a, m, DT);
+            let want = b_est.update(gyro, Some(f_c), m, DT);
+            assert_eq!(got, want, "step {k}");
+            if k % 5 == 4 {
+                // A tilt-correction step (every 5th): the compensated force it read.
+                assert_eq!(a_est.tilt_specific_force_frd_mps2(), f_c);
+            }
         }
     }
 

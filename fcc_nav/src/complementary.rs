@@ -205,22 +205,38 @@ impl AngleCf {
     /// One step: integrate `rate_radps` (plus the bias estimate) over `dt_s`, then correct
     /// with `meas_rad` if present. `None` = predict only (bias kept). Returns the angle.
     pub fn update(&mut self, rate_radps: f32, meas_rad: Option<f32>, dt_s: f32) -> f32 {
+        self.predict(rate_radps, dt_s);
+        match meas_rad {
+            Some(m) => self.correct(m, dt_s),
+            None => self.angle_rad,
+        }
+    }
+
+    /// Propagation only: integrate `rate_radps` (plus the bias estimate) over `dt_s`.
+    pub fn predict(&mut self, rate_radps: f32, dt_s: f32) -> f32 {
         let mut a = self.angle_rad + (rate_radps + self.bias_radps) * dt_s;
         if self.wrap {
             a = wrap_pi(a);
         }
-        if let Some(m) = meas_rad {
-            let (g1, g2) = self.cache.get(dt_s);
-            let mut e = m - a;
-            if self.wrap {
-                e = wrap_pi(e);
-            }
-            a += g1 * e;
-            if self.wrap {
-                a = wrap_pi(a);
-            }
-            self.bias_radps += g2 * e;
+        self.angle_rad = a;
+        a
+    }
+
+    /// Correction only, with the gains of a step of `dt_s`: the time the predictions since the
+    /// last correction covered (correcting every `n` predictions with the gains of `n·dt`
+    /// keeps the filter's poles, sampled at `n·dt`). Returns the angle.
+    pub fn correct(&mut self, meas_rad: f32, dt_s: f32) -> f32 {
+        let mut a = self.angle_rad;
+        let (g1, g2) = self.cache.get(dt_s);
+        let mut e = meas_rad - a;
+        if self.wrap {
+            e = wrap_pi(e);
         }
+        a += g1 * e;
+        if self.wrap {
+            a = wrap_pi(a);
+        }
+        self.bias_radps += g2 * e;
         self.angle_rad = a;
         a
     }

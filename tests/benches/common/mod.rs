@@ -55,6 +55,9 @@ pub struct Tick {
     pub calibrated: bool,
     /// The core's own attitude estimate (roll, pitch, yaw, rad).
     pub core_euler_rad: [f32; 3],
+    /// The manoeuvre acceleration (NED, m/s²) the core's *next* attitude step removes from the
+    /// specific force (`Navigator::tilt_accel_comp_ned_mps2` after this tick).
+    pub tilt_comp_next_ned_mps2: [f32; 3],
 }
 
 pub struct Capture {
@@ -182,6 +185,7 @@ pub fn capture(name: &str, with_link: bool) -> Capture {
             airborne: !body.on_ground(),
             calibrated: sim.fc.core.nav().calibrated,
             core_euler_rad: [e.roll_rad, e.pitch_rad, e.yaw_rad],
+            tilt_comp_next_ned_mps2: sim.fc.core.navigator().tilt_accel_comp_ned_mps2(),
         });
     }
     Capture {
