@@ -84,9 +84,9 @@ for id in 1a 1b 2a 2b 3a 6; do
     grep -q "^ROW|$id|" <<<"$rows" || { echo "bench output lacks row $id" >&2; exit 1; }
 done
 
-# The flight-safety campaign (issue 13): 72 seeds × 7 scenario families = 504 flights scored on
+# The flight-safety campaign (issue 13): 72 seeds × 8 scenario families = 576 flights scored on
 # the simulator's truth, full durations (5-minute velocity cruises, 100 s gale hovers).
-echo "== fcc-campaign (504 flights)" >&2
+echo "== fcc-campaign (576 flights)" >&2
 cargo build -q --release -p fcc_sim --bin fcc-campaign >&2
 campaign_status=0
 target/release/fcc-campaign --per-family 72 --long --out "$raw.campaign" >"$raw.campaign.log" 2>&1 \

@@ -171,6 +171,17 @@ impl TouchdownGate {
         }
     }
 
+    /// Commit now, forced (never held again): the landing cannot judge a lull when the ground
+    /// speed is not observed. With GPS lost the speed is dead-reckoned and its error grows
+    /// with time (a slow acceleration and a tilt look alike to the accelerometer), so waiting
+    /// for a calm that only the drifting estimate sees adds drift: the hover campaign with GPS
+    /// lost at 40 s (`launch_configs/scenarios/gps_loss.yaml`) waited up to 40 s and slid into
+    /// the ground at up to 14 m/s.
+    pub fn commit_blind(&mut self) {
+        self.committed = true;
+        self.forced = true;
+    }
+
     /// The final descent is committed (the level tilt limit applies).
     pub fn committed(&self) -> bool {
         self.committed
@@ -181,8 +192,8 @@ impl TouchdownGate {
         self.wait_s
     }
 
-    /// The touchdown was committed by the timeout ([`MAX_WAIT_S`], [`LAST_CHANCE_S`]), not by
-    /// a lull.
+    /// The touchdown was committed by the timeout ([`MAX_WAIT_S`], [`LAST_CHANCE_S`]) or
+    /// blind ([`Self::commit_blind`]), not by a lull.
     pub fn forced(&self) -> bool {
         self.forced
     }
@@ -226,6 +237,17 @@ mod tests {
         run(&mut g, 0.1, GATE_CLEARANCE_M + ARRIVED_M, 20.0, 1.0);
         run(&mut g, 0.1, 0.3, 20.0, 1.0);
         assert!((g.wait_s() - 0.2).abs() < 0.01, "{}", g.wait_s());
+    }
+
+    #[test]
+    fn blind_commit_descends_at_once_and_is_never_held_again() {
+        let mut g = TouchdownGate::new();
+        // Still on the approach, gusty: nothing to wait for without a ground speed.
+        g.commit_blind();
+        assert!(g.committed() && g.forced());
+        assert_eq!(run(&mut g, 0.5, 0.5, 8.0, 1.0), GateAction::Descend);
+        assert_eq!(run(&mut g, 0.5, 0.1, 8.0, 1.0), GateAction::Descend);
+        assert_eq!(g.wait_s(), 0.0);
     }
 
     #[test]

@@ -1,5 +1,5 @@
-//! The Monte-Carlo flight-safety campaign, short form (issue 13): 6 seeds × 7 scenario
-//! families (42 flights), every flight scored on the simulator's truth
+//! The Monte-Carlo flight-safety campaign, short form (issue 13): 6 seeds × 8 scenario
+//! families (48 flights), every flight scored on the simulator's truth
 //! (`fcc_sim::campaign`). The benchmark flies ≥ 500 (BENCHMARKS.md):
 //!
 //! ```text
@@ -10,10 +10,12 @@
 //! loops on whenever truly airborne, every flight landed and disarmed; hover true altitude
 //! within ±0.3 m and the estimated box within half of paper A's; mission cross-track; yaw under
 //! a 25 µT disturbance; paper B's rig at every height and air temperature; touchdown ≤ 0.5 m/s
-//! down, ≤ 0.3 m/s horizontal, ≤ 5° tilt in every family but the gale hover. The gale hover's
-//! `campaign::OPEN_CHECKS` (touchdown horizontal speed and tilt, the 2 m true excursion) are
-//! printed with their failures but not asserted: the vehicle does not meet them yet (the issue
-//! stays open on them).
+//! down, ≤ 0.3 m/s horizontal, ≤ 5° tilt in every family but the gale hover and the GPS loss;
+//! with GPS lost, LAND within the GPS timeout + 0.5 s. The gale hover's
+//! `campaign::OPEN_CHECKS` (touchdown horizontal speed and tilt, the 2 m true excursion) and the
+//! GPS loss's `campaign::GPS_LOSS_OPEN_CHECKS` (touchdown horizontal speed and tilt: the
+//! velocity is dead-reckoned) are printed with their failures but not asserted: the vehicle
+//! does not meet them yet (the issue stays open on them).
 
 use fcc_sim::campaign;
 

@@ -247,7 +247,7 @@ impl fmt::Display for TruthReport {
                 c.outcome,
                 c.gate_wait_s,
                 if c.gate_forced {
-                    ", committed by the timeout"
+                    ", committed without a lull (timeout, or GPS lost)"
                 } else {
                     ""
                 }

@@ -24,7 +24,7 @@ macro_rules! say {
     about = "Monte-Carlo flight-safety campaign on the simulator's truth"
 )]
 struct Args {
-    /// Flights per scenario family (7 families).
+    /// Flights per scenario family (8 families).
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u64).range(1..=10_000))]
     per_family: u64,
     /// First seed (flight i of a family uses seed + i).
