@@ -84,8 +84,9 @@ pub const OPEN_CHECKS: [&str; 3] = [
 /// baro, accelerometer and rangefinders alone. Its [`GPS_LOSS_OPEN_CHECKS`] are open: without
 /// GPS nothing this airframe carries observes the velocity over the ground (a slow
 /// acceleration and a tilt error look alike to the accelerometer), and the dead-reckoned
-/// velocity's error grows ≈ 0.1 m/s per second from the loss — an attitude error of ≈ 0.8°,
-/// the complementary filter's own in gusts, frozen at the loss. The landing is made as short as
+/// velocity's error grows ≈ 0.05–0.1 m/s per second from the loss — the attitude error of
+/// the moment (≈ 0.3–0.5°, the complementary filter reading gust accelerations as tilt) read as
+/// an acceleration. The landing is made as short as
 /// is safe (`fcc_firmware::flight`: down at the descent limit, the slow part from 0.6 m, no
 /// wait at the touchdown gate), which bounds the slide at contact but not to 0.3 m/s.
 pub const GPS_LOSS_FAMILY: &str = "gps_loss";
