@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Soak benchmark of the whole stack (issue 14 point 4): fcc-sitl --link-pty (square, then a long
 # hover in HOLD) ⇄ fcc-wire-fault (light bit-error rate, 1e-6) ⇄ fcc-bridge (recording a bag)
-# ⇄ fcc-mission, plus a Cyclone DDS peer; the bridge is SIGKILLed and restarted once (at 35 %).
+# ⇄ fcc-mission, plus a Cyclone DDS peer; the bridge is SIGKILLed and restarted once (half-way).
 # Samples every process's RSS every 5 s and prints the least-squares RSS slope after warm-up
 # (20 % of the soak, ≥ 60 s) in MB/h per process (goal ≤ 1 MB/h each) and the messages lost
 # outside the kill window. Exit 0 when every goal holds.
