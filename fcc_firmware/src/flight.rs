@@ -748,10 +748,10 @@ impl FlightCore {
     /// The tilt limit: `limits.max_tilt_deg`, and in LAND's last [`LAND_LEVEL_HEIGHT_M`] above
     /// the gear no more than [`LAND_LEVEL_TILT_DEG`] while slower than
     /// [`LAND_LEVEL_MAX_SPEED_MPS`] (touch down level: a tilted gear catches a foot) — once
-    /// the touchdown gate has committed — and on the gear (ground contact) whatever the speed. Waiting at the gate the vehicle leans as far as the
-    /// wind needs to stay put (the level limit there let every gust slide it, and at 0.15 m the
-    /// limit switched on and off with the height noise); a commit whose command the level
-    /// limit clips goes back to the gate.
+    /// the touchdown gate has committed — and on the gear (ground contact) whatever the speed.
+    /// Waiting at the gate the vehicle leans as far as the wind needs to stay put (the level
+    /// limit there let every gust slide it, and at 0.15 m the limit switched on and off with
+    /// the height noise); a commit whose command the level limit clips goes back to the gate.
     fn tilt_limit_rad(&self, nav: &NavState) -> f32 {
         let on_ground_m = self.params.airframe.sensor_height_on_ground_m;
         let speed = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);

@@ -232,14 +232,12 @@ def main():
     with open(os.path.join(tmp, "rss.json"), "w") as f:
         json.dump({"VmRSS": samples, "RssAnon": anon}, f)
     print(f"=== RSS slope after warm-up (least squares; goal ≤ {a.goal_mb_h:g} MB/h each)")
-    window = {}  # row → (series key, generation, from t)
-    for n in ["sitl", "relay", "mission"]:
-        window[n] = (n, 1, warm)
-    b1 = [(t, r) for t, r, g in samples["bridge"] if g == 1 and t >= warm]
+    pick = lambda series, key, gen, t0: [(t, r) for t, r, g in series[key] if g == gen and t >= t0]  # noqa: E731
+    window = {n: (n, 1, warm) for n in ["sitl", "relay", "mission"]}  # row → (series, generation, from t)
+    b1 = pick(samples, "bridge", 1, warm)
     if b1 and b1[-1][0] - b1[0][0] >= 0.5 * warm:
         window["bridge (1st, to the kill)"] = ("bridge", 1, warm)
     window["bridge (restarted)"] = ("bridge", 2, (restart_t or 0.0) + warm)
-    pick = lambda series, key, gen, t0: [(t, r) for t, r, g in series[key] if g == gen and t >= t0]
     rows = [(n, pick(samples, *w)) for n, w in window.items()]
     names = {"sitl": "simulator fcc-sitl", "relay": "fcc-wire-fault", "mission": "fcc-mission"}
     for n, s in rows:
