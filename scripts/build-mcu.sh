@@ -87,7 +87,7 @@ if command -v $objdump >/dev/null; then
   # Allowlist: source file (and function / callee) → reason.
   awk -F'\t' '
     function reason(file, fn, callee) {
-      if (file ~ /^fcc_nav\/src\/geodesy\.rs$/) return "allowed: WGS-84 lat/lon -> local NED (home: once; then per GPS fix, 5 Hz)"
+      if (file ~ /^msg\/src\/geodesy\.rs$/) return "allowed: WGS-84 lat/lon -> local NED (home: once; then per GPS fix, 5 Hz)"
       if (callee ~ /^(__aeabi_(f2d|d2f)|,)+$/) return "allowed: f32<->f64 conversion only (lat/lon and home fields are f64), no f64 arithmetic"
       if (file ~ /^fcc_nav\/src\/complementary\.rs$/ && fn ~ /CfGains>::discrete/) return "allowed: filter gain design, cached per dt (first IMU sample; again only if an IMU sample is missed)"
       if (file ~ /^fcc_firmware\/board\/src\/drivers\/.*(gps|ubx)/) return "allowed: lat/lon from the GPS receiver"
@@ -99,7 +99,7 @@ if command -v $objdump >/dev/null; then
     END {
       bad = 0
       for (k in n) { split(k, p, "\t"); r = reason(p[1], p[2], c[k]); if (r ~ /^NOT/) bad = 1
-        cs = c[k]; gsub(/libm::math::[a-z0-9_]+::/, "libm::", cs); gsub(/fcc_nav::geodesy::/, "", cs)
+        cs = c[k]; gsub(/libm::math::[a-z0-9_]+::/, "libm::", cs); gsub(/fcc_msgs::geodesy::/, "", cs)
         printf "  %s: %s — %d call(s) of %s  => %s\n", p[1], p[2], n[k], cs, r | "sort" }
       close("sort")
       if (keys == 0) print "  none"

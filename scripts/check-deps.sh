@@ -1,9 +1,8 @@
 #!/usr/bin/env bash
 # The house's dependency rules (issue 15), checked on the tree as it is:
 #   1. Crate graph (from `cargo metadata`): no package but fcc_bridge itself depends on the
-#      bridge application (fcc_bridge); fcc_mission's workspace dependencies are fcc_msgs, the
-#      ROS library fcc_ros and fcc_nav (the no_std math floor: WGS-84 geodesy for lat/lon goals)
-#      only; fcc_ros depends on fcc_msgs and fcc_nav (the one f64 angle wrap) only; fcc_msgs on
+#      bridge application (fcc_bridge); fcc_mission's workspace dependencies are fcc_msgs (the
+#      link vocabulary and WGS-84 geodesy for lat/lon goals) and the ROS library fcc_ros only; fcc_ros depends on fcc_msgs and fcc_nav (the one f64 angle wrap) only; fcc_msgs on
 #      no workspace crate.
 #   2. The MCU crate's default build (`cargo build -p fcc_firmware`) pulls in no simulator
 #      dependency.
@@ -42,7 +41,7 @@ def ws_deps(name):
 users = [n for n in pkgs if n != "fcc_bridge" and "fcc_bridge" in ws_deps(n)]
 report(not users, "no crate but fcc_bridge's own targets depends on fcc_bridge",
        f"{users} do" if users else "")
-for name, allowed in [("fcc_mission", {"fcc_msgs", "fcc_ros", "fcc_nav"}), ("fcc_ros", {"fcc_msgs", "fcc_nav"}),
+for name, allowed in [("fcc_mission", {"fcc_msgs", "fcc_ros"}), ("fcc_ros", {"fcc_msgs", "fcc_nav"}),
                       ("fcc_msgs", set())]:
     if name not in pkgs:
         report(False, f"{name} exists")

@@ -8,10 +8,10 @@
 use crate::nav_health::{Innovations, NavHealth};
 use crate::params::NavParams;
 use crate::sensors::{BaroSample, GpsFix, ImuSample, SensorInputs};
+use fcc_msgs::geodesy::{Lla, LocalNed};
 use fcc_nav::attitude::{
     accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, AttitudeEstimator, Euler,
 };
-use fcc_nav::geodesy::{Lla, LocalNed};
 use fcc_nav::ground_altitude::{GroundAltitude, GroundAltitudeFilter, GroundAltitudeParams};
 use fcc_nav::horizontal::HorizontalEstimator;
 use fcc_nav::lowpass::LowPass2;

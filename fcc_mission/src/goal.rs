@@ -5,12 +5,12 @@
 //!
 //! Frames: a [`GoalPoint::LocalEnu`] is `map` (REP-103 ENU, origin = home: x east, y north,
 //! z up); a [`GoalPoint::Global`] is WGS-84 latitude/longitude, converted with
-//! `fcc_nav::geodesy` (f64) on the tangent plane at [`Home`]. Altitudes are above home in both.
+//! `fcc_msgs::geodesy` (f64) on the tangent plane at [`Home`]. Altitudes are above home in both.
 //! The geofence is the MCU's (`limits.fence_radius_m` around home, `limits.fence_alt_m` above
 //! it; [`Fence::from_param_table`] takes the one parameter table's values).
 
 use crate::mission::{Mission, MissionError, Waypoint, DEFAULT_ACCEL_LIMIT_MPS2};
-use fcc_nav::geodesy::{Lla, LocalNed};
+use fcc_msgs::geodesy::{Lla, LocalNed};
 use std::fmt;
 
 /// Cruise speed when the goal leaves it 0, m/s.

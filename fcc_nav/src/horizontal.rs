@@ -2,7 +2,7 @@
 //! acceleration double-integrated through `F_H`, one [`PosVelCf`] per axis (north, east).
 //!
 //! GPS latency is handled by the filters' predicted-position history: `HIST = 128` steps,
-//! i.e. 256 ms at 500 Hz. GPS positions are local NED metres (see [`crate::geodesy`]).
+//! i.e. 256 ms at 500 Hz. GPS positions are local NED metres (see `fcc_msgs::geodesy`).
 
 use crate::complementary::{CfGains, PosVelCf};
 

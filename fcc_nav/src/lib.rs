@@ -11,7 +11,6 @@
 //! | [`vertical`] | altitude/vertical speed from baro + accel (eqs. 5–6) | accel down \[m/s²], baro altitude \[m] or pressure \[Pa] | altitude up \[m], vel down \[m/s] |
 //! | [`range_aid`] | range-aided height: the rangefinder altitude replaces the baro in the vertical filter while valid, baro offset learnt, terrain steps re-anchored | altitude estimate, baro altitude \[m], height above ground \[m] | altitude measurement \[m] |
 //! | [`observer`] | Luenberger linear-acceleration observer (eqs. 10–14) | tilt, tilt command \[rad], measured accel \[m/s²] | filtered accel \[m/s²] |
-//! | [`geodesy`] | WGS-84 LLA ↔ ECEF ↔ local NED (`f64`) | lat/lon \[deg], alt \[m] | ECEF \[m], NED \[m] |
 //! | [`math`] | the `f32` elementary functions every module uses (no `f64` on the single-precision FPU) | | |
 //! | [`sysid`] | paper A's "3D curve fitting" of `a = k1·θ − k2·v`: streaming least squares ([`PlaneFit`]), and with a wind term per window by least squares (`WindPlaneFit`) or instrumental variables (`WindIvFit`, setpoints as instruments), with standard errors | tilt \[rad], vel \[m/s], accel \[m/s²] (+ instruments) | k1 \[m/s²/rad], k2 \[1/s], intervals |
 //!
@@ -24,7 +23,8 @@
 //!   `[0, 0, −9.81]` m/s² in FRD. Gravity-compensated NED acceleration is `R·f + [0, 0, g]`.
 //! * Altitude is reported **up positive** (`alt_m`); NED velocities are down positive.
 //! * Units are in names (`_m`, `_mps`, `_mps2`, `_rad`, `_radps`, `_s`, `_pa`, `_ut`, `_deg`).
-//!   Everything is `f32` except geodesy (`f64`).
+//!   Everything is `f32`. WGS-84 geodesy (`f64` lat/lon ↔ local NED) is `fcc_msgs::geodesy`,
+//!   beside the messages that carry lat/lon.
 //! * Every filter `update` takes its own `dt_s`; the design rate is 500 Hz (`dt_s = 0.002`).
 #![no_std]
 // The bare-metal ARM build (always cross-built with -Zbuild-std, i.e. nightly mode) takes the
@@ -38,7 +38,6 @@ extern crate std;
 
 pub mod attitude;
 pub mod complementary;
-pub mod geodesy;
 pub mod ground_altitude;
 pub mod horizontal;
 pub mod lowpass;
@@ -53,7 +52,6 @@ mod test_util;
 
 pub use attitude::{AttitudeEstimator, Euler};
 pub use complementary::{AngleCf, CfGains, PosVelCf};
-pub use geodesy::{Lla, LocalNed};
 pub use horizontal::HorizontalEstimator;
 pub use observer::{AccelObserver, AccelObserverParams};
 pub use sysid::{PlaneFit, PlaneFitResult};

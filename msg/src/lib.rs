@@ -22,7 +22,10 @@
 //! Vocabulary tables both ends read: [`params`] (the MCU parameters settable over the link: id,
 //! name, unit, default, range, doc — one table, [`for_each_mcu_param!`]); [`vocab`] (flight modes,
 //! failsafe causes, altitude sources: ROS constant values and names, checked against `msg/*.msg`).
-//! Modules: [`frame`], [`handshake`], [`messages`], [`params`], [`rates`], [`vocab`], `ros`
+//! Where the messages' lat/lon live: [`geodesy`] (WGS-84 geodetic ↔ ECEF ↔ the local NED tangent
+//! plane at home, `f64`), which the firmware's navigation and the mission node's lat/lon goals
+//! both use.
+//! Modules: [`frame`], [`geodesy`], [`handshake`], [`messages`], [`params`], [`rates`], [`vocab`], `ros`
 //! (feature `ros`).
 //!
 //! ## Frame layout
@@ -60,6 +63,7 @@
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 
 pub mod frame;
+pub mod geodesy;
 pub mod handshake;
 pub mod messages;
 pub mod params;

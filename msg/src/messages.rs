@@ -416,28 +416,6 @@ pub struct ParamSet {
 // The message enum, ids and schema
 // ---------------------------------------------------------------------------------------------
 
-/// Message ids (the header's `msg_id`). MCU → Linux in 0x01..=0x3F, Linux → MCU in 0x40..=0x7F.
-pub mod id {
-    pub const HELLO: u8 = 0x01;
-    pub const IMU_RAW: u8 = 0x02;
-    pub const MAG_RAW: u8 = 0x03;
-    pub const BARO_RAW: u8 = 0x04;
-    pub const GPS_RAW: u8 = 0x05;
-    pub const RANGE_RAW: u8 = 0x06;
-    pub const BATTERY: u8 = 0x07;
-    pub const NAV_STATE: u8 = 0x08;
-    pub const ALTITUDE_FUSION: u8 = 0x09;
-    pub const STATUS: u8 = 0x0A;
-    pub const TIME_SYNC_PONG: u8 = 0x0B;
-    pub const COMMAND_ACK: u8 = 0x0C;
-    pub const PARAM_ACK: u8 = 0x0D;
-    pub const HELLO_REQUEST: u8 = 0x40;
-    pub const VELOCITY_SETPOINT: u8 = 0x41;
-    pub const COMMAND: u8 = 0x42;
-    pub const TIME_SYNC_PING: u8 = 0x43;
-    pub const PARAM_SET: u8 = 0x44;
-}
-
 /// Every message of the protocol, one variant per payload struct.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Message {
@@ -468,34 +446,42 @@ pub enum Direction {
     LinuxToMcu,
 }
 
-/// Invokes `$m!(Variant, Type, ID)` for every message, in id order.
+/// The message table, the one place a message's id is written: invokes `$m!(Variant, ID =
+/// value)` for every message, in id order (the payload struct is named as its variant). Message
+/// ids (the header's `msg_id`): MCU → Linux in 0x01..=0x3F, Linux → MCU in 0x40..=0x7F.
 macro_rules! for_each_message {
     ($m:ident) => {
         $m! {
-            Hello, Hello, HELLO;
-            ImuRaw, ImuRaw, IMU_RAW;
-            MagRaw, MagRaw, MAG_RAW;
-            BaroRaw, BaroRaw, BARO_RAW;
-            GpsRaw, GpsRaw, GPS_RAW;
-            RangeRaw, RangeRaw, RANGE_RAW;
-            Battery, Battery, BATTERY;
-            NavState, NavState, NAV_STATE;
-            AltitudeFusion, AltitudeFusion, ALTITUDE_FUSION;
-            Status, Status, STATUS;
-            TimeSyncPong, TimeSyncPong, TIME_SYNC_PONG;
-            CommandAck, CommandAck, COMMAND_ACK;
-            ParamAck, ParamAck, PARAM_ACK;
-            HelloRequest, HelloRequest, HELLO_REQUEST;
-            VelocitySetpoint, VelocitySetpoint, VELOCITY_SETPOINT;
-            Command, Command, COMMAND;
-            TimeSyncPing, TimeSyncPing, TIME_SYNC_PING;
-            ParamSet, ParamSet, PARAM_SET;
+            Hello, HELLO = 0x01;
+            ImuRaw, IMU_RAW = 0x02;
+            MagRaw, MAG_RAW = 0x03;
+            BaroRaw, BARO_RAW = 0x04;
+            GpsRaw, GPS_RAW = 0x05;
+            RangeRaw, RANGE_RAW = 0x06;
+            Battery, BATTERY = 0x07;
+            NavState, NAV_STATE = 0x08;
+            AltitudeFusion, ALTITUDE_FUSION = 0x09;
+            Status, STATUS = 0x0A;
+            TimeSyncPong, TIME_SYNC_PONG = 0x0B;
+            CommandAck, COMMAND_ACK = 0x0C;
+            ParamAck, PARAM_ACK = 0x0D;
+            HelloRequest, HELLO_REQUEST = 0x40;
+            VelocitySetpoint, VELOCITY_SETPOINT = 0x41;
+            Command, COMMAND = 0x42;
+            TimeSyncPing, TIME_SYNC_PING = 0x43;
+            ParamSet, PARAM_SET = 0x44;
         }
     };
 }
 
 macro_rules! impl_message {
-    ($($variant:ident, $ty:ty, $id:ident;)*) => {
+    ($($variant:ident, $id:ident = $value:literal;)*) => {
+        /// Message ids (the header's `msg_id`), from the message table.
+        pub mod id {
+            $(#[doc = concat!("[`", stringify!($variant), "`](super::", stringify!($variant), ")")]
+            pub const $id: u8 = $value;)*
+        }
+
         impl Message {
             /// The header's message id.
             pub const fn id(&self) -> u8 {
@@ -522,7 +508,7 @@ macro_rules! impl_message {
             pub(crate) fn deserialize_payload(msg_id: u8, payload: &[u8]) -> Result<Message, PayloadError> {
                 match msg_id {
                     $(id::$id => {
-                        let (p, rest) = postcard::take_from_bytes::<$ty>(payload)
+                        let (p, rest) = postcard::take_from_bytes::<$variant>(payload)
                             .map_err(|_| PayloadError::Invalid)?;
                         if !rest.is_empty() {
                             return Err(PayloadError::TrailingBytes(rest.len()));
@@ -537,14 +523,14 @@ macro_rules! impl_message {
         /// Largest postcard payload of any message.
         pub const MAX_PAYLOAD_LEN: usize = {
             let mut m = 0;
-            $(if <$ty as MaxSize>::POSTCARD_MAX_SIZE > m { m = <$ty as MaxSize>::POSTCARD_MAX_SIZE; })*
+            $(if <$variant as MaxSize>::POSTCARD_MAX_SIZE > m { m = <$variant as MaxSize>::POSTCARD_MAX_SIZE; })*
             m
         };
 
         /// Largest postcard payload for a message id (`None` for an unknown id).
         pub const fn max_payload_len(msg_id: u8) -> Option<usize> {
             match msg_id {
-                $(id::$id => Some(<$ty as MaxSize>::POSTCARD_MAX_SIZE),)*
+                $(id::$id => Some(<$variant as MaxSize>::POSTCARD_MAX_SIZE),)*
                 _ => None,
             }
         }
@@ -693,9 +679,9 @@ mod tests {
 
     fn max_size_of(name: &str) -> usize {
         macro_rules! lookup {
-            ($($variant:ident, $ty:ty, $id:ident;)*) => {
+            ($($variant:ident, $id:ident = $value:literal;)*) => {
                 match name {
-                    $(stringify!($variant) => <$ty as MaxSize>::POSTCARD_MAX_SIZE,)*
+                    $(stringify!($variant) => <$variant as MaxSize>::POSTCARD_MAX_SIZE,)*
                     "LinkCounters" => LinkCounters::POSTCARD_MAX_SIZE,
                     "SensorHealth" => SensorHealth::POSTCARD_MAX_SIZE,
                     _ => panic!("no type {name}"),

@@ -41,6 +41,39 @@ pub fn speed_of_sound_mps(t_c: f64) -> f64 {
 
 use super::sensor_models::{quantise, Schedule};
 
+/// What both rangefinders share: the fixed-rate schedule, the noise stream and the last serial
+/// line, which is parsed back as a driver would.
+#[derive(Clone, Debug)]
+struct SerialOutput {
+    rng: ChaCha8Rng,
+    schedule: Schedule,
+    last_line: String,
+}
+
+impl SerialOutput {
+    /// `salt` separates each model's noise stream from the others' for the same `seed`.
+    fn new(rate_hz: f64, seed: u64, salt: u64) -> Self {
+        Self {
+            rng: ChaCha8Rng::seed_from_u64(seed ^ salt),
+            schedule: Schedule::new(rate_hz),
+            last_line: String::new(),
+        }
+    }
+
+    /// Emit `line` at `t_us` and read it back with `parse` (`fallback_m` if that fails).
+    fn emit(
+        &mut self,
+        t_us: u64,
+        line: String,
+        parse: fn(&str) -> Option<f32>,
+        fallback_m: f32,
+    ) -> RangeSample {
+        let range_m = parse(&line).unwrap_or(fallback_m);
+        self.last_line = line;
+        RangeSample { t_us, range_m }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Laser altimeter
 // ---------------------------------------------------------------------------------------------
@@ -107,25 +140,18 @@ pub fn parse_laser_line(line: &str) -> Option<f32> {
 #[derive(Clone, Debug)]
 pub struct LaserModel {
     pub params: LaserParams,
-    rng: ChaCha8Rng,
-    schedule: Schedule,
-    last_line: String,
+    out: SerialOutput,
 }
 
 impl LaserModel {
     pub fn new(params: LaserParams, seed: u64) -> Self {
-        let schedule = Schedule::new(params.rate_hz);
-        Self {
-            params,
-            rng: ChaCha8Rng::seed_from_u64(seed ^ 0x1A5E_0006_0000_0006),
-            schedule,
-            last_line: String::new(),
-        }
+        let out = SerialOutput::new(params.rate_hz, seed, 0x1A5E_0006_0000_0006);
+        Self { params, out }
     }
 
     /// The last serial line produced.
     pub fn last_line(&self) -> &str {
-        &self.last_line
+        &self.out.last_line
     }
 
     /// The noise-free range the sensor would report (m), or the sentinel: no return over a dark
@@ -161,19 +187,20 @@ impl LaserModel {
         terrain: &Terrain,
         _air_temp_c: f64,
     ) -> Option<RangeSample> {
-        if !self.schedule.due(t_us) {
+        if !self.out.schedule.due(t_us) {
             return None;
         }
         let truth = self.true_reading_m(t_us, pos_ned_m, q_body_to_ned, terrain);
         let r = if truth >= LASER_NO_RETURN_M as f64 {
             truth
         } else {
-            let n = normal(&mut self.rng, self.params.sigma_m);
+            let n = normal(&mut self.out.rng, self.params.sigma_m);
             quantise((truth + n).max(0.0), self.params.resolution_m)
         };
-        self.last_line = laser_line(r);
-        let range_m = parse_laser_line(&self.last_line).unwrap_or(LASER_NO_RETURN_M);
-        Some(RangeSample { t_us, range_m })
+        Some(
+            self.out
+                .emit(t_us, laser_line(r), parse_laser_line, LASER_NO_RETURN_M),
+        )
     }
 }
 
@@ -185,6 +212,8 @@ impl LaserModel {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SonarParams {
+    /// Sensor position in the body FRD frame, m.
+    pub mount_offset_frd_m: [f64; 3],
     /// Output rate, Hz (10).
     pub rate_hz: f64,
     /// Minimum reported range, m (objects closer than 20 cm are reported as 20 cm).
@@ -201,13 +230,12 @@ pub struct SonarParams {
     pub beam_half_angle_deg: f64,
     /// Fixed speed of sound the sensor converts with, m/s (343.2, the usual 20 °C figure).
     pub c0_mps: f64,
-    /// Sensor position in the body FRD frame, m.
-    pub mount_offset_frd_m: [f64; 3],
 }
 
 impl Default for SonarParams {
     fn default() -> Self {
         Self {
+            mount_offset_frd_m: [0.0; 3],
             rate_hz: 10.0,
             min_report_m: 0.20,
             max_range_m: 10.68,
@@ -216,7 +244,6 @@ impl Default for SonarParams {
             resolution_m: 0.01,
             beam_half_angle_deg: 15.0,
             c0_mps: 343.2,
-            mount_offset_frd_m: [0.0; 3],
         }
     }
 }
@@ -239,25 +266,18 @@ pub fn parse_sonar_line(line: &str) -> Option<f32> {
 #[derive(Clone, Debug)]
 pub struct SonarModel {
     pub params: SonarParams,
-    rng: ChaCha8Rng,
-    schedule: Schedule,
-    last_line: String,
+    out: SerialOutput,
 }
 
 impl SonarModel {
     pub fn new(params: SonarParams, seed: u64) -> Self {
-        let schedule = Schedule::new(params.rate_hz);
-        Self {
-            params,
-            rng: ChaCha8Rng::seed_from_u64(seed ^ 0x50AA_0007_0000_0007),
-            schedule,
-            last_line: String::new(),
-        }
+        let out = SerialOutput::new(params.rate_hz, seed, 0x50AA_0007_0000_0007);
+        Self { params, out }
     }
 
     /// The last serial line produced.
     pub fn last_line(&self) -> &str {
-        &self.last_line
+        &self.out.last_line
     }
 
     /// Tilt of body-down from local vertical, rad.
@@ -304,7 +324,7 @@ impl SonarModel {
         terrain: &Terrain,
         air_temp_c: f64,
     ) -> Option<RangeSample> {
-        if !self.schedule.due(t_us) {
+        if !self.out.schedule.due(t_us) {
             return None;
         }
         let p = self.params.clone();
@@ -318,12 +338,13 @@ impl SonarModel {
             } else {
                 p.sigma_m
             };
-            let n = normal(&mut self.rng, sigma);
+            let n = normal(&mut self.out.rng, sigma);
             quantise(truth + n, p.resolution_m).clamp(p.min_report_m, p.max_range_m)
         };
-        self.last_line = sonar_line(r);
-        let range_m = parse_sonar_line(&self.last_line).unwrap_or(p.max_range_m as f32);
-        Some(RangeSample { t_us, range_m })
+        Some(
+            self.out
+                .emit(t_us, sonar_line(r), parse_sonar_line, p.max_range_m as f32),
+        )
     }
 }
 
