@@ -22,6 +22,8 @@ the kill when that span is long enough), and the messages lost outside the kill 
 Host stalls: this driver notes every pass of its 50 ms loop that came ≥ 0.5 s late (the machine
 starved it, e.g. a parallel build on a small machine); losses within 2 s of such a stall are
 printed apart (the simulator then catches up in a burst its pty cannot hold), not hidden.
+Each slope is printed with its standard error (what the window can resolve). The test command
+runs a short form (3.5 min, --goal-mb-h 10: catches a gross leak, cannot certify 1 MB/h).
 Exit 0 when every slope ≤ goal and no loss is unexplained; 1 otherwise; 2 on a set-up failure.
 Wall-clock figures are the soak's own (RSS over time); no check depends on timing otherwise.
 """
@@ -62,7 +64,8 @@ def rss_kb(pid, field="VmRSS"):
 
 
 def slope_mb_h(samples):
-    """Least-squares slope of (t_s, rss_kb) in MB/h, with the span and the residual RMS (MB)."""
+    """Least-squares slope of (t_s, rss_kb) in MB/h, with the span, the residual RMS (MB) and the
+    slope's standard error (MB/h: what a window this short can resolve)."""
     n = len(samples)
     if n < 3:
         return None
@@ -74,7 +77,8 @@ def slope_mb_h(samples):
     b = sum((t - mt) * (r - mr) for t, r in samples) / sxx
     res = [(r - (mr + b * (t - mt))) for t, r in samples]
     rms = (sum(x * x for x in res) / n) ** 0.5
-    return b * 3600 / 1024, samples[-1][0] - samples[0][0], rms / 1024
+    se = (sum(x * x for x in res) / (n - 2) / sxx) ** 0.5
+    return b * 3600 / 1024, samples[-1][0] - samples[0][0], rms / 1024, se * 3600 / 1024
 
 
 def main():
@@ -246,12 +250,12 @@ def main():
             print(f"  {names.get(n, n)}: too few samples after warm-up")
             fails.append(f"{n}: too few samples")
             continue
-        b, span, rms = r
+        b, span, rms, se = r
         first, last = s[0][1] / 1024, s[-1][1] / 1024
         ok = b <= a.goal_mb_h
         ra = slope_mb_h(pick(anon, *window[n]))
         of_anon = f"; anonymous (RssAnon) {ra[0]:+.2f} MB/h" if ra else ""
-        print(f"ROW|RSS slope {names.get(n, n)}|{b:+.2f} MB/h over {span / 60:.1f} min "
+        print(f"ROW|RSS slope {names.get(n, n)}|{b:+.2f} ± {se:.2f} MB/h over {span / 60:.1f} min "
               f"({first:.1f} → {last:.1f} MB, residual RMS {rms:.2f} MB{of_anon})|goal ≤ {a.goal_mb_h:g} MB/h|"
               f"{'met' if ok else 'NOT met'}")
         if not ok:

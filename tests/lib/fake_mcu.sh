@@ -7,7 +7,7 @@
 start_fake_mcu() {
   local secs="$1"; shift
   "$bin/fcc-fake-mcu" --duration "$secs" "$@" > "$tmp/fake.out" 2> "$tmp/fake.err" &
-  for _ in $(seq 50); do grep -q '^PTY' "$tmp/fake.out" && break; sleep 0.1; done
+  for _ in $(seq 50); do grep -qs '^PTY' "$tmp/fake.out" && break; sleep 0.1; done
   pty="$(awk '/^PTY/{print $2}' "$tmp/fake.out")"
   [ -n "$pty" ] || { echo "fake MCU gave no PTY: $(head -c 300 "$tmp/fake.err")" >&2; exit 1; }
 }
