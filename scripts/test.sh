@@ -27,6 +27,11 @@ export FCC_DDS_PYTHON="$PWD/.venv-dds/bin/python" FCC_REQUIRE_DDS_PEER=1
 # wheel workarounds are in the script. Skips what is done (stamp). Figures: the script's header.
 mark "ros2-setup"
 scripts/ros2-setup.sh jazzy kilted
+# The independent secure DDS peer (issue 19): Debian's Cyclone DDS 0.10 with its security plugins
+# (apt-get: libddsc0debian, cyclonedds-dev; root in CI) and its Python binding built against it in
+# .venv-sec (PyPI sdist). Skips what is done.
+mark "security-setup"
+scripts/security-setup.sh
 
 # --- step "MCU: cross-build, size, QEMU replay" (issue 8) ---------------------------------------
 # Installs what it needs when missing (apt-get: Debian's rustc-web, cargo-web, rust-web-src,
@@ -143,6 +148,12 @@ tests/e2e/slow_link.sh "$FCC_DDS_PYTHON"
 # (part d, issue 17) the mission node's FollowWaypoints action through rclpy's ActionClient: the
 # square as one goal (cross-track vs the YAML flight's), a goal outside the geofence refused, a
 # lat/lon goal's feedback and result on the truth, cancel = hold, preemption (~80 s wall).
+# SROS2 keystore (issue 19): `fcc-keystore create` (CA, governance, least-privilege enclaves from
+# the topic table) checked with openssl and by Debian's Cyclone DDS 0.10 with its security
+# plugins: ground-station commands pass, the observer's writer is refused, an unauthenticated
+# participant sees nothing; bad enclave names and roles refused. ~15 s.
+mark "security keystore"
+tests/security/keystore.sh
 mark "ros2 peer"
 tests/ros2/run_ros2_peer.sh
 # --- end of step "real ROS 2 peer" ---------------------------------------------------------------

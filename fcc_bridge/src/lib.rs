@@ -24,10 +24,12 @@
 //! 6. Reading bags back: [`report`] (`bag`, `series`, `figures`, `plot`, `sysid` — for
 //!    `fcc-report` and `fcc-replay`).
 //! 7. Test tools: [`fake_mcu`] (a scripted MCU on a pty).
+//! 8. Security tooling: [`keystore`] (SROS2 keystores with openssl; the documents are
+//!    `fcc_ros::sros2`'s).
 //!
 //! Binaries: `fcc-bridge` (`main.rs`), `fcc-fake-mcu`, `fcc-bag-recover`, `fcc-report`,
-//! `fcc-replay`, `fcc-record-bench` (`src/bin/`). `scripts/check-deps.sh` checks that no module
-//! import circles back.
+//! `fcc-replay`, `fcc-record-bench`, `fcc-keystore` (`src/bin/`). `scripts/check-deps.sh`
+//! checks that no module import circles back.
 
 pub mod bounded;
 pub mod bridge;
@@ -35,6 +37,7 @@ pub mod convert;
 pub mod diag;
 pub mod fake_mcu;
 pub mod health;
+pub mod keystore;
 pub mod mcu_params;
 pub mod record;
 pub mod recover;

@@ -1,0 +1,144 @@
+#!/usr/bin/env python3
+"""An fcc-keystore keystore judged by an independent DDS Security implementation (issue 19):
+Debian's Cyclone DDS 0.10 with its security plugins (auth PKI-DH, access control, AES-GCM
+crypto), through its Python binding built against it (scripts/security-setup.sh).
+
+  keystore_peer.py KEYSTORE [--seconds 8]
+
+Four Cyclone participants, each its own process with its own enclave of KEYSTORE:
+  bridge    (/fcc/fcc_bridge):  writes rt/fcc/status, reads rt/fcc/cmd/mode
+  ground    (/ground_station):  reads rt/fcc/status, writes rt/fcc/cmd/mode
+  observer  (/observer):        reads rt/fcc/status; its writer on rt/fcc/cmd/mode must be refused
+  plain     (no security):      reads rt/fcc/status; must receive nothing (authentication)
+Pass: the ground station's commands reach the bridge enclave, the ground station and the
+observer receive the status, the observer's writer is refused by access control, the plain
+participant receives nothing. Exit 0 when every check holds; run inside a loopback-only
+network namespace (tests/security/keystore.sh).
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+PLUGINS = "/usr/lib/x86_64-linux-gnu/libddsc0debian"
+
+
+def security_xml(enclave_dir):
+    f = lambda name: f"file:{os.path.join(enclave_dir, name)}"  # noqa: E731
+    return f"""<CycloneDDS><Domain id="any"><Security>
+  <Authentication>
+    <Library path="{PLUGINS}/libdds_security_auth.so" initFunction="init_authentication"
+             finalizeFunction="finalize_authentication"/>
+    <IdentityCA>{f("identity_ca.cert.pem")}</IdentityCA>
+    <IdentityCertificate>{f("cert.pem")}</IdentityCertificate>
+    <PrivateKey>{f("key.pem")}</PrivateKey>
+  </Authentication>
+  <AccessControl>
+    <Library path="{PLUGINS}/libdds_security_ac.so" initFunction="init_access_control"
+             finalizeFunction="finalize_access_control"/>
+    <PermissionsCA>{f("permissions_ca.cert.pem")}</PermissionsCA>
+    <Governance>{f("governance.p7s")}</Governance>
+    <Permissions>{f("permissions.p7s")}</Permissions>
+  </AccessControl>
+  <Cryptographic>
+    <Library path="{PLUGINS}/libdds_security_crypto.so" initFunction="init_crypto"
+             finalizeFunction="finalize_crypto"/>
+  </Cryptographic>
+</Security></Domain></CycloneDDS>"""
+
+
+def participant(role, seconds):
+    """One participant (this process); prints one JSON line of what it saw."""
+    from dataclasses import dataclass
+    from cyclonedds.core import DDSException
+    from cyclonedds.domain import DomainParticipant
+    from cyclonedds.idl import IdlStruct
+    from cyclonedds.pub import DataWriter
+    from cyclonedds.sub import DataReader
+    from cyclonedds.topic import Topic
+
+    @dataclass
+    class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
+        data: str
+
+    dp = DomainParticipant(0)
+    status = Topic(dp, "rt/fcc/status", String)
+    mode = Topic(dp, "rt/fcc/cmd/mode", String)
+    out = {"role": role, "received": 0, "writer": None}
+    writer, reader = None, None
+    if role == "bridge":
+        writer, reader = DataWriter(dp, status), DataReader(dp, mode)
+    else:
+        reader = DataReader(dp, status)
+        if role in ("ground", "observer"):
+            try:
+                writer = DataWriter(dp, mode)
+                out["writer"] = "created"
+            except DDSException as e:
+                out["writer"] = f"refused: {e}"
+    t_end = time.time() + seconds
+    k = 0
+    while time.time() < t_end:
+        if writer is not None:
+            writer.write(String(data=f"{role} {k}"))
+            k += 1
+        out["received"] += len(reader.take(N=100))
+        time.sleep(0.05)
+    print(json.dumps(out), flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("keystore", nargs="?")
+    ap.add_argument("--seconds", type=float, default=8.0)
+    ap.add_argument("--role", help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.role:
+        participant(a.role, a.seconds)
+        return 0
+    enclaves = {"bridge": "fcc/fcc_bridge", "ground": "ground_station", "observer": "observer"}
+    procs = {}
+    for role in ["bridge", "ground", "observer", "plain"]:
+        env = dict(os.environ)
+        if role in enclaves:
+            env["CYCLONEDDS_URI"] = security_xml(os.path.join(a.keystore, "enclaves", enclaves[role]))
+        else:
+            env.pop("CYCLONEDDS_URI", None)
+        procs[role] = subprocess.Popen(
+            [sys.executable, __file__, "--role", role, "--seconds", str(a.seconds)],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen = {}
+    for role, p in procs.items():
+        out, err = p.communicate(timeout=a.seconds + 60)
+        lines = [ln for ln in out.splitlines() if ln.startswith("{")]
+        if p.returncode != 0 or not lines:
+            print(f"FAIL {role}: exit {p.returncode}; {err.strip()[-400:]}")
+            return 1
+        seen[role] = json.loads(lines[-1])
+        print(f"{role}: {seen[role]}")
+    checks = [
+        ("the ground station's cmd/mode reaches the bridge enclave", seen["bridge"]["received"] > 0,
+         f"{seen['bridge']['received']} samples"),
+        ("the ground station may write cmd/mode", seen["ground"]["writer"] == "created",
+         seen["ground"]["writer"]),
+        ("the ground station receives status", seen["ground"]["received"] > 0,
+         f"{seen['ground']['received']} samples"),
+        ("the observer receives status", seen["observer"]["received"] > 0,
+         f"{seen['observer']['received']} samples"),
+        ("the observer's cmd/mode writer is refused by access control",
+         str(seen["observer"]["writer"]).startswith("refused"), seen["observer"]["writer"]),
+        ("an unauthenticated participant receives nothing", seen["plain"]["received"] == 0,
+         f"{seen['plain']['received']} samples"),
+    ]
+    fails = 0
+    for name, ok, detail in checks:
+        print(f"{'PASS' if ok else 'FAIL'} {name}: {detail}")
+        fails += not ok
+    print(f"{len(checks) - fails} passed, {fails} failed")
+    return 1 if fails else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
