@@ -22,10 +22,12 @@ ln -sfn /usr/include "$home/include"
 ln -sfn /usr/bin "$home/bin"
 ln -sf /usr/lib/x86_64-linux-gnu/libddsc.so "$home/lib/libddsc.so"
 for f in "$plugins"/*.so; do ln -sf "$f" "$home/lib/"; done
-if ! .venv-sec/bin/python -c 'import cyclonedds.__library__ as l, sys; sys.exit("cyclonedds-home" not in l.library_path)' 2>/dev/null; then
+# The binding records the library's path at build time: it must be this checkout's (pip's wheel
+# cache would hand out one built for another checkout, hence --no-cache-dir).
+if ! .venv-sec/bin/python -c 'import cyclonedds.__library__ as l, sys; sys.exit(l.library_path != sys.argv[1])' "$home/lib/libddsc.so" 2>/dev/null; then
   rm -rf .venv-sec
   python3 -m venv .venv-sec
-  CYCLONEDDS_HOME="$home" .venv-sec/bin/pip install -q --disable-pip-version-check \
+  CYCLONEDDS_HOME="$home" .venv-sec/bin/pip install -q --disable-pip-version-check --no-cache-dir \
     --no-binary cyclonedds cyclonedds==0.10.2
 fi
 echo "security-setup: .venv-sec (cyclonedds $(.venv-sec/bin/python -c 'import cyclonedds.__library__ as l; print(l.library_path)'))"
