@@ -135,25 +135,12 @@ pub fn enclave_dir(keystore: &Path, enclave: &str) -> Result<PathBuf> {
     Ok(keystore.join("enclaves").join(rel))
 }
 
-/// `YYYY-MM-DDThh:mm:ss` of the Unix time `t_s` (UTC).
+/// `YYYY-MM-DDThh:mm:ss` of the Unix time `t_s` (UTC), as permissions documents write it.
 fn iso8601(t_s: i64) -> String {
-    let (days, secs) = (t_s.div_euclid(86_400), t_s.rem_euclid(86_400));
-    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!(
-        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}",
-        secs / 3600,
-        secs / 60 % 60,
-        secs % 60
-    )
+    chrono::DateTime::from_timestamp(t_s, 0)
+        .unwrap_or_default()
+        .format("%Y-%m-%dT%H:%M:%S")
+        .to_string()
 }
 
 /// Creates `enclave` with `role`'s permissions for the vehicle in namespace `ns`: a key, a

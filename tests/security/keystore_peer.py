@@ -22,30 +22,26 @@ import subprocess
 import sys
 import time
 
-PLUGINS = "/usr/lib/x86_64-linux-gnu/libddsc0debian"
-
-
 def security_xml(enclave_dir):
+    """Cyclone's <Security> for an enclave; the plugins are the ones beside the library the
+    binding was built against (scripts/security-setup.sh links them there)."""
+    from cyclonedds.__library__ import library_path
+    plugins = os.path.dirname(library_path)
     f = lambda name: f"file:{os.path.join(enclave_dir, name)}"  # noqa: E731
+    lib = lambda kind, fn: (f'<Library path="{plugins}/libdds_security_{kind}.so" '  # noqa: E731
+                            f'initFunction="init_{fn}" finalizeFunction="finalize_{fn}"/>')
     return f"""<CycloneDDS><Domain id="any"><Security>
-  <Authentication>
-    <Library path="{PLUGINS}/libdds_security_auth.so" initFunction="init_authentication"
-             finalizeFunction="finalize_authentication"/>
+  <Authentication>{lib("auth", "authentication")}
     <IdentityCA>{f("identity_ca.cert.pem")}</IdentityCA>
     <IdentityCertificate>{f("cert.pem")}</IdentityCertificate>
     <PrivateKey>{f("key.pem")}</PrivateKey>
   </Authentication>
-  <AccessControl>
-    <Library path="{PLUGINS}/libdds_security_ac.so" initFunction="init_access_control"
-             finalizeFunction="finalize_access_control"/>
+  <AccessControl>{lib("ac", "access_control")}
     <PermissionsCA>{f("permissions_ca.cert.pem")}</PermissionsCA>
     <Governance>{f("governance.p7s")}</Governance>
     <Permissions>{f("permissions.p7s")}</Permissions>
   </AccessControl>
-  <Cryptographic>
-    <Library path="{PLUGINS}/libdds_security_crypto.so" initFunction="init_crypto"
-             finalizeFunction="finalize_crypto"/>
-  </Cryptographic>
+  <Cryptographic>{lib("crypto", "crypto")}</Cryptographic>
 </Security></Domain></CycloneDDS>"""
 
 
