@@ -2,10 +2,19 @@
 # The independent secure DDS peer of issue 19: Debian's Cyclone DDS 0.10 (libddsc0debian ships
 # the three DDS Security plugins: auth, access control, crypto) and the Cyclone DDS Python
 # binding built against it (PyPI's cyclonedds wheel bundles a library without security) in
-# .venv-sec. Installs with apt-get when missing (root, as in CI); skips what is done.
+# .venv-sec; and OpenSSL's development files for rustdds' DDS Security. Installs with apt-get when missing (root, as in CI); skips what is done.
 #   usage: scripts/security-setup.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# rustdds' DDS Security (fcc_ros' default `security` feature) links OpenSSL: its headers and
+# pkg-config for the openssl-sys build.
+if ! pkg-config --exists openssl 2>/dev/null; then
+  if [ "$(id -u)" -ne 0 ]; then
+    echo "security-setup: needs libssl-dev and pkg-config (apt-get install as root)" >&2
+    exit 1
+  fi
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -q libssl-dev pkg-config > /dev/null
+fi
 plugins=/usr/lib/x86_64-linux-gnu/libddsc0debian
 if [ ! -e "$plugins/libdds_security_auth.so" ] || [ ! -e /usr/include/dds/dds.h ]; then
   if [ "$(id -u)" -ne 0 ]; then

@@ -154,6 +154,13 @@ tests/e2e/slow_link.sh "$FCC_DDS_PYTHON"
 # participant sees nothing; bad enclave names and roles refused. ~15 s.
 mark "security keystore"
 tests/security/keystore.sh
+# The bridge with ROS 2 security (issue 19): Enforce refuses a missing enclave, a tampered
+# permissions file and an expired certificate with one line; in enclave /fcc/fcc_bridge it
+# authenticates with Debian's Cyclone DDS 0.10 (rustdds' DDS Security): the ground station gets
+# telemetry and its arm and setpoint reach the MCU, the observer's writers are refused, an
+# unauthenticated participant gets nothing, a loopback capture holds no plaintext telemetry. ~15 s.
+mark "security stack"
+tests/security/secure_stack.sh
 mark "ros2 peer"
 tests/ros2/run_ros2_peer.sh
 # --- end of step "real ROS 2 peer" ---------------------------------------------------------------

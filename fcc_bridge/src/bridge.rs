@@ -37,6 +37,8 @@ pub struct Options {
     pub node_name: String,
     pub domain_id: u16,
     pub localhost_only: bool,
+    /// The checked SROS2 enclave directory when security is on (`fcc_ros::security`).
+    pub enclave_dir: Option<std::path::PathBuf>,
     pub cfg: Config,
     pub limits: SetpointLimits,
     pub clock: ClockSource,
@@ -70,6 +72,7 @@ impl Default for Options {
             node_name: "fcc_bridge".into(),
             domain_id: 0,
             localhost_only: true,
+            enclave_dir: None,
             cfg: Config::default(),
             limits: SetpointLimits::default(),
             clock: ClockSource::Sync,
@@ -324,6 +327,7 @@ fn context(opts: &Options) -> Result<Context, BridgeError> {
     fcc_ros::ros_node::context(fcc_ros::ros_node::DdsEnv {
         domain_id: opts.domain_id,
         localhost_only: opts.localhost_only,
+        enclave_dir: opts.enclave_dir.clone(),
     })
     .map_err(BridgeError::Ros)
 }

@@ -74,6 +74,7 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
         o.remaps = ros.remaps.clone();
         let env = |k: &str| std::env::var(k).ok();
         o.domain_id = params::domain_id(env("ROS_DOMAIN_ID").as_deref())?;
+        o.enclave_dir = fcc_ros::ros_node::security_from_env(&ros)?;
         let p = &ros.params;
         let rec = fcc_bridge::record::record_options(cli.record.as_deref(), p)?;
         o.localhost_only = params::localhost_only(

@@ -16,6 +16,8 @@
 //!   SIGTERM/SIGINT on a thread of their own.
 //! - [`heap`]: the allocator's free pages handed back to the OS every 30 s (a flat RSS over
 //!   hours; each node's `main` starts it).
+//! - [`security`]: ROS 2 security at start-up: the `ROS_SECURITY_*` environment and
+//!   `--enclave`, the enclave directory and its certificate and signature checks.
 //! - [`sros2`]: SROS2 (issue 19): the enclaves' roles and their governance and least-privilege
 //!   permissions documents, derived from the topic table (signed by `fcc_bridge::keystore`).
 
@@ -23,6 +25,7 @@ pub mod frames;
 pub mod heap;
 pub mod params;
 pub mod ros_node;
+pub mod security;
 pub mod sros2;
 pub mod startup;
 pub mod topics;

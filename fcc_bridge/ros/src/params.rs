@@ -19,6 +19,8 @@ pub struct RosArgs {
     pub params_files: Vec<String>,
     /// For parameters that came from a `--params-file`: which file (for error messages).
     pub param_origin: BTreeMap<String, String>,
+    /// `--enclave /a/b` (`-e`): the SROS2 enclave ([`crate::security`]).
+    pub enclave: Option<String>,
 }
 
 impl RosArgs {
@@ -200,6 +202,14 @@ pub fn split_ros_args(args: &[String]) -> Result<(Vec<String>, RosArgs), String>
                 i += 1;
             }
             "--log-level" => {
+                i += 1;
+            }
+            "-e" | "--enclave" => {
+                let v = args
+                    .get(i + 1)
+                    .ok_or_else(|| format!("{a} needs an enclave name"))?;
+                crate::security::enclave_parts(v)?;
+                ros.enclave = Some(v.clone());
                 i += 1;
             }
             "--enable-rosout-logs"

@@ -4,26 +4,32 @@
 //! subscriptions by relative ROS name, and the ROS clock (system or `/clock`).
 
 use crate::params::{self, RosArgs};
+use crate::security::{Decision, SecurityEnv};
 use fcc_msgs::ros::{Clock, RosMsg};
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
     Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Subscription,
 };
 use std::net::Ipv4Addr;
+use std::path::PathBuf;
 
 /// DDS settings from the environment and the `localhost_only` parameter.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct DdsEnv {
     pub domain_id: u16,
     pub localhost_only: bool,
+    /// The checked SROS2 enclave directory when security is on ([`crate::security`]).
+    pub enclave_dir: Option<PathBuf>,
 }
 
 impl DdsEnv {
-    /// Read `ROS_DOMAIN_ID`, `ROS_LOCALHOST_ONLY`, `ROS_AUTOMATIC_DISCOVERY_RANGE` and the
-    /// `localhost_only` ROS parameter (loopback only by default, as the bridge).
+    /// Read `ROS_DOMAIN_ID`, `ROS_LOCALHOST_ONLY`, `ROS_AUTOMATIC_DISCOVERY_RANGE`, the
+    /// `localhost_only` ROS parameter (loopback only by default, as the bridge) and the SROS2
+    /// settings ([`security_from_env`]).
     pub fn from_env(ros: &RosArgs) -> Result<Self, String> {
         let env = |k: &str| std::env::var(k).ok();
         Ok(DdsEnv {
+            enclave_dir: security_from_env(ros)?,
             domain_id: params::domain_id(env("ROS_DOMAIN_ID").as_deref())?,
             localhost_only: params::localhost_only(
                 ros.params.get("localhost_only").map(String::as_str),
@@ -34,8 +40,35 @@ impl DdsEnv {
     }
 }
 
+/// The SROS2 enclave directory from `ROS_SECURITY_*` and `--enclave` ([`crate::security`]),
+/// checked: `None` when security is off (a Permissive fallback is logged as a warning), `Err`
+/// the one line an Enforce node stops with.
+pub fn security_from_env(ros: &RosArgs) -> Result<Option<PathBuf>, String> {
+    let sec = SecurityEnv::from_env(ros, |k| std::env::var(k).ok());
+    let now_unix_s = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() as i64);
+    match sec.decide(now_unix_s)? {
+        Decision::On { enclave_dir } => {
+            log::info!(
+                "security: enclave {} ({})",
+                sec.enclave,
+                enclave_dir.display()
+            );
+            Ok(Some(enclave_dir))
+        }
+        Decision::Off { warning } => {
+            if let Some(w) = warning {
+                log::warn!("{w}");
+            }
+            Ok(None)
+        }
+    }
+}
+
 /// A ros2-client context on a participant restricted to loopback unless disabled (a
-/// `ROS_STATIC_PEERS` it cannot honour is logged as a warning).
+/// `ROS_STATIC_PEERS` it cannot honour is logged as a warning), with DDS Security's builtin
+/// plugins on the enclave when [`DdsEnv::enclave_dir`] is set.
 pub fn context(env: DdsEnv) -> Result<Context, String> {
     let peers = std::env::var("ROS_STATIC_PEERS").ok();
     if let Some(w) = params::static_peers_warning(peers.as_deref()) {
@@ -45,8 +78,28 @@ pub fn context(env: DdsEnv) -> Result<Context, String> {
     if env.localhost_only {
         b = b.with_only_networks([Ipv4Addr::LOCALHOST]);
     }
+    if let Some(dir) = env.enclave_dir {
+        b = secure(b, dir)?;
+    }
     let dp = b.build().map_err(|e| format!("DDS participant: {e:?}"))?;
     Context::from_domain_participant(dp).map_err(|e| format!("ROS context: {e:?}"))
+}
+
+#[cfg(feature = "security")]
+fn secure(
+    b: rustdds::DomainParticipantBuilder,
+    dir: PathBuf,
+) -> Result<rustdds::DomainParticipantBuilder, String> {
+    use rustdds::DomainParticipantSecurityConfigFiles as Files;
+    Ok(b.builtin_security(Files::with_ros_default_names(dir, String::new())))
+}
+
+#[cfg(not(feature = "security"))]
+fn secure(
+    _b: rustdds::DomainParticipantBuilder,
+    dir: PathBuf,
+) -> Result<rustdds::DomainParticipantBuilder, String> {
+    Err(format!("{}: this build has no DDS Security", dir.display()))
 }
 
 /// A node `namespace/name` with `/rosout` and its `use_sim_time` parameter declared with the

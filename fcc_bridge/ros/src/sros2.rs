@@ -15,7 +15,7 @@
 //! | role | enclave (ns `/fcc`) | publishes | subscribes |
 //! |---|---|---|---|
 //! | bridge | `/fcc/fcc_bridge` | the table's published topics, its services' replies | the table's read topics, requests to its services |
-//! | mission | `/fcc/fcc_mission` | the table's read topics (setpoints, commands), its actions' replies, feedback, status | the table's published topics, its actions' requests |
+//! | mission | `/fcc/fcc_mission` | the table's read topics (setpoints, commands), `mission/status`, its actions' replies, feedback, status | the table's published topics, its actions' requests |
 //! | ground | `/ground_station` | setpoints, commands, requests to every service and action in the ns | everything in the ns |
 //! | observer | `/observer` | nothing of the vehicle's (its own node infrastructure only) | everything in the ns |
 
@@ -135,6 +135,7 @@ pub fn grant(role: Role, ns: &str, fqn: &str) -> Grant {
         Role::Mission => {
             g.publish.extend(commands);
             g.publish.extend([
+                format!("rt{ns}/{}", crate::topics::MISSION_STATUS),
                 format!("rr{ns}/*/_action/*Reply"),
                 format!("rt{ns}/*/_action/feedback"),
                 format!("rt{ns}/*/_action/status"),
@@ -292,6 +293,7 @@ mod tests {
     fn mission_writes_setpoints_and_serves_its_actions() {
         let m = grant(Role::Mission, "/fcc/", "/fcc/fcc_mission");
         assert!(has(&m.publish, "rt/fcc/setpoint/velocity"));
+        assert!(has(&m.publish, "rt/fcc/mission/status"));
         assert!(has(&m.publish, "rt/fcc/*/_action/feedback"));
         assert!(has(&m.subscribe, "rq/fcc/*/_action/*Request"));
         assert!(has(&m.subscribe, "rt/fcc/state/odom"));

@@ -185,6 +185,11 @@ pub const CMD_MODE: Topic<StringMsg> = Topic::new("cmd/mode", READ, R);
 pub const CMD_KILL: Topic<StringMsg> = Topic::new("cmd/kill", READ, R);
 pub const LINK_RAW_FRAMES: Topic<LinkFrame> = Topic::new("link/raw_frames", TELEMETRY, Recorded);
 
+/// The mission node's own topic (std_msgs/String, JSON progress): the one name outside the
+/// bridge's table, here so that the mission node and its SROS2 permissions ([`crate::sros2`])
+/// name it once.
+pub const MISSION_STATUS: &str = "mission/status";
+
 /// Every entry as (name, `pkg/msg/Type`, QoS, direction), in the order above.
 pub fn table() -> Vec<(&'static str, String, QosInfo, Direction)> {
     macro_rules! rows {

@@ -12,6 +12,7 @@ fn ctx() -> Context {
     ros_node::context(DdsEnv {
         domain_id: 0,
         localhost_only: true,
+        enclave_dir: None,
     })
     .unwrap()
 }

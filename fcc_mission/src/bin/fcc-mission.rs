@@ -300,7 +300,7 @@ struct Dds {
 /// when several participants start together): run under `startup::App::setup_dds`.
 fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     step.set("creating the DDS participant");
-    let ctx = ros_node::context(o.dds)?;
+    let ctx = ros_node::context(o.dds.clone())?;
     step.set("creating the ROS node");
     let live = Arc::new(AtomicBool::new(false));
     let opts = node_options(&o.params, live.clone());
@@ -431,9 +431,8 @@ fn descriptor(p: &node_params::NodeParam) -> ParameterDescriptor {
     }
 }
 
-/// The mission node's own topic (std_msgs/String, JSON): the only name not in the bridge's
-/// topic table ([`fcc_ros::topics`]).
-const MISSION_STATUS_TOPIC: &str = "mission/status";
+/// The mission node's own topic (std_msgs/String, JSON), named beside the bridge's topic table.
+const MISSION_STATUS_TOPIC: &str = fcc_ros::topics::MISSION_STATUS;
 
 /// What [`setup_dds`] needs (owned: it runs on a thread of its own).
 struct DdsSetup {
@@ -452,7 +451,7 @@ struct DdsSetup {
 
 async fn run(o: Options) -> Result<(), Failure> {
     let setup = DdsSetup {
-        dds: o.dds,
+        dds: o.dds.clone(),
         params: declared_parameters(&o),
         namespace: o.namespace.clone(),
         node_name: o.node_name.clone(),

@@ -312,6 +312,28 @@ impl SecurityPlugins {
       .remote_endpoint_crypto_handle_cache
       .contains_key(&(local_guid, remote_guid))
   }
+
+  /// fcc (vendored): the builtin crypto plugin keys a remote endpoint's handle by (remote
+  /// participant, local endpoint), so a second endpoint of the same remote participant matched
+  /// to the same local endpoint (fcc-mission has two `/clock` readers: its own and
+  /// ros2-client's) gets the first one's handle; registering it again failed ("already
+  /// associated") and left the pair without a handle, which failed every send of the local
+  /// writer (the bridge's `/clock` reached nobody).
+  fn sibling_remote_endpoint_crypto_handle(
+    &self,
+    local_guid: GUID,
+    remote_guid: GUID,
+  ) -> Option<EndpointCryptoHandle> {
+    self
+      .remote_endpoint_crypto_handle_cache
+      .iter()
+      .find(|((l, r), _)| {
+        *l == local_guid
+          && r.prefix == remote_guid.prefix
+          && r.entity_id.entity_kind.is_writer() == remote_guid.entity_id.entity_kind.is_writer()
+      })
+      .map(|(_, h)| *h)
+  }
 }
 
 /// Interface for using the Authentication plugin
@@ -835,6 +857,11 @@ impl SecurityPlugins {
     if self.has_remote_endpoint_been_registered_already(local_writer_guid, remote_reader_guid) {
       return Ok(());
     }
+    if let Some(h) = self.sibling_remote_endpoint_crypto_handle(local_writer_guid, remote_reader_guid)
+    {
+      self.store_remote_endpoint_crypto_handle((local_writer_guid, remote_reader_guid), h);
+      return Ok(());
+    }
 
     // First get the secret shared by the participants
     let shared_secret = self.get_shared_secret(remote_reader_guid.prefix)?;
@@ -864,6 +891,11 @@ impl SecurityPlugins {
   ) -> SecurityResult<()> {
     // If remote has already been registered, do nothing
     if self.has_remote_endpoint_been_registered_already(local_reader_guid, remote_writer_guid) {
+      return Ok(());
+    }
+    if let Some(h) = self.sibling_remote_endpoint_crypto_handle(local_reader_guid, remote_writer_guid)
+    {
+      self.store_remote_endpoint_crypto_handle((local_reader_guid, remote_writer_guid), h);
       return Ok(());
     }
 

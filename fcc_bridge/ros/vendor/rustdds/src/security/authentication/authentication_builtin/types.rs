@@ -305,10 +305,19 @@ pub const ECDSA_SIGNATURE_ALGO_NAME: &[u8] = b"ECDSA-SHA256";
 
 // Recognize standard string constatns and convert to
 // corresponging algorithm identifiers in ring library.
+/// fcc (vendored): an algorithm name as sent by a peer, without the one terminating NUL that
+/// Cyclone DDS includes in its handshake's string-valued binary properties
+/// (`c.dsign_algo`, `c.kagree_algo`: `b"ECDH+prime256v1-CEUM\0"`). The bytes as received
+/// still go into the handshake's hashes and signatures.
+pub(crate) fn algo_name(name: &[u8]) -> &[u8] {
+  name.strip_suffix(b"\0").unwrap_or(name)
+}
+
 pub(crate) fn parse_signature_algo_name_to_ring(
   algo_name: &[u8],
 ) -> SecurityResult<&'static dyn ring::signature::VerificationAlgorithm> {
-  match algo_name {
+  // fcc (vendored): a Cyclone DDS peer's name ends in a NUL.
+  match self::algo_name(algo_name) {
     RSA_SIGNATURE_ALGO_NAME => Ok(&ring::signature::RSA_PSS_2048_8192_SHA256),
     ECDSA_SIGNATURE_ALGO_NAME => Ok(&ring::signature::ECDSA_P256_SHA256_ASN1),
     _other =>
@@ -468,12 +477,10 @@ impl BuiltinHandshakeMessageToken {
       .challenge2
       .ok_or_else(|| create_security_error_and_log!("challenge2 not found"))
       .and_then(|b| Challenge::try_from(b.as_ref()))?;
-    let dh1 = self
-      .dh1
-      .ok_or_else(|| create_security_error_and_log!("dh1 not found"))?;
-    let dh2 = self
-      .dh2
-      .ok_or_else(|| create_security_error_and_log!("dh2 not found"))?;
+    // fcc (vendored): dh1 and dh2 are optional in the final message (DDS Security 1.1
+    // Table 52, like hash_c1/hash_c2); Cyclone DDS 0.10 sends neither.
+    let dh1 = self.dh1;
+    let dh2 = self.dh2;
     let signature = self
       .signature
       .ok_or_else(|| create_security_error_and_log!("signature not found"))?;
@@ -526,8 +533,9 @@ pub(in crate::security) struct HandshakeFinal {
   pub hash_c2: Option<Sha256>,
   pub challenge1: Challenge,
   pub challenge2: Challenge,
-  pub dh1: Bytes,
-  pub dh2: Bytes,
+  // fcc (vendored): optional (Table 52).
+  pub dh1: Option<Bytes>,
+  pub dh2: Option<Bytes>,
   pub signature: Bytes,
 }
 

@@ -37,6 +37,8 @@ impl CryptoKeyExchange for CryptographicBuiltin {
     self
       .get_receiver_specific_encode_key_materials(&remote_datareader_crypto_handle)
       .cloned()
+      // fcc (vendored): no token for an unprotected payload (see `without_none_payload`).
+      .map(KeyMaterial_AES_GCM_GMAC_seq::without_none_payload)
       // Convert to CryptoTokens
       .and_then(Vec::<DatawriterCryptoToken>::try_from)
   }

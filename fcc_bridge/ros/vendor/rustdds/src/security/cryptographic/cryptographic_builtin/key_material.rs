@@ -90,6 +90,24 @@ pub(super) enum KeyMaterialScope {
 }
 
 impl KeyMaterial_AES_GCM_GMAC_seq {
+  /// fcc (vendored): the key materials to send as a writer's crypto tokens: the payload's
+  /// is left out when the payload is not protected (transformation kind NONE), as Cyclone DDS
+  /// does. Cyclone 0.10 rejects a NONE key material for an endpoint whose protection kind is
+  /// not NONE (`check_crypto_keymaterial`: "Invalid Crypto token", code 115), so the SEDP
+  /// writers' tokens (metadata encrypted, payload not) were refused and discovery with it
+  /// never completed. The receiver finds keys by key id, so one token decodes the same.
+  pub fn without_none_payload(self) -> Self {
+    match self {
+      Self::Two(key_material, payload)
+        if payload.transformation_kind
+          == BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_NONE =>
+      {
+        Self::One(key_material)
+      }
+      other => other,
+    }
+  }
+
   pub fn select(&self, scope: KeyMaterialScope) -> &KeyMaterial_AES_GCM_GMAC {
     match (self, scope) {
       (Self::One(key_material), _) => key_material, // This is all we have

@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# fcc-bridge with ROS 2 security (issue 19), in ONE loopback-only network namespace:
+#  1. start-up under ROS_SECURITY_STRATEGY=Enforce refuses, with one line naming the file and the
+#     reason, a missing enclave, a tampered permissions file and an expired certificate;
+#     Permissive runs without security and says so;
+#  2. the bridge in enclave /fcc/fcc_bridge against the scripted fake MCU, judged by Debian's
+#     Cyclone DDS 0.10 with its security plugins (tests/security/secure_peer.py, .venv-sec from
+#     scripts/security-setup.sh): the ground station receives telemetry and its arm and setpoint
+#     reach the MCU, the observer's writers are refused, an unauthenticated participant receives
+#     nothing, and a loopback capture holds no plaintext telemetry.
+#   usage: tests/security/secure_stack.sh   (~30 s)
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+. "$root/tests/lib/loopback_only.sh"
+loopback_only "$0"
+. "$root/tests/lib/fake_mcu.sh"
+py="$root/.venv-sec/bin/python"
+rc=0
+check() { # NAME CONDITION-EXIT-STATUS DETAIL
+  if [ "$2" -eq 0 ]; then echo "PASS $1${3:+: $3}"; else echo "FAIL $1${3:+: $3}"; rc=1; fi
+}
+ks="$tmp/keystore"
+"$bin/fcc-keystore" create "$ks" > /dev/null
+export ROS_SECURITY_ENABLE=true ROS_SECURITY_STRATEGY=Enforce
+
+# --- 1. Start-up checks (no DDS traffic: each refusal happens before the participant exists).
+refused() { # NAME KEYSTORE ENCLAVE EXPECTED-TEXT
+  local out s
+  set +e
+  out=$(ROS_SECURITY_KEYSTORE="$2" timeout 10 "$bin/fcc-bridge" --device /nonexistent \
+        --ros-args --enclave "$3" 2>&1 | grep '^fcc-bridge:'); s=${PIPESTATUS[0]}
+  set -e
+  [ "$(printf '%s\n' "$out" | grep -c .)" -eq 1 ] && printf '%s' "$out" | grep -q "$4"
+  check "Enforce refuses $1 with one line" $? "$out"
+}
+refused "a missing enclave" "$ks" /fcc/nope "no such enclave directory"
+bad="$tmp/tampered"; cp -r "$ks" "$bad"
+sed -i 's|rt/fcc/status|rt/fcc/statux|' "$bad/enclaves/fcc/fcc_bridge/permissions.p7s"
+refused "a tampered permissions file" "$bad" /fcc/fcc_bridge "permissions.p7s: signature does not verify"
+# An identity certificate from the same CA that expired in 2021 (openssl ca sets past dates).
+old="$tmp/expired"; cp -r "$ks" "$old"; d="$old/enclaves/fcc/fcc_bridge"; ca="$tmp/ca"
+mkdir -p "$ca/new"; : > "$ca/index.txt"; echo 1000 > "$ca/serial"
+cat > "$ca/ca.cnf" <<EOF
+[ca]
+default_ca = c
+[c]
+database = $ca/index.txt
+new_certs_dir = $ca/new
+serial = $ca/serial
+default_md = sha256
+policy = p
+[p]
+commonName = supplied
+EOF
+openssl req -new -key "$d/key.pem" -subj '/CN=\/fcc\/fcc_bridge' -out "$ca/req.pem"
+openssl ca -batch -config "$ca/ca.cnf" -in "$ca/req.pem" -out "$d/cert.pem" -notext \
+  -cert "$ks/public/ca.cert.pem" -keyfile "$ks/private/ca.key.pem" \
+  -startdate 20200101000000Z -enddate 20210101000000Z 2> "$ca/err" > /dev/null \
+  || { cat "$ca/err"; exit 1; }
+refused "an expired certificate" "$old" /fcc/fcc_bridge "cert.pem: certificate expired on"
+set +e
+out=$(ROS_SECURITY_STRATEGY=Permissive ROS_SECURITY_KEYSTORE="$ks" timeout 3 "$bin/fcc-bridge" \
+      --device /nonexistent --ros-args --enclave /fcc/nope 2>&1)
+set -e
+printf '%s' "$out" | grep -q "running WITHOUT security"
+check "Permissive runs without the missing enclave and says so" $? \
+  "$(printf '%s\n' "$out" | grep -o 'security (Permissive).*' | head -1)"
+
+# --- 2. The secure bridge and the independent secure peers.
+start_fake_mcu 90 --log "$tmp/mcu.jsonl"
+ROS_SECURITY_KEYSTORE="$ks" RUST_LOG=info "$bin/fcc-bridge" --device "$pty" \
+  --ros-args -r __ns:=/fcc --enclave /fcc/fcc_bridge > "$tmp/bridge.log" 2>&1 &
+bridge=$!
+set +e
+"$py" "$here/secure_peer.py" "$ks" --mcu-log "$tmp/mcu.jsonl" --seconds "${FCC_SECURITY_SECONDS:-6}"
+s=$?
+set -e
+check "Cyclone DDS 0.10 with its security plugins and the secure bridge" $s
+if ! kill -0 "$bridge" 2>/dev/null; then echo "FAIL fcc-bridge died"; rc=1; fi
+if [ $rc -ne 0 ]; then echo "--- bridge log"; grep -v '^\s*$' "$tmp/bridge.log" | tail -20; fi
+exit $rc
