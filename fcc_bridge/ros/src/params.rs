@@ -157,6 +157,26 @@ pub fn remap(remaps: &[(String, String)], ns: &str, name: &str) -> String {
     name.to_string()
 }
 
+/// The components of an absolute enclave name (`/`, `/a/b`; ROS name characters only).
+pub fn enclave_parts(enclave: &str) -> Result<Vec<&str>, String> {
+    let rest = enclave
+        .strip_prefix('/')
+        .ok_or_else(|| format!("enclave '{enclave}' is not absolute (it must start with /)"))?;
+    if rest.is_empty() {
+        return Ok(Vec::new());
+    }
+    let parts: Vec<&str> = rest.split('/').collect();
+    let ok = |p: &&str| {
+        !p.is_empty()
+            && !p.starts_with(|c: char| c.is_ascii_digit())
+            && p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+    };
+    match parts.iter().find(|p| !ok(p)) {
+        Some(bad) => Err(format!("enclave '{enclave}': bad component '{bad}'")),
+        None => Ok(parts),
+    }
+}
+
 /// Split argv into (program args, ROS args). Accepts several `--ros-args` blocks, each ending
 /// at `--` or the end.
 pub fn split_ros_args(args: &[String]) -> Result<(Vec<String>, RosArgs), String> {
@@ -208,7 +228,7 @@ pub fn split_ros_args(args: &[String]) -> Result<(Vec<String>, RosArgs), String>
                 let v = args
                     .get(i + 1)
                     .ok_or_else(|| format!("{a} needs an enclave name"))?;
-                crate::security::enclave_parts(v)?;
+                enclave_parts(v)?;
                 ros.enclave = Some(v.clone());
                 i += 1;
             }
