@@ -45,6 +45,44 @@ def security_xml(enclave_dir):
 </Security></Domain></CycloneDDS>"""
 
 
+def run_roles(script, keystore, enclaves, roles, seconds, pythonpath=None):
+    """Runs `script --role R --seconds S` per role, each its own process (a participant), with
+    the Cyclone security configuration of `enclaves[R]` from `keystore` (none for a role
+    without one); returns {role: its JSON line}, or None (printed FAIL) if one failed."""
+    procs = {}
+    for role in roles:
+        env = dict(os.environ)
+        if pythonpath:
+            env["PYTHONPATH"] = os.pathsep.join(pythonpath)
+        if role in enclaves:
+            env["CYCLONEDDS_URI"] = security_xml(os.path.join(keystore, "enclaves", enclaves[role]))
+        else:
+            env.pop("CYCLONEDDS_URI", None)
+        procs[role] = subprocess.Popen(
+            [sys.executable, script, "--role", role, "--seconds", str(seconds)],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen = {}
+    for role, p in procs.items():
+        out, err = p.communicate(timeout=seconds + 60)
+        lines = [ln for ln in out.splitlines() if ln.startswith("{")]
+        if p.returncode != 0 or not lines:
+            print(f"FAIL {role}: exit {p.returncode}; {err.strip()[-400:]}")
+            return None
+        seen[role] = json.loads(lines[-1])
+        print(f"{role}: {seen[role]}")
+    return seen
+
+
+def report(checks):
+    """Prints PASS/FAIL per (name, ok, detail) and the totals; the exit status."""
+    fails = 0
+    for name, ok, detail in checks:
+        print(f"{'PASS' if ok else 'FAIL'} {name}: {detail}")
+        fails += not ok
+    print(f"{len(checks) - fails} passed, {fails} failed")
+    return 1 if fails else 0
+
+
 def participant(role, seconds):
     """One participant (this process); prints one JSON line of what it saw."""
     from dataclasses import dataclass
@@ -95,25 +133,10 @@ def main():
         participant(a.role, a.seconds)
         return 0
     enclaves = {"bridge": "fcc/fcc_bridge", "ground": "ground_station", "observer": "observer"}
-    procs = {}
-    for role in ["bridge", "ground", "observer", "plain"]:
-        env = dict(os.environ)
-        if role in enclaves:
-            env["CYCLONEDDS_URI"] = security_xml(os.path.join(a.keystore, "enclaves", enclaves[role]))
-        else:
-            env.pop("CYCLONEDDS_URI", None)
-        procs[role] = subprocess.Popen(
-            [sys.executable, __file__, "--role", role, "--seconds", str(a.seconds)],
-            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen = {}
-    for role, p in procs.items():
-        out, err = p.communicate(timeout=a.seconds + 60)
-        lines = [ln for ln in out.splitlines() if ln.startswith("{")]
-        if p.returncode != 0 or not lines:
-            print(f"FAIL {role}: exit {p.returncode}; {err.strip()[-400:]}")
-            return 1
-        seen[role] = json.loads(lines[-1])
-        print(f"{role}: {seen[role]}")
+    seen = run_roles(__file__, a.keystore, enclaves, ["bridge", "ground", "observer", "plain"],
+                     a.seconds)
+    if seen is None:
+        return 1
     checks = [
         ("the ground station's cmd/mode reaches the bridge enclave", seen["bridge"]["received"] > 0,
          f"{seen['bridge']['received']} samples"),
@@ -128,12 +151,7 @@ def main():
         ("an unauthenticated participant receives nothing", seen["plain"]["received"] == 0,
          f"{seen['plain']['received']} samples"),
     ]
-    fails = 0
-    for name, ok, detail in checks:
-        print(f"{'PASS' if ok else 'FAIL'} {name}: {detail}")
-        fails += not ok
-    print(f"{len(checks) - fails} passed, {fails} failed")
-    return 1 if fails else 0
+    return report(checks)
 
 
 if __name__ == "__main__":

@@ -22,14 +22,13 @@ import json
 import os
 import socket
 import struct
-import subprocess
 import sys
 import threading
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "dds"))
-from keystore_peer import security_xml  # noqa: E402
+from keystore_peer import report, run_roles  # noqa: E402
 
 ENCLAVES = {"ground": "ground_station", "observer": "observer"}
 # Telemetry only the bridge writes: frame ids, and the fake MCU's position NED (10, 5, -3) as
@@ -126,26 +125,10 @@ def main():
         return 0
     cap = Capture()
     cap.start()
-    procs = {}
-    for role in ["ground", "observer", "plain"]:
-        env = dict(os.environ)
-        env["PYTHONPATH"] = os.pathsep.join([os.path.join(HERE, "..", "dds"), HERE])
-        if role in ENCLAVES:
-            env["CYCLONEDDS_URI"] = security_xml(os.path.join(a.keystore, "enclaves", ENCLAVES[role]))
-        else:
-            env.pop("CYCLONEDDS_URI", None)
-        procs[role] = subprocess.Popen(
-            [sys.executable, __file__, "--role", role, "--seconds", str(a.seconds)],
-            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen = {}
-    for role, p in procs.items():
-        out, err = p.communicate(timeout=a.seconds + 60)
-        lines = [ln for ln in out.splitlines() if ln.startswith("{")]
-        if p.returncode != 0 or not lines:
-            print(f"FAIL {role}: exit {p.returncode}; {err.strip()[-400:]}")
-            return 1
-        seen[role] = json.loads(lines[-1])
-        print(f"{role}: {seen[role]}")
+    seen = run_roles(__file__, a.keystore, ENCLAVES, ["ground", "observer", "plain"], a.seconds,
+                     pythonpath=[os.path.join(HERE, "..", "dds"), HERE])
+    if seen is None:
+        return 1
     cap.stop = True
     cap.join()
     udp = b"\n".join(cap.payloads)
@@ -181,12 +164,7 @@ def main():
         ("no plaintext telemetry on the wire", not leaks, f"found {leaks}" if leaks else
          f"none of {list(PLAINTEXT)}"),
     ]
-    fails = 0
-    for name, ok, detail in checks:
-        print(f"{'PASS' if ok else 'FAIL'} {name}: {detail}")
-        fails += not ok
-    print(f"{len(checks) - fails} passed, {fails} failed")
-    return 1 if fails else 0
+    return report(checks)
 
 
 if __name__ == "__main__":
