@@ -7,7 +7,8 @@
 # Row 4 (bridge latency/CPU/max rate: fake MCU on a pty → fcc-bridge → independent Cyclone DDS
 # peer, tests/dds/bench_latency.sh, in a loopback-only namespace; needs PyPI cyclonedds, found as
 # $FCC_DDS_PYTHON or .venv-dds/bin/python — scripts/test.sh makes it) and row 5 (recorder
-# throughput vs the bare mcap writer, fcc-record-bench) run after the cargo benches.
+# throughput vs the bare mcap writer, fcc-record-bench) run after the cargo benches; rows 4d/4e
+# (security on vs off, tests/security/bench_security.sh) beside row 4.
 #
 #   scripts/bench.sh            # ~3–4 min after the build (plus scripts/test-mcu.sh if present)
 set -euo pipefail
@@ -62,6 +63,15 @@ if "$py" -c 'import cyclonedds' 2>/dev/null; then
     tests/dds/bench_latency.sh "$py" 2>&1 | tee -a "$raw" >&2 || echo "bench_latency.sh failed" >&2
 else
     echo "== row 4 skipped: no Python with cyclonedds ($py); run scripts/test.sh once to make .venv-dds" >&2
+fi
+# Rows 4d/4e: the bridge with ROS 2 security on vs off, same run (issue 19), against Debian's
+# Cyclone DDS 0.10 with its security plugins (.venv-sec: scripts/security-setup.sh); ~2 min.
+cargo build --release --locked -p fcc_bridge --bin fcc-keystore >&2
+if scripts/security-setup.sh >&2; then
+    echo "== tests/security/bench_security.sh (rows 4d, 4e)" >&2
+    tests/security/bench_security.sh 2>&1 | tee -a "$raw" >&2 || echo "bench_security.sh failed" >&2
+else
+    echo "== rows 4d/4e skipped: scripts/security-setup.sh failed" >&2
 fi
 # Row 5: recorder throughput; fcc-record-bench prints `ROW|recorder throughput|ours|mcap|ratio|goal|verdict`.
 echo "== fcc-record-bench (row 5)" >&2

@@ -157,8 +157,10 @@ tests/security/keystore.sh
 # The bridge with ROS 2 security (issue 19): Enforce refuses a missing enclave, a tampered
 # permissions file and an expired certificate with one line; in enclave /fcc/fcc_bridge it
 # authenticates with Debian's Cyclone DDS 0.10 (rustdds' DDS Security): the ground station gets
-# telemetry and its arm and setpoint reach the MCU, the observer's writers are refused, an
-# unauthenticated participant gets nothing, a loopback capture holds no plaintext telemetry. ~15 s.
+# telemetry and its arm and setpoint reach the MCU, the observer's writers are refused, a rogue
+# node's writers (its own side not enforcing) are denied by the bridge, counted on /diagnostics and
+# told on /rosout, participants without credentials or of another CA get nothing and are counted,
+# a loopback capture holds no plaintext telemetry. ~40 s.
 mark "security stack"
 tests/security/secure_stack.sh
 mark "ros2 peer"

@@ -132,6 +132,8 @@ pub struct Publishers {
     diagnostics: Publisher<DiagnosticArray>,
     home: Publisher<NavSatFix>,
     clock: Option<Publisher<Clock>>,
+    /// DDS Security's refusals, for `/diagnostics` (with security on; [`setup_dds`]).
+    security: Option<fcc_ros::security_events::SharedSecurityCounts>,
 }
 
 /// A publisher for a topic of the table, under the node's namespace and remaps.
@@ -170,6 +172,7 @@ impl Publishers {
             } else {
                 None
             },
+            security: None,
         })
     }
 
@@ -663,8 +666,14 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     let spinner = spawn_spinner(&mut node)?;
     shared.live.store(true, Ordering::SeqCst);
     spawn_rosout(&node, opts)?;
+    // With security on, every refusal is a WARN (hence /rosout) and counted for /diagnostics.
+    let security = opts
+        .enclave_dir
+        .as_ref()
+        .and_then(|_| fcc_ros::security_events::watch(&node, |line| tracing::warn!("{line}")));
     step.set("creating the publishers");
-    let pubs = Publishers::new(&mut node, opts)?;
+    let mut pubs = Publishers::new(&mut node, opts)?;
+    pubs.security = security;
     step.set("creating the subscriptions");
     let (rx, crx) = subscribe_all(&ctx, &mut node, opts)?;
     step.set("creating the services");
@@ -1067,7 +1076,14 @@ fn publish_diag(
     let now = now_ns();
     rates.update(st, now);
     let t = rec_time(st);
-    let d = diag::diagnostics(st, rates, device, connected, Time::from_nanos(t));
+    let mut d = diag::diagnostics(st, rates, device, connected, Time::from_nanos(t));
+    if let Some(c) = pubs
+        .security
+        .as_ref()
+        .and_then(|c| c.lock().ok().map(|c| c.clone()))
+    {
+        d.status.push(diag::security_status(&c, device));
+    }
     tap.published_on(&topics::DIAGNOSTICS, &d, t);
     let _ = pubs.diagnostics.publish(d);
 }

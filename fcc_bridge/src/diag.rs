@@ -1,13 +1,14 @@
 //! `/diagnostics` (diagnostic_msgs/DiagnosticArray) from the bridge's state: statuses
 //! `fcc_bridge: link`, `fcc_bridge: time sync`, `fcc_bridge: setpoints`, `fcc: vehicle` and
-//! `fcc: sensors` (WARN while a sensor is unhealthy by the rules of [`crate::health`]), and the
-//! link rates ([`RateMeter`]).
+//! `fcc: sensors` (WARN while a sensor is unhealthy by the rules of [`crate::health`]),
+//! `fcc_bridge: security` (with ROS 2 security on), and the link rates ([`RateMeter`]).
 
 use crate::convert::Config;
 use crate::health::{nav_fault_names, unhealthy};
 use crate::state::{Handshake, LinkState};
 use fcc_msgs as link;
 use fcc_msgs::ros::*;
+use fcc_ros::security_events::SecurityCounts;
 use std::collections::BTreeMap;
 
 /// The `fcc: sensors` diagnostic status: WARN while a sensor is unhealthy (see [`unhealthy`]).
@@ -283,6 +284,36 @@ fn vehicle_status(m: &link::Status, device: &str) -> DiagnosticStatus {
     }
 }
 
+/// `fcc_bridge: security` (with ROS 2 security on): what DDS Security refused — participants
+/// that failed authentication, remote readers and writers denied by access control (each
+/// counted once, [`fcc_ros::security_events`]); WARN once anything was refused.
+pub fn security_status(c: &SecurityCounts, device: &str) -> DiagnosticStatus {
+    let refused = c.participants_rejected + c.writers_denied + c.readers_denied;
+    DiagnosticStatus {
+        level: if refused == 0 {
+            DiagnosticStatus::OK
+        } else {
+            DiagnosticStatus::WARN
+        },
+        name: "fcc_bridge: security".into(),
+        message: if refused == 0 {
+            "DDS Security on: nothing refused".into()
+        } else {
+            format!(
+                "{} participants refused, {} writers and {} readers denied",
+                c.participants_rejected, c.writers_denied, c.readers_denied
+            )
+        },
+        hardware_id: device.to_string(),
+        values: vec![
+            kv("participants_rejected", c.participants_rejected),
+            kv("writers_denied", c.writers_denied),
+            kv("readers_denied", c.readers_denied),
+            kv("last_event", c.last.as_deref().unwrap_or("")),
+        ],
+    }
+}
+
 fn kv(key: &str, value: impl ToString) -> KeyValue {
     KeyValue {
         key: key.into(),
@@ -310,5 +341,39 @@ pub fn diagnostics(
     DiagnosticArray {
         header: Header::new(stamp, ""),
         status,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn security_status_warns_once_anything_was_refused() {
+        let quiet = security_status(&SecurityCounts::default(), "/dev/x");
+        assert_eq!(quiet.level, DiagnosticStatus::OK);
+        let mut c = SecurityCounts::default();
+        c.participants_rejected = 2;
+        c.writers_denied = 1;
+        let s = security_status(&c, "/dev/x");
+        assert_eq!(s.level, DiagnosticStatus::WARN);
+        assert_eq!(s.name, "fcc_bridge: security");
+        assert!(
+            s.message.contains("2 participants refused, 1 writers"),
+            "{}",
+            s.message
+        );
+        let v = |k: &str| {
+            s.values
+                .iter()
+                .find(|kv| kv.key == k)
+                .unwrap()
+                .value
+                .clone()
+        };
+        assert_eq!(
+            (v("participants_rejected"), v("writers_denied")),
+            ("2".into(), "1".into())
+        );
     }
 }

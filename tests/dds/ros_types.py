@@ -225,6 +225,18 @@ class DiagnosticArray(IdlStruct, typename=_t("diagnostic_msgs", "DiagnosticArray
 
 
 @dataclass
+class Log(IdlStruct, typename=_t("rcl_interfaces", "Log")):
+    """rcl_interfaces/msg/Log (/rosout)"""
+    stamp: Time
+    level: uint8
+    name: str
+    msg: str
+    file: str
+    function: str
+    line: uint32
+
+
+@dataclass
 class Altitude(IdlStruct, typename=_t("fcc_msgs", "Altitude")):
     """msg/msg/Altitude.msg"""
     header: Header

@@ -18,12 +18,9 @@ import os
 import re
 import sys
 import time
-from dataclasses import dataclass
 
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
-from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import uint8, uint32
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
@@ -34,17 +31,6 @@ import ros_types as rt
 RELIABLE = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepLast(10))
 BEST_EFFORT = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(1000))
 MAX_TEXT = 2048
-
-
-@dataclass
-class Log(IdlStruct, typename="rcl_interfaces::msg::dds_::Log_"):
-    stamp: rt.Time
-    level: uint8
-    name: str
-    msg: str
-    file: str
-    function: str
-    line: uint32
 
 
 def rss_mb(pid):
@@ -84,7 +70,7 @@ def main():
     name = lambda n: "rt" + (n if n.startswith("/") else f"{ns}/{n}")
     status = DataReader(dp, Topic(dp, name("status"), rt.Status), qos=RELIABLE)
     diag = DataReader(dp, Topic(dp, "rt/diagnostics", rt.DiagnosticArray), qos=BEST_EFFORT)
-    rosout = DataReader(dp, Topic(dp, "rt/rosout", Log), qos=BEST_EFFORT)
+    rosout = DataReader(dp, Topic(dp, "rt/rosout", rt.Log), qos=BEST_EFFORT)
     sp = DataWriter(dp, Topic(dp, name("setpoint/velocity"), rt.TwistStamped), qos=RELIABLE)
     mode = DataWriter(dp, Topic(dp, name("cmd/mode"), rt.String), qos=RELIABLE)
 

@@ -6,10 +6,17 @@ Cyclone DDS 0.10 with its security plugins, through its Python binding built aga
 
   secure_peer.py KEYSTORE --mcu-log FILE [--seconds 8]
 
-Three Cyclone participants, each its own process:
-  ground    (enclave /ground_station): reads imu/data_raw and status, arms and sends a setpoint
+Five Cyclone participants, each its own process:
+  ground    (enclave /ground_station): reads imu/data_raw and status, arms and sends a setpoint;
+            reads /diagnostics and /rosout for the bridge's security events
   observer  (enclave /observer): reads imu/data_raw; its setpoint and cmd/arm writers must be
-            refused by access control
+            refused by access control (by its own Cyclone, from its permissions)
+  rogue     (the observer's identity and permissions, with a governance re-signed by the CA
+            that does not enforce write access control on its own side, as a tampered node
+            could be): Cyclone creates its writers and it sends a setpoint and cmd/arm false;
+            the bridge's access control must deny both writers, count and report them
+  foreign   (an enclave of another keystore: a certificate from another CA): must receive
+            nothing; the bridge counts it as a refused participant
   plain     (no security): reads imu/data_raw; must receive nothing
 and, in this process, a packet capture on loopback (AF_PACKET) for the whole run: no plaintext
 telemetry (the frame ids "base_link" and "imu_link", the odometry's position bytes) in any
@@ -30,7 +37,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "dds"))
 from keystore_peer import report, run_roles  # noqa: E402
 
-ENCLAVES = {"ground": "ground_station", "observer": "observer"}
+ENCLAVES = {"ground": "ground_station", "observer": "observer", "rogue": "rogue"}
+# What the rogue sends: a setpoint of map ENU (7, 7, 7) (NED (7, 7, -7) at the MCU) and a disarm.
+ROGUE_ENU = (7.0, 7.0, 7.0)
 # Telemetry only the bridge writes: frame ids, and the fake MCU's position NED (10, 5, -3) as
 # state/odom's ENU position (f64 little-endian). Each is on the wire when security is off (the
 # permissions documents, sent in clear in the handshake by the spec, name topics: not a marker).
@@ -56,13 +65,20 @@ def participant(role, seconds):
     odom = DataReader(dp, Topic(dp, "rt/fcc/state/odom", rt.Odometry), qos=best_effort)
     out = {"role": role, "imu": 0, "writers": {}, "sent": 0}
     writers = {}
-    if role in ("ground", "observer"):
+    if role == "ground":  # the bridge's security events
+        diag = DataReader(dp, Topic(dp, "rt/diagnostics", rt.DiagnosticArray), qos=reliable)
+        rosout = DataReader(dp, Topic(dp, "rt/rosout", rt.Log),
+                            qos=Qos(Policy.Reliability.Reliable(duration(seconds=1)),
+                                    Policy.Durability.TransientLocal, Policy.History.KeepLast(100)))
+        out["security"], out["rosout"] = None, []
+    if role in ("ground", "observer", "rogue"):
         for name, typ in (("setpoint/velocity", rt.TwistStamped), ("cmd/arm", rt.Bool)):
             try:
                 writers[name] = DataWriter(dp, Topic(dp, f"rt/fcc/{name}", typ), qos=reliable)
                 out["writers"][name] = "created"
             except DDSException as e:
                 out["writers"][name] = f"refused: {e}"
+    arm, enu = (False, ROGUE_ENU) if role == "rogue" else (True, (1.0, 2.0, 0.5))
     t0 = time.time()
     first = None
     while time.time() - t0 < seconds + 20:
@@ -72,18 +88,32 @@ def participant(role, seconds):
         now = time.time()
         if n and first is None:
             first = now
-        if first is not None and now - first > 1.0 and out["sent"] < 5 and writers:
+        if role == "ground":
+            for a in diag.take(N=50):
+                for st in a.status:
+                    if st.name == "fcc_bridge: security":
+                        out["security"] = {kv.key: kv.value for kv in st.values}
+            out["rosout"] += [m.msg for m in rosout.take(N=100) if "DDS Security" in m.msg]
+        # The rogue sends too (its writers exist), from 1 s after the start.
+        started = first if role != "rogue" else t0
+        if started is not None and now - started > 1.0 and out["sent"] < 5 and writers:
             if "cmd/arm" in writers and out["sent"] == 0:
-                writers["cmd/arm"].write(rt.Bool(data=True))
+                writers["cmd/arm"].write(rt.Bool(data=arm))
                 time.sleep(0.05)
             if "setpoint/velocity" in writers:
                 stamp = rt.Time(sec=int(now), nanosec=int((now % 1) * 1e9))
                 writers["setpoint/velocity"].write(
-                    rt.TwistStamped(rt.Header(stamp, "map"), rt.Twist(rt.Vector3(1.0, 2.0, 0.5))))
+                    rt.TwistStamped(rt.Header(stamp, "map"), rt.Twist(rt.Vector3(*enu))))
             out["sent"] += 1
         if first is not None and now - first > seconds:
-            break
-        if first is None and role == "plain" and now - t0 > seconds:
+            # The ground station waits (up to 8 s more) for the bridge's report of the
+            # rogue's writers and the refused participants.
+            sec = out.get("security") or {}
+            if role != "ground" or now - first > seconds + 8 or (
+                    int(sec.get("writers_denied", 0)) >= 2
+                    and int(sec.get("participants_rejected", 0)) >= 2):
+                break
+        if first is None and role in ("plain", "foreign") and now - t0 > seconds:
             break
         time.sleep(0.05)
     print(json.dumps(out), flush=True)
@@ -118,6 +148,8 @@ def main():
     ap.add_argument("keystore", nargs="?")
     ap.add_argument("--mcu-log")
     ap.add_argument("--seconds", type=float, default=8.0)
+    ap.add_argument("--foreign", required=False,
+                    help="an enclave directory of another keystore (another CA)")
     ap.add_argument("--role", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.role:
@@ -125,7 +157,9 @@ def main():
         return 0
     cap = Capture()
     cap.start()
-    seen = run_roles(__file__, a.keystore, ENCLAVES, ["ground", "observer", "plain"], a.seconds,
+    enclaves = dict(ENCLAVES, foreign=os.path.abspath(a.foreign))
+    seen = run_roles(__file__, a.keystore, enclaves,
+                     ["ground", "observer", "rogue", "foreign", "plain"], a.seconds,
                      pythonpath=[os.path.join(HERE, "..", "dds"), HERE])
     if seen is None:
         return 1
@@ -143,7 +177,13 @@ def main():
     recs = [json.loads(line) for line in open(a.mcu_log) if line.strip()]
     sps = [r for r in recs if r["msg"] == "VelocitySetpoint"]
     cmds = [r["command"] for r in recs if r["msg"] == "Command"]
-    g, o, p = seen["ground"], seen["observer"], seen["plain"]
+    g, o, p, r, f = (seen[k] for k in ("ground", "observer", "plain", "rogue", "foreign"))
+    rogue_ned = (ROGUE_ENU[1], ROGUE_ENU[0], -ROGUE_ENU[2])
+    rogue_sps = [sp for sp in sps
+                 if all(abs(x - y) < 1e-6 for x, y in zip(sp["vel_ned_mps"], rogue_ned))]
+    sec = g.get("security") or {}
+    denied_lines = [m for m in g.get("rosout", []) if "denied by access control" in m]
+    refused_lines = [m for m in g.get("rosout", []) if "authentication failed" in m]
     checks = [
         ("the ground station receives the bridge's IMU (DDS Security with rustdds)", g["imu"] > 0,
          f"{g['imu']} samples"),
@@ -159,6 +199,22 @@ def main():
          all(str(v).startswith("refused") for v in o["writers"].values()) and len(o["writers"]) == 2,
          o["writers"]),
         ("an unauthenticated participant receives nothing", p["imu"] == 0, f"{p['imu']} samples"),
+        ("a participant with a certificate of another CA receives nothing", f["imu"] == 0,
+         f"{f['imu']} samples"),
+        ("the rogue's own Cyclone lets it create its writers (the case the bridge must refuse)",
+         set(r["writers"].values()) == {"created"} and r["sent"] > 0,
+         f"{r['writers']}, {r['sent']} sends"),
+        ("the bridge denies the rogue's writers: its setpoint never reaches the MCU",
+         not rogue_sps, f"{len(rogue_sps)} of {len(sps)} setpoints are the rogue's"),
+        ("the rogue's cmd/arm false never reaches the MCU", "Disarm" not in cmds, cmds),
+        ("/diagnostics counts the rogue's two denied writers",
+         int(sec.get("writers_denied", 0)) >= 2, sec),
+        ("/diagnostics counts the refused participants (no security, another CA)",
+         int(sec.get("participants_rejected", 0)) >= 2, sec.get("participants_rejected")),
+        ("/rosout tells the denied writers", len(denied_lines) >= 2,
+         denied_lines[:1] or g.get("rosout")),
+        ("/rosout tells the refused participants", len(refused_lines) >= 2,
+         refused_lines[:1] or g.get("rosout")),
         ("the capture saw the unencrypted SPDP announcements", SPDP_MARK in udp,
          f"{len(cap.payloads)} UDP datagrams, {len(udp)} bytes"),
         ("no plaintext telemetry on the wire", not leaks, f"found {leaks}" if leaks else

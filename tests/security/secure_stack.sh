@@ -6,9 +6,13 @@
 #  2. the bridge in enclave /fcc/fcc_bridge against the scripted fake MCU, judged by Debian's
 #     Cyclone DDS 0.10 with its security plugins (tests/security/secure_peer.py, .venv-sec from
 #     scripts/security-setup.sh): the ground station receives telemetry and its arm and setpoint
-#     reach the MCU, the observer's writers are refused, an unauthenticated participant receives
-#     nothing, and a loopback capture holds no plaintext telemetry.
-#   usage: tests/security/secure_stack.sh   (~30 s)
+#     reach the MCU, the observer's writers are refused, an unauthenticated participant and one
+#     of another CA receive nothing, a rogue node's writers (its own side not enforcing) are
+#     denied by the bridge, which counts the refusals on /diagnostics and tells them on /rosout,
+#     and a loopback capture holds no plaintext telemetry;
+#  3. (only with FCC_SECURITY_FLIGHT=1: fails today, see below) the square through fcc-launch with
+#     the bridge and the mission node in their enclaves, and its bag in plaintext.
+#   usage: [FCC_SECURITY_FLIGHT=1] [FCC_SECURITY_KEEP=DIR] tests/security/secure_stack.sh   (~40 s)
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -68,15 +72,62 @@ check "Permissive runs without the missing enclave and says so" $? \
   "$(printf '%s\n' "$out" | grep -o 'security (Permissive).*' | head -1)"
 
 # --- 2. The secure bridge and the independent secure peers.
+# A rogue enclave: the observer's identity and permissions with a governance that does not
+# enforce write access control on its own side, signed by the same CA (a tampered node: its own
+# Cyclone then creates the writers its permissions do not grant; the bridge must deny them).
+rogue="$ks/enclaves/rogue"; cp -r "$ks/enclaves/observer" "$rogue"
+sed 's|<enable_write_access_control>true|<enable_write_access_control>false|' \
+  "$ks/enclaves/governance.xml" > "$tmp/governance_rogue.xml"
+grep -q '<enable_write_access_control>false' "$tmp/governance_rogue.xml"
+openssl smime -sign -text -in "$tmp/governance_rogue.xml" -out "$rogue/governance.p7s" \
+  -signer "$ks/public/ca.cert.pem" -inkey "$ks/private/ca.key.pem"
+# A participant of another keystore (another CA): authentication must fail.
+"$bin/fcc-keystore" create "$tmp/foreign" > /dev/null
 start_fake_mcu 90 --log "$tmp/mcu.jsonl"
 ROS_SECURITY_KEYSTORE="$ks" RUST_LOG=info "$bin/fcc-bridge" --device "$pty" \
   --ros-args -r __ns:=/fcc --enclave /fcc/fcc_bridge > "$tmp/bridge.log" 2>&1 &
 bridge=$!
 set +e
-"$py" "$here/secure_peer.py" "$ks" --mcu-log "$tmp/mcu.jsonl" --seconds "${FCC_SECURITY_SECONDS:-6}"
+"$py" "$here/secure_peer.py" "$ks" --mcu-log "$tmp/mcu.jsonl" --seconds "${FCC_SECURITY_SECONDS:-6}" \
+  --foreign "$tmp/foreign/enclaves/ground_station"
 s=$?
 set -e
 check "Cyclone DDS 0.10 with its security plugins and the secure bridge" $s
 if ! kill -0 "$bridge" 2>/dev/null; then echo "FAIL fcc-bridge died"; rc=1; fi
 if [ $rc -ne 0 ]; then echo "--- bridge log"; grep -v '^\s*$' "$tmp/bridge.log" | tail -20; fi
+kill -TERM "$bridge" 2>/dev/null || true; wait "$bridge" 2>/dev/null || true
+keep() { if [ -n "${FCC_SECURITY_KEEP:-}" ]; then mkdir -p "$FCC_SECURITY_KEEP"; cp "$tmp"/*.log "$tmp"/*.jsonl "$FCC_SECURITY_KEEP"/ 2>/dev/null || true; fi; }
+# Part 3 is the reproducer of what is not done yet (README, "ROS 2 security"): between two
+# rustdds participants some payloads do not decrypt, so the secure stack cannot fly a mission.
+# It runs only when asked (FCC_SECURITY_FLIGHT=1) until it passes; then it joins the test command.
+if [ -z "${FCC_SECURITY_FLIGHT:-}" ]; then keep; exit $rc; fi
+
+# --- 3. The whole stack secure: fcc-sitl ⇄ fcc-bridge (/fcc/fcc_bridge) ⇄ fcc-mission
+#     (/fcc/fcc_mission), two rustdds participants authenticating each other: the square flown
+#     through fcc-launch at speed 4, every setpoint and command of the mission node over DDS
+#     Security. A failed key exchange leaves the mission without a vehicle: it times out. The
+#     bridge's bag of it is plaintext (the recorder is on the bridge's side of DDS Security).
+t0=$SECONDS
+set +e
+ROS_SECURITY_KEYSTORE="$ks" RUST_LOG=info timeout 150 "$bin/fcc-launch" \
+  "$root/launch_configs/square_flight.yaml" BIN:="$bin" out:="$tmp/square" speed:=4 hover_s:=0 \
+  record:="$tmp/square/secure.mcap" > "$tmp/launch.log" 2>&1
+lrc=$?
+set -e
+# The bag is recorded on the bridge's side of DDS Security: plaintext, read by Foxglove's mcap
+# and rosbags (tests/mcap/check_bag.py), every message the bridge published in it.
+bagpy="${FCC_DDS_PYTHON:-$root/.venv-dds/bin/python}"
+s=0; "$bagpy" "$root/tests/mcap/check_bag.py" "$tmp/square/secure.mcap" \
+  --counts "$tmp/square/secure.mcap.counts.json" --min-seconds 10 > "$tmp/bag.txt" 2>&1 || s=1
+check "the secure flight's bag holds plaintext messages, read by independent readers" $s \
+  "$(tail -1 "$tmp/bag.txt")"
+grep -E '^\[mission\] fcc-mission: mission complete|^leg |^all ' "$tmp/launch.log" || true
+for node in fcc_bridge fcc_mission; do
+  s=0; grep "^\[${node#fcc_}\].*enclave" "$tmp/launch.log" | grep -qF "$ks/enclaves/fcc/$node" || s=1
+  check "the $node node ran in its enclave /fcc/$node" $s
+done
+s=0; grep -q 'fcc-mission: mission complete' "$tmp/launch.log" && [ $lrc -eq 0 ] || s=1
+check "the square flown through the secure bridge and mission node (fcc-launch exit $lrc, $((SECONDS - t0)) s)" $s
+if [ $lrc -ne 0 ]; then echo "--- launch log"; grep -v '^\s*$' "$tmp/launch.log" | tail -25; fi
+keep
 exit $rc

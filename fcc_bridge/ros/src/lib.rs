@@ -18,6 +18,8 @@
 //!   hours; each node's `main` starts it).
 //! - [`security`]: ROS 2 security at start-up: the `ROS_SECURITY_*` environment and
 //!   `--enclave`, the enclave directory and its certificate and signature checks.
+//! - [`security_events`]: what DDS Security refused (a participant that failed authentication,
+//!   an endpoint denied by access control), counted for `/diagnostics`, told on `/rosout`.
 //! - [`sros2`]: SROS2 (issue 19): the enclaves' roles and their governance and least-privilege
 //!   permissions documents, derived from the topic table (signed by `fcc_bridge::keystore`).
 
@@ -26,6 +28,7 @@ pub mod heap;
 pub mod params;
 pub mod ros_node;
 pub mod security;
+pub mod security_events;
 pub mod sros2;
 pub mod startup;
 pub mod topics;

@@ -241,6 +241,15 @@ const APP: startup::App = startup::App {
 
 #[tokio::main(flavor = "current_thread")]
 async fn main() {
+    // The DDS libraries' warnings and errors (a failed key exchange, a refused handshake) on
+    // stderr; the node's own lines are its Log's.
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| "warn,rustdds=error,ros2_client=warn".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
     let o = options();
     // Free heap pages back to the OS every 30 s: a flat RSS over hours (fcc_ros::heap).
     fcc_ros::heap::spawn_trimmer();
@@ -653,7 +662,7 @@ fn log_start(o: &Options, log: &Log) {
     log.info(
         None,
         &format!(
-            "node {}/{} (DDS domain {}, {}), {mission}, actions {}, setpoints at {} Hz, {} time, {}",
+            "node {}/{} (DDS domain {}, {}, {}), {mission}, actions {}, setpoints at {} Hz, {} time, {}",
             o.namespace.trim_end_matches('/'),
             o.node_name,
             o.dds.domain_id,
@@ -661,6 +670,10 @@ fn log_start(o: &Options, log: &Log) {
                 "loopback only"
             } else {
                 "all interfaces"
+            },
+            match &o.dds.enclave_dir {
+                Some(d) => format!("DDS Security in enclave {}", d.display()),
+                None => "no DDS Security".into(),
             },
             ACTIONS.map(|(name, _)| o.name(name)).join(", "),
             o.rate_hz,

@@ -208,7 +208,8 @@ pub mod dds {
   };
   #[doc(inline)]
   pub use crate::node::{
-    Node, NodeCreateError, NodeEvent, ParameterError, ReaderWait, Spinner, WriterWait,
+    Node, NodeCreateError, NodeEvent, ParameterError, ReaderWait, SecurityEvent, Spinner,
+    WriterWait,
   };
   #[doc(inline)]
   pub use crate::pubsub::{Publisher, Subscription};
@@ -290,7 +291,7 @@ pub use log::Log;
 pub use dds::{
   ActionClient, ActionServer, AsyncActionServer, Client, Context, ContextOptions,
   DEFAULT_PUBLISHER_QOS, DEFAULT_SUBSCRIPTION_QOS, Node, NodeCreateError, NodeEvent,
-  NodeLoggingHandle, ParameterError, Publisher, ReaderWait, RosoutRaw, Server, ServiceMapping,
+  NodeLoggingHandle, ParameterError, Publisher, ReaderWait, RosoutRaw, SecurityEvent, Server, ServiceMapping,
   Spinner, Subscription, WriterWait,
 };
 #[cfg(all(feature = "zenoh", not(feature = "dds")))]

@@ -53,6 +53,53 @@ pub enum NodeEvent {
   Graph(GraphEvent),
   /// A `ros_discovery_info` update from another Participant.
   ParticipantEntities(ParticipantEntitiesInfo),
+  /// fcc (vendored): a DDS Security event (only with the `security` feature).
+  Security(SecurityEvent),
+}
+
+/// fcc (vendored): what DDS Security refused, from RustDDS's participant status events.
+#[derive(Clone, Debug)]
+pub enum SecurityEvent {
+  /// Authentication of a remote participant failed (its identity did not validate, or the
+  /// handshake failed): it discovers nothing and nothing of it is matched. `participant` is
+  /// its GUID prefix, as RustDDS prints it.
+  ParticipantRejected { participant: String },
+  /// Access control refused a remote reader or writer: its participant's permissions do not
+  /// grant it the topic. `participant` is its GUID prefix, `endpoint` its GUID.
+  EndpointDenied {
+    participant: String,
+    endpoint: String,
+    topic_name: String,
+    is_writer: bool,
+  },
+}
+
+#[cfg(feature = "security")]
+fn security_event(e: &DomainParticipantStatusEvent) -> Option<SecurityEvent> {
+  match e {
+    DomainParticipantStatusEvent::Authentication {
+      participant,
+      status: rustdds::discovery::AuthenticationStatus::Rejected,
+    } => Some(SecurityEvent::ParticipantRejected {
+      participant: format!("{participant:?}"),
+    }),
+    DomainParticipantStatusEvent::RemoteEndpointDenied {
+      guid,
+      topic_name,
+      is_writer,
+    } => Some(SecurityEvent::EndpointDenied {
+      participant: format!("{:?}", guid.prefix),
+      endpoint: format!("{guid:?}"),
+      topic_name: topic_name.clone(),
+      is_writer: *is_writer,
+    }),
+    _ => None,
+  }
+}
+
+#[cfg(not(feature = "security"))]
+fn security_event(_e: &DomainParticipantStatusEvent) -> Option<SecurityEvent> {
+  None
 }
 
 /// Best-effort [`GraphEntity`] for a DDS-matched remote entity.
@@ -373,6 +420,9 @@ impl Spinner {
           // See `crate::graph` module docs for the mapping's limitations
           // (DDS matched-entity events only carry GUIDs, not topic/node
           // names).
+          if let Some(e) = security_event(&dp_status_event) {
+            self.send_status_event(&NodeEvent::Security(e));
+          }
           let graph_event = match dp_status_event {
             DomainParticipantStatusEvent::RemoteReaderMatched { local_writer, remote_reader } => {
               self.writers_to_remote_readers.lock().unwrap()
@@ -1098,7 +1148,7 @@ impl Node {
       .filter_map(|event| async move {
         match event {
           NodeEvent::Graph(g) => Some(g),
-          NodeEvent::ParticipantEntities(_) => None,
+          NodeEvent::ParticipantEntities(_) | NodeEvent::Security(_) => None,
         }
       })
   }

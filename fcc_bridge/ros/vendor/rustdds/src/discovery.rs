@@ -6,6 +6,9 @@ pub(crate) mod discovery_db;
 
 #[cfg(feature = "security")]
 pub(crate) mod secure_discovery;
+// fcc (vendored): public, for the `Authentication` participant status event's field.
+#[cfg(feature = "security")]
+pub use secure_discovery::AuthenticationStatus;
 
 pub(crate) mod sedp_messages;
 pub(crate) mod spdp_participant_data;

@@ -396,6 +396,14 @@ pub enum DomainParticipantStatusEvent {
     participant: GuidPrefix,
     status: AuthenticationStatus,
   },
+  /// fcc (vendored): access control refused a remote reader or writer announced in
+  /// discovery (its participant's permissions do not grant the topic): it is not matched.
+  #[cfg(feature = "security")]
+  RemoteEndpointDenied {
+    guid: GUID,
+    topic_name: String,
+    is_writer: bool,
+  },
   /// The CA has revoked the identity of some Participant.
   /// We may be currently communicating with the Participant, or it may be
   /// unknown to us.

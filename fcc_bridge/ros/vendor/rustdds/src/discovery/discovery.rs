@@ -1707,6 +1707,9 @@ impl Discovery {
             });
           }
         }
+      } else if let Sample::Value(sec_sub) = &sec_sub_sample {
+        let d = &sec_sub.discovered_reader_data;
+        self.report_denied(d.reader_proxy.remote_reader_guid, d.subscription_topic_data.topic_name(), false);
       }
     }
   }
@@ -1754,6 +1757,9 @@ impl Discovery {
             });
           }
         }
+      } else if let Sample::Value(se_pub) = &sec_pub_sample {
+        let d = &se_pub.discovered_writer_data;
+        self.report_denied(d.writer_proxy.remote_writer_guid, d.publication_topic_data.topic_name(), true);
       }
     }
   }
@@ -2185,6 +2191,17 @@ impl Discovery {
       Ok(_) => (),
       Err(e) => error!("Failed to send DiscoveryNotification {e:?}"),
     }
+  }
+
+  /// fcc (vendored): a remote endpoint refused by access control is reported as a participant
+  /// status event (it was only logged), so a node can count and publish security events.
+  #[cfg(feature = "security")]
+  fn report_denied(&self, guid: GUID, topic_name: &str, is_writer: bool) {
+    self.send_participant_status(DomainParticipantStatusEvent::RemoteEndpointDenied {
+      guid,
+      topic_name: topic_name.to_string(),
+      is_writer,
+    });
   }
 
   fn send_participant_status(&self, event: DomainParticipantStatusEvent) {

@@ -363,6 +363,18 @@ impl SecureDiscovery {
 
     // Update authentication status to DB
     discovery_db_write(discovery_db).update_authentication_status(guid_prefix, updated_auth_status);
+    // fcc (vendored): a participant rejected on its first announcement (incompatible security,
+    // no identity token, an identity that does not validate) is told to the DP event loop, so
+    // that the `Authentication { Rejected }` participant status event reaches the application
+    // (it was only logged); once, when the status first becomes Rejected.
+    if updated_auth_status == AuthenticationStatus::Rejected
+      && auth_status_opt != Some(AuthenticationStatus::Rejected)
+    {
+      send_discovery_notification(
+        discovery_updated_sender,
+        DiscoveryNotificationType::ParticipantAuthenticationStatusChanged { guid_prefix },
+      );
+    }
 
     // Decide if normal Discovery can process the participant message
     // If authentication has begun with the remote, we should have already notified
@@ -1614,7 +1626,12 @@ impl SecureDiscovery {
         );
       }
       Some(DiscHandshakeState::PendingRequestMessage) => {
-        self.handshake_on_pending_request_message(message, discovery_db, auth_msg_writer);
+        self.handshake_on_pending_request_message(
+          message,
+          discovery_db,
+          auth_msg_writer,
+          discovery_updated_sender,
+        );
       }
       Some(DiscHandshakeState::PendingReplyMessage) => {
         self.handshake_on_pending_reply_message(
@@ -1649,6 +1666,7 @@ impl SecureDiscovery {
     received_message: &ParticipantStatelessMessage,
     discovery_db: &Arc<RwLock<DiscoveryDB>>,
     auth_msg_writer: &no_key::DataWriter<ParticipantStatelessMessage>,
+    discovery_updated_sender: &WakeSender<DiscoveryNotificationType>,
   ) {
     let remote_guid_prefix = received_message.generic.source_guid_prefix();
     debug!(
@@ -1729,6 +1747,18 @@ impl SecureDiscovery {
         error!(
           "Replying to a handshake request failed: {e}. Remote guid prefix: {remote_guid_prefix:?}"
         );
+        // fcc (vendored): a request whose identity certificate does not verify (another CA,
+        // a bad signature, not valid now) fails the same way every time the remote resends
+        // it: the participant is Rejected (and the application told), instead of staying
+        // Authenticating for good. Other failures keep the handshake open, as before.
+        if e.msg.contains("ertificate") {
+          self.update_participant_authentication_status_and_notify_dp(
+            remote_guid_prefix,
+            AuthenticationStatus::Rejected,
+            discovery_db,
+            discovery_updated_sender,
+          );
+        }
       }
     }
   }

@@ -354,7 +354,9 @@ impl MessageReceiver {
                  message decoding."
               )
             }
-            Err(e) => return error!("{e:?}"),
+            Err(e) => {
+              return error!("decode_rtps_message from {:?}: {e:?}", self.source_guid_prefix)
+            }
           }
         } else {
           if security_plugins.rtps_not_protected(&self.dest_guid_prefix) {
@@ -718,7 +720,9 @@ impl MessageReceiver {
               source_guid,
               &reader.guid(),
             )
-            .map_err(|e| error!("{e:?}")),
+            .map_err(|e| {
+              error!("decode_serialized_payload {source_guid:?} -> {:?}: {e:?}", reader.guid())
+            }),
           None => Ok(encoded_payload),
         },
       )
@@ -793,7 +797,9 @@ impl MessageReceiver {
             source_guid,
             &reader.guid(),
           )
-          .map_err(|e| error!("{e:?}"))
+          .map_err(|e| {
+            error!("decode_serialized_payload (frag) {source_guid:?} -> {:?}: {e:?}", reader.guid())
+          })
       }
       None => Ok(encoded_payload),
     }
@@ -921,7 +927,10 @@ impl MessageReceiver {
         );
         match decode_result {
           Err(e) => {
-            error!("Submessage decoding failed: {e:?}");
+            error!(
+              "Submessage decoding failed: {e:?} (from {:?}, submessage {:?})",
+              self.source_guid_prefix, encoded_submessage.header
+            );
           }
           Ok(DecodeOutcome::Success(DecodedSubmessage::Writer(
             decoded_writer_submessage,
