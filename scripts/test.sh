@@ -160,7 +160,8 @@ tests/security/keystore.sh
 # telemetry and its arm and setpoint reach the MCU, the observer's writers are refused, a rogue
 # node's writers (its own side not enforcing) are denied by the bridge, counted on /diagnostics and
 # told on /rosout, participants without credentials or of another CA get nothing and are counted,
-# a loopback capture holds no plaintext telemetry. ~40 s.
+# a loopback capture holds no plaintext telemetry; then the square through fcc-launch with the
+# bridge and the mission node each in its enclave, and its bag read in plaintext. ~70 s.
 mark "security stack"
 tests/security/secure_stack.sh
 mark "ros2 peer"

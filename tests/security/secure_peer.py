@@ -18,6 +18,7 @@ Five Cyclone participants, each its own process:
   foreign   (an enclave of another keystore: a certificate from another CA): must receive
             nothing; the bridge counts it as a refused participant
   plain     (no security): reads imu/data_raw; must receive nothing
+foreign and plain also write a setpoint and cmd/arm false: neither may reach the MCU.
 and, in this process, a packet capture on loopback (AF_PACKET) for the whole run: no plaintext
 telemetry (the frame ids "base_link" and "imu_link", the odometry's position bytes) in any
 UDP payload, while the unencrypted SPDP announcements ("DDS:Auth:PKI-DH") are seen (the
@@ -40,6 +41,8 @@ from keystore_peer import report, run_roles  # noqa: E402
 ENCLAVES = {"ground": "ground_station", "observer": "observer", "rogue": "rogue"}
 # What the rogue sends: a setpoint of map ENU (7, 7, 7) (NED (7, 7, -7) at the MCU) and a disarm.
 ROGUE_ENU = (7.0, 7.0, 7.0)
+# What the participants without credentials or of another CA send (their own writers exist).
+OUTSIDER_ENU = (9.0, 9.0, 9.0)
 # Telemetry only the bridge writes: frame ids, and the fake MCU's position NED (10, 5, -3) as
 # state/odom's ENU position (f64 little-endian). Each is on the wire when security is off (the
 # permissions documents, sent in clear in the handshake by the spec, name topics: not a marker).
@@ -71,14 +74,15 @@ def participant(role, seconds):
                             qos=Qos(Policy.Reliability.Reliable(duration(seconds=1)),
                                     Policy.Durability.TransientLocal, Policy.History.KeepLast(100)))
         out["security"], out["rosout"] = None, []
-    if role in ("ground", "observer", "rogue"):
+    if role in ("ground", "observer", "rogue", "plain", "foreign"):
         for name, typ in (("setpoint/velocity", rt.TwistStamped), ("cmd/arm", rt.Bool)):
             try:
                 writers[name] = DataWriter(dp, Topic(dp, f"rt/fcc/{name}", typ), qos=reliable)
                 out["writers"][name] = "created"
             except DDSException as e:
                 out["writers"][name] = f"refused: {e}"
-    arm, enu = (False, ROGUE_ENU) if role == "rogue" else (True, (1.0, 2.0, 0.5))
+    arm, enu = {"rogue": (False, ROGUE_ENU), "plain": (False, OUTSIDER_ENU),
+                "foreign": (False, OUTSIDER_ENU)}.get(role, (True, (1.0, 2.0, 0.5)))
     t0 = time.time()
     first = None
     while time.time() - t0 < seconds + 20:
@@ -94,8 +98,8 @@ def participant(role, seconds):
                     if st.name == "fcc_bridge: security":
                         out["security"] = {kv.key: kv.value for kv in st.values}
             out["rosout"] += [m.msg for m in rosout.take(N=100) if "DDS Security" in m.msg]
-        # The rogue sends too (its writers exist), from 1 s after the start.
-        started = first if role != "rogue" else t0
+        # The rogue and the outsiders (they receive nothing) send from 1 s after the start.
+        started = first if role in ("ground", "observer") else t0
         if started is not None and now - started > 1.0 and out["sent"] < 5 and writers:
             if "cmd/arm" in writers and out["sent"] == 0:
                 writers["cmd/arm"].write(rt.Bool(data=arm))
@@ -178,9 +182,10 @@ def main():
     sps = [r for r in recs if r["msg"] == "VelocitySetpoint"]
     cmds = [r["command"] for r in recs if r["msg"] == "Command"]
     g, o, p, r, f = (seen[k] for k in ("ground", "observer", "plain", "rogue", "foreign"))
-    rogue_ned = (ROGUE_ENU[1], ROGUE_ENU[0], -ROGUE_ENU[2])
-    rogue_sps = [sp for sp in sps
-                 if all(abs(x - y) < 1e-6 for x, y in zip(sp["vel_ned_mps"], rogue_ned))]
+    def sent_as(enu):  # the MCU's setpoints equal to map ENU `enu` (NED at the MCU)
+        ned = (enu[1], enu[0], -enu[2])
+        return [sp for sp in sps if all(abs(x - y) < 1e-6 for x, y in zip(sp["vel_ned_mps"], ned))]
+    rogue_sps, outsider_sps = sent_as(ROGUE_ENU), sent_as(OUTSIDER_ENU)
     sec = g.get("security") or {}
     denied_lines = [m for m in g.get("rosout", []) if "denied by access control" in m]
     refused_lines = [m for m in g.get("rosout", []) if "authentication failed" in m]
@@ -201,6 +206,9 @@ def main():
         ("an unauthenticated participant receives nothing", p["imu"] == 0, f"{p['imu']} samples"),
         ("a participant with a certificate of another CA receives nothing", f["imu"] == 0,
          f"{f['imu']} samples"),
+        ("neither injects anything: their setpoints never reach the MCU",
+         not outsider_sps and p["sent"] > 0 and f["sent"] > 0,
+         f"{len(outsider_sps)} of {len(sps)} setpoints are theirs; sent {p['sent']} + {f['sent']}"),
         ("the rogue's own Cyclone lets it create its writers (the case the bridge must refuse)",
          set(r["writers"].values()) == {"created"} and r["sent"] > 0,
          f"{r['writers']}, {r['sent']} sends"),

@@ -246,7 +246,9 @@ async fn main() {
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "warn,rustdds=error,ros2_client=warn".into()),
+                .unwrap_or_else(|_| "warn,rustdds=error,ros2_client=warn".into())
+                // ros2-client echoes every /rosout record as an event: the node prints its lines.
+                .add_directive("ros2_client::rosout=off".parse().expect("static directive")),
         )
         .with_writer(std::io::stderr)
         .init();

@@ -785,8 +785,6 @@ impl CryptoTransform for CryptographicBuiltin {
       return Err(security_error("Encoded payload smaller than minimum size"));
     }
     let (header_bytes, content_and_footer_bytes) = encoded_buffer.split_at(head_len);
-    let (content_bytes, footer_bytes) =
-      content_and_footer_bytes.split_at(content_and_footer_bytes.len() - foot_len);
 
     // Deserialize crypto header and footer
 
@@ -802,8 +800,6 @@ impl CryptoTransform for CryptographicBuiltin {
         },
       builtin_crypto_header_extra: BuiltinCryptoHeaderExtra(initialization_vector),
     } = crypto_header.try_into()?;
-
-    let BuiltinCryptoFooter { common_mac, .. } = BuiltinCryptoFooter::try_from(footer_bytes)?;
 
     // Get the payload decode key material
     let decode_key_material = self.session_decode_crypto_materials(
@@ -833,14 +829,48 @@ impl CryptoTransform for CryptographicBuiltin {
            kind is NONE, this method should not have been called."
         ))
       }
+      // fcc (vendored): the DATA submessage pads the serialized payload to a multiple of 4
+      // bytes and the receiver gets the padding with it (`Data::read_from`: "the rest of the
+      // submessage"), so the footer is not always the last `foot_len` bytes. RustDDS' own
+      // encoded payloads are not padded inside (Cyclone DDS pads the plaintext), so between
+      // two RustDDS participants every payload whose length is not a multiple of 4 failed its
+      // MAC ("Unspecified": e.g. a std_msgs/Bool, a NavSatFix).
       BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES128_GMAC
       | BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES256_GMAC => {
-        validate_mac(decode_key, initialization_vector, content_bytes, common_mac)
-          // if validate_mac succeeds, then map result to content bytes
-          .map(|()| Vec::from(content_bytes))
+        // The signed SerializedPayload has no length: try the footer at the end and before
+        // 1..=3 zero bytes of padding.
+        let n = content_and_footer_bytes.len();
+        let mut result = Err(security_error("Encoded payload smaller than minimum size"));
+        for pad in 0..=3usize {
+          if n < foot_len + pad
+            || content_and_footer_bytes[n - pad..].iter().any(|b| *b != 0)
+          {
+            break;
+          }
+          let (content_bytes, rest) = content_and_footer_bytes.split_at(n - pad - foot_len);
+          let BuiltinCryptoFooter { common_mac, .. } =
+            BuiltinCryptoFooter::try_from(&rest[..foot_len])?;
+          result = validate_mac(decode_key, initialization_vector, content_bytes, common_mac)
+            .map(|()| Vec::from(content_bytes));
+          if result.is_ok() {
+            break;
+          }
+        }
+        result
       }
       BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES128_GCM
       | BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES256_GCM => {
+        // CryptoContent carries its length: the footer follows it, padding after is ignored.
+        let content_len = content_and_footer_bytes
+          .get(..4)
+          .map(|l| 4 + u32::from_be_bytes([l[0], l[1], l[2], l[3]]) as usize)
+          .ok_or_else(|| security_error("Encoded payload smaller than minimum size"))?;
+        if content_and_footer_bytes.len() < content_len + foot_len {
+          return Err(security_error("Encoded payload shorter than its CryptoContent"));
+        }
+        let (content_bytes, rest) = content_and_footer_bytes.split_at(content_len);
+        let BuiltinCryptoFooter { common_mac, .. } =
+          BuiltinCryptoFooter::try_from(&rest[..foot_len])?;
         let ciphertext = CryptoContent::read_from_buffer(content_bytes)?.data;
         decrypt(decode_key, initialization_vector, &ciphertext, common_mac)
       }
