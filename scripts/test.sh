@@ -8,6 +8,25 @@ cd "$(dirname "$0")/.."
 # since the start; the summary at the end lists every step's share.
 marks=()
 mark() { marks+=("$SECONDS $1"); echo "[test.sh] ${SECONDS} s: $1"; }
+# Steps that mostly wait (downloads, fixed-length soaks) run beside others so the test command
+# fits its 30 min on 2 cores: `bg_start NAME CMD…` runs CMD with its output kept; `bg_wait NAME`
+# waits for it, prints that output and stops the run if the step failed.
+declare -A bg_pid bg_log
+trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
+bg_start() {
+  local n=$1; shift
+  bg_log[$n]=$(mktemp)
+  "$@" > "${bg_log[$n]}" 2>&1 &
+  bg_pid[$n]=$!
+  echo "[test.sh] ${SECONDS} s: $n started beside the next steps"
+}
+bg_wait() {
+  local n=$1 rc=0
+  wait "${bg_pid[$n]}" || rc=$?
+  echo "=== $n (ran beside other steps; done at ${SECONDS} s, exit $rc)"
+  cat "${bg_log[$n]}"; rm -f "${bg_log[$n]}"
+  if [ "$rc" -ne 0 ]; then echo "test.sh: $n failed (exit $rc)" >&2; exit 1; fi
+}
 mark "fetch + venvs"
 
 # 1. Dependencies (needs the package registries): Rust crates, and the independent DDS peer
@@ -22,11 +41,6 @@ if ! .venv-dds/bin/python -c 'import mcap, mcap_ros2.decoder, rosbags.highlevel'
   .venv-dds/bin/pip install -q --disable-pip-version-check mcap mcap-ros2-support rosbags
 fi
 export FCC_DDS_PYTHON="$PWD/.venv-dds/bin/python" FCC_REQUIRE_DDS_PEER=1
-# Real ROS 2 (issue 16): Jazzy and Kilted rclpy on Fast DDS from PyPI wheels, each in its venv
-# under target/ros2/, and `colcon build` of our interface package msg/ (fcc_msgs) with them; the
-# wheel workarounds are in the script. Skips what is done (stamp). Figures: the script's header.
-mark "ros2-setup"
-scripts/ros2-setup.sh jazzy kilted
 # The independent secure DDS peer (issue 19): Debian's Cyclone DDS 0.10 with its security plugins
 # (apt-get: libddsc0debian, cyclonedds-dev; root in CI) and its Python binding built against it in
 # .venv-sec (PyPI sdist). Skips what is done.
@@ -46,6 +60,12 @@ scripts/security-setup.sh
 mark "test-mcu"
 scripts/test-mcu.sh
 export FCC_REQUIRE_MCU=1
+# Real ROS 2 (issue 16): Jazzy and Kilted rclpy on Fast DDS from PyPI wheels, each in its venv
+# under target/ros2/, and `colcon build` of our interface package msg/ (fcc_msgs) with them; the
+# wheel workarounds are in the script. Skips what is done (stamp). Figures: the script's header.
+# Only the last step ("real ROS 2 peer") needs it: it runs beside the builds and tests from here
+# (after every other apt-get of this script, so no two hold the dpkg lock).
+bg_start ros2-setup scripts/ros2-setup.sh jazzy kilted
 # --- end of step "MCU: cross-build, size, QEMU replay" ------------------------------------------
 
 # 2. Everything that runs, in a private network namespace with loopback only when available.
@@ -73,17 +93,18 @@ run cargo build --offline --locked -p fcc_msgs --no-default-features
 scripts/check-deps.sh
 # Every program the end-to-end tests start (fcc-sitl, fcc-bridge, fcc-fake-mcu, fcc-mission,
 # fcc-launch, fcc-wire-fault, fcc-report, the recorder's mission driver), built before the tests.
+# One feature set for every workspace build and test below: fcc_mission's `ros` (fcc-mission,
+# fcc-launch and their tests) unified with the rest, so cargo compiles each dependency once (a
+# second resolution rebuilt rustdds with DDS Security, ring, openssl and ros2-client: ~3.5 min).
+features=(--features fcc_mission/ros)
 mark "release builds"
-run cargo build --offline --locked --release --workspace --bins --examples
-run cargo build --offline --locked --release -p fcc_mission --features ros --bin fcc-mission --bin fcc-launch
+run cargo build --offline --locked --release --workspace --bins --examples "${features[@]}"
 # Unit tests beside the code, the scenario tests in tests/ (optimised: whole flights), the DDS
-# peer and recorder tests.
+# peer and recorder tests, and the ROS 2 side of fcc_mission (feature `ros`): fcc-mission's and
+# fcc-launch's own tests, the mission node's start-up protection (stalled DDS set-up, SIGTERM
+# during start-up).
 mark "cargo test (workspace)"
-run cargo test --offline --locked --workspace --release
-# The ROS 2 side of fcc_mission (feature `ros`): fcc-mission's and fcc-launch's own tests, and the
-# mission node's start-up protection (stalled DDS set-up, SIGTERM during start-up).
-mark "cargo test (fcc_mission ros)"
-run cargo test --offline --locked --release -p fcc_mission --features ros
+run cargo test --offline --locked --workspace --release "${features[@]}"
 # The board's sensor/actuator drivers (MPU-9250, MS5611, UBX, laser, sonar, S.BUS, ESC PWM) on the
 # host, against datasheet byte sequences (the board crate is not a workspace member).
 mark "cargo test (board drivers)"
@@ -112,18 +133,11 @@ tests/e2e/flood_uplink.sh "$FCC_DDS_PYTHON"
 #   slope ≤ 10 MB/h. A 1-minute window resolves a slope to ±1–4 MB/h (printed beside each), so
 #   this catches the leaks the long soak found (77, 25–38 MB/h) but cannot certify the ≤ 1 MB/h
 #   goal; the ≥ 30-minute benchmark does (BENCHMARKS.md). Both use ~15 % of a core.
-mark "soak (short) + churn"
-churn_log=$(mktemp)
-tests/e2e/churn.sh "$FCC_DDS_PYTHON" > "$churn_log" 2>&1 &
-churn_pid=$!
-soak_rc=0
-scripts/soak.sh 3.5 --warmup-s 45 --sample-s 2 --goal-mb-h 10 || soak_rc=$?
-churn_rc=0
-wait "$churn_pid" || churn_rc=$?
-echo "=== participant churn (ran beside the soak)"; cat "$churn_log"; rm -f "$churn_log"
-if [ "$soak_rc" -ne 0 ] || [ "$churn_rc" -ne 0 ]; then
-  echo "test.sh: soak exit $soak_rc, churn exit $churn_rc" >&2; exit 1
-fi
+# Both wait on the clock (3.5 min, 40 cycles) at ~15 % of a core each: they run beside the next
+# steps (command safety … security stack), which use well under a core.
+mark "soak (short) + churn, beside the next steps"
+bg_start churn tests/e2e/churn.sh "$FCC_DDS_PYTHON"
+bg_start soak scripts/soak.sh 3.5 --warmup-s 45 --sample-s 2 --goal-mb-h 10
 # Command safety through the real pty + bridge (issue 14): cmd/arm false, cmd/mode disarm and arm
 # toggled at 100 Hz at 5 m refused and counted with the vehicle holding ±0.5 m on the CSV truth,
 # the emergency kill only by cmd/kill "KILL"; bridge parameters outside their safe range refused.
@@ -164,6 +178,9 @@ tests/security/keystore.sh
 # bridge and the mission node each in its enclave, and its bag read in plaintext. ~70 s.
 mark "security stack"
 tests/security/secure_stack.sh
+bg_wait soak
+bg_wait churn
+bg_wait ros2-setup
 mark "ros2 peer"
 tests/ros2/run_ros2_peer.sh
 # --- end of step "real ROS 2 peer" ---------------------------------------------------------------
