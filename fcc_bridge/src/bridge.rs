@@ -1077,12 +1077,13 @@ fn publish_diag(
     rates.update(st, now);
     let t = rec_time(st);
     let mut d = diag::diagnostics(st, rates, device, connected, Time::from_nanos(t));
-    if let Some(c) = pubs
+    // Built under the lock: no copy of the counts (and their set of seen GUIDs) each second.
+    if let Some(s) = pubs
         .security
         .as_ref()
-        .and_then(|c| c.lock().ok().map(|c| c.clone()))
+        .and_then(|c| c.lock().ok().map(|c| diag::security_status(&c, device)))
     {
-        d.status.push(diag::security_status(&c, device));
+        d.status.push(s);
     }
     tap.published_on(&topics::DIAGNOSTICS, &d, t);
     let _ = pubs.diagnostics.publish(d);
