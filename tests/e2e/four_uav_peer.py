@@ -62,6 +62,11 @@ RELIABLE = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.
 BEST_EFFORT = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(500))
 LATCHED = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.Durability.TransientLocal,
               Policy.History.KeepLast(10))
+# Latched topics (transient local in fcc_ros::topics) are read as a ROS node reads them: with a
+# transient-local reader. Each is written once, maybe before the reader matches — always so for a
+# topic this peer only learns of from discovery (`home`: its reader is made when the writer is
+# seen); a volatile reader legitimately misses such a sample.
+LATCHED_TOPICS = {"tf_static"}
 
 # Topics of one vehicle (relative to its namespace): type, min rate in ROS (= simulated) time
 # or None (only "received"), expected header frame_id or None.
@@ -177,11 +182,12 @@ def observe(a):
     me = str(dp.guid)
     readers = {}   # (vehicle, name) -> DataReader
 
-    def add_reader(v, name, ty):
+    def add_reader(v, name, ty, latched=False):
         dds = f"rt/uav{v}/{name}"
         if name in LIGHT or name not in TOPICS:
             ty = header_only(ty)
-        qos = LATCHED if name == "tf_static" else (BEST_EFFORT if name == "setpoint/velocity" else RELIABLE)
+        latched = latched or name in LATCHED_TOPICS
+        qos = LATCHED if latched else (BEST_EFFORT if name == "setpoint/velocity" else RELIABLE)
         readers[(v, name)] = DataReader(dp, Topic(dp, dds, ty), qos=qos)
 
     for v in vehicles:
@@ -214,7 +220,8 @@ def observe(a):
                         if ty is None:
                             unknown_types[(v, name)] = s.type_name
                         else:
-                            add_reader(v, name, ty)
+                            offered = s.qos[Policy.Durability] if Policy.Durability in s.qos else None
+                            add_reader(v, name, ty, latched=offered == Policy.Durability.TransientLocal)
                             count[(v, name)] = 0
                             stamps[(v, name)], keep[(v, name)] = [], []
                             frames[(v, name)] = set()
