@@ -20,11 +20,11 @@ raw=$(mktemp)
 trap 'rm -f "$raw" "$raw.mcu" "$raw.rec" "$raw.campaign" "$raw.campaign.log"' EXIT
 
 echo "== building (release)" >&2
-cargo bench -p fcc_tests --no-run "${BENCHES[@]/#/--bench=}" >&2
+cargo bench -p fcc_tests --features bench-peers --no-run "${BENCHES[@]/#/--bench=}" >&2
 
 for b in "${BENCHES[@]}"; do
     echo "== bench $b" >&2
-    cargo bench -q -p fcc_tests --bench "$b" | tee -a "$raw" >&2
+    cargo bench -q -p fcc_tests --features bench-peers --bench "$b" | tee -a "$raw" >&2
 done
 
 # Row 3b: instructions per step on the emulated Cortex-M4F, from the MCU-target work if present.

@@ -83,15 +83,37 @@ openssl smime -sign -text -in "$tmp/governance_rogue.xml" -out "$rogue/governanc
   -signer "$ks/public/ca.cert.pem" -inkey "$ks/private/ca.key.pem"
 # A participant of another keystore (another CA): authentication must fail.
 "$bin/fcc-keystore" create "$tmp/foreign" > /dev/null
-start_fake_mcu 90 --log "$tmp/mcu.jsonl"
-ROS_SECURITY_KEYSTORE="$ks" RUST_LOG=info "$bin/fcc-bridge" --device "$pty" \
-  --ros-args -r __ns:=/fcc --enclave /fcc/fcc_bridge > "$tmp/bridge.log" 2>&1 &
-bridge=$!
-set +e
-"$py" "$here/secure_peer.py" "$ks" --mcu-log "$tmp/mcu.jsonl" --seconds "${FCC_SECURITY_SECONDS:-6}" \
-  --foreign "$tmp/foreign/enclaves/ground_station"
-s=$?
-set -e
+# One attempt: a fresh fake MCU and secure bridge, the five peers; sets s (the peer's status) and
+# authenticated (how many participants completed the handshake with the bridge).
+part2() {
+  local n=$1
+  start_fake_mcu 90 --log "$tmp/mcu$n.jsonl"
+  ROS_SECURITY_KEYSTORE="$ks" RUST_LOG=info "$bin/fcc-bridge" --device "$pty" \
+    --ros-args -r __ns:=/fcc --enclave /fcc/fcc_bridge > "$tmp/bridge$n.log" 2>&1 &
+  bridge=$!
+  set +e
+  "$py" "$here/secure_peer.py" "$ks" --mcu-log "$tmp/mcu$n.jsonl" \
+    --seconds "${FCC_SECURITY_SECONDS:-6}" --foreign "$tmp/foreign/enclaves/ground_station" \
+    > "$tmp/peer$n.out" 2>&1
+  s=$?
+  set -e
+  authenticated=$(grep -c "Authenticated successfully" "$tmp/bridge$n.log" || true)
+}
+part2 1
+# An open defect (README, "Security"): now and then (about 1 run in 5 here, more under load) one
+# of the three Cyclone participants with credentials never completes its handshake with the
+# bridge (neither side reports an error; it gets nothing). Only that case is retried, once, and
+# said: any other failure, or the same stall twice, fails the test.
+if [ "$s" -ne 0 ] && [ "$authenticated" -lt 3 ] && kill -0 "$bridge" 2>/dev/null; then
+  echo "RETRY part 2 (known handshake stall): only $authenticated of the 3 Cyclone participants" \
+    "with credentials (ground, observer, rogue) authenticated with the bridge; attempt 1 saw:"
+  sed 's/^/  attempt 1: /' "$tmp/peer1.out"
+  kill -TERM "$bridge" 2>/dev/null || true; wait "$bridge" 2>/dev/null || true
+  part2 2
+  cp "$tmp/bridge2.log" "$tmp/bridge.log"; cat "$tmp/peer2.out"
+else
+  cp "$tmp/bridge1.log" "$tmp/bridge.log"; cat "$tmp/peer1.out"
+fi
 check "Cyclone DDS 0.10 with its security plugins and the secure bridge" $s
 if ! kill -0 "$bridge" 2>/dev/null; then echo "FAIL fcc-bridge died"; rc=1; fi
 if [ $rc -ne 0 ]; then echo "--- bridge log"; grep -v '^\s*$' "$tmp/bridge.log" | tail -20; fi
