@@ -26,7 +26,7 @@ if [ ${#need_pkgs[@]} -gt 0 ]; then
   echo "build-mcu.sh: installing ${need_pkgs[*]}" >&2
   SUDO=""; [ "$(id -u)" = 0 ] || SUDO=sudo
   $SUDO apt-get update -qq >/dev/null
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${need_pkgs[@]}" >/dev/null
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -o DPkg::Lock::Timeout=600 -y -qq --no-install-recommends "${need_pkgs[@]}" >/dev/null
 fi
 
 export RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1

@@ -28,8 +28,11 @@ command -v "$PY" >/dev/null || { echo "ros2-setup.sh: $PY not found (the wheels 
 if ! command -v cmake >/dev/null; then
   echo "ros2-setup.sh: installing cmake (apt-get)" >&2
   SUDO=""; [ "$(id -u)" = 0 ] || SUDO=sudo
-  $SUDO apt-get update -qq >/dev/null
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends cmake >/dev/null
+  # It may run beside the test command's other installs: wait for dpkg's lock; update the package
+  # lists only if the install fails without.
+  inst() { DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -o DPkg::Lock::Timeout=600 -y -qq \
+             --no-install-recommends cmake >/dev/null; }
+  inst 2>/dev/null || { $SUDO apt-get update -qq >/dev/null; inst; }
 fi
 
 now() { date +%s.%N; }

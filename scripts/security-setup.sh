@@ -13,7 +13,7 @@ if ! pkg-config --exists openssl 2>/dev/null; then
     echo "security-setup: needs libssl-dev and pkg-config (apt-get install as root)" >&2
     exit 1
   fi
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -q libssl-dev pkg-config > /dev/null
+  DEBIAN_FRONTEND=noninteractive apt-get install -o DPkg::Lock::Timeout=600 -y -q libssl-dev pkg-config > /dev/null
 fi
 plugins=/usr/lib/x86_64-linux-gnu/libddsc0debian
 if [ ! -e "$plugins/libdds_security_auth.so" ] || [ ! -e /usr/include/dds/dds.h ]; then
@@ -21,7 +21,7 @@ if [ ! -e "$plugins/libdds_security_auth.so" ] || [ ! -e /usr/include/dds/dds.h 
     echo "security-setup: needs libddsc0debian and cyclonedds-dev (apt-get install as root)" >&2
     exit 1
   fi
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -q libddsc0debian cyclonedds-dev > /dev/null
+  DEBIAN_FRONTEND=noninteractive apt-get install -o DPkg::Lock::Timeout=600 -y -q libddsc0debian cyclonedds-dev > /dev/null
 fi
 # The binding's build looks for CYCLONEDDS_HOME/{include,bin,lib/libddsc.so}: a directory of
 # links to Debian's files.

@@ -41,6 +41,13 @@ if ! .venv-dds/bin/python -c 'import mcap, mcap_ros2.decoder, rosbags.highlevel'
   .venv-dds/bin/pip install -q --disable-pip-version-check mcap mcap-ros2-support rosbags
 fi
 export FCC_DDS_PYTHON="$PWD/.venv-dds/bin/python" FCC_REQUIRE_DDS_PEER=1
+# Real ROS 2 (issue 16): Jazzy and Kilted rclpy on Fast DDS from PyPI wheels, each in its venv
+# under target/ros2/, and `colcon build` of our interface package msg/ (fcc_msgs) with them; the
+# wheel workarounds are in the script. Skips what is done (stamp). Figures: the script's header.
+# Only the "real ROS 2 peer" step needs it: it runs from here beside everything before that step
+# (its downloads overlap the other installs and the MCU step's; every apt-get here waits for
+# dpkg's lock).
+bg_start ros2-setup scripts/ros2-setup.sh jazzy kilted
 # The independent secure DDS peer (issue 19): Debian's Cyclone DDS 0.10 with its security plugins
 # (apt-get: libddsc0debian, cyclonedds-dev; root in CI) and its Python binding built against it in
 # .venv-sec (PyPI sdist). Skips what is done.
@@ -60,12 +67,6 @@ scripts/security-setup.sh
 mark "test-mcu"
 scripts/test-mcu.sh
 export FCC_REQUIRE_MCU=1
-# Real ROS 2 (issue 16): Jazzy and Kilted rclpy on Fast DDS from PyPI wheels, each in its venv
-# under target/ros2/, and `colcon build` of our interface package msg/ (fcc_msgs) with them; the
-# wheel workarounds are in the script. Skips what is done (stamp). Figures: the script's header.
-# Only the last step ("real ROS 2 peer") needs it: it runs beside the builds and tests from here
-# (after every other apt-get of this script, so no two hold the dpkg lock).
-bg_start ros2-setup scripts/ros2-setup.sh jazzy kilted
 # --- end of step "MCU: cross-build, size, QEMU replay" ------------------------------------------
 
 # 2. Everything that runs, in a private network namespace with loopback only when available.
@@ -123,8 +124,8 @@ run cargo test --offline --locked --manifest-path fcc_firmware/board/Cargo.toml 
 # The end-to-end steps below mostly wait on simulated flights (each ~0.5 core at speed 2) and on
 # the clock (the soak), each in its own loopback-only namespace. Phase 1 runs the ones that do
 # not mind sharing the CPU in two lanes beside the quiet soak and churn; phase 2 runs alone the
-# three whose checks need the CPU (four_uav's rates, the rclpy observer's /clock rate, the DDS
-# Security handshakes of five participants at once).
+# four whose checks need the CPU (the setpoint flood's wall-clock latency, four_uav's rates, the
+# rclpy observer's /clock rate, the DDS Security handshakes of five participants at once).
 # Measured alone on this machine (wall s / CPU s): run_stack 85/55, robust_stack 118/59,
 # flood_uplink 12/11, command_safety 26/11, heading 47/22, slow_link 46/14, keystore 8/3,
 # secure_stack 64/35, churn 75/14, soak 211/58, four_uav ~40/80, the two waiting cargo tests ~150.
@@ -152,9 +153,6 @@ bg_start "waiting cargo tests + run_stack" lane2
 # Robustness through the real pty + bridge (issue 6): bad configuration, a noisy wire under the
 # square mission, the mission node killed mid-leg, the bridge and the serial device lost and back.
 tests/e2e/robust_stack.sh "$FCC_DDS_PYTHON"
-# Uplink budget (issue 14): a 10 kHz setpoint flood through a 921600-baud line (fcc-wire-fault --baud):
-# land/hold at the MCU ≤ 100 ms after the peer's write, uplink ≤ 25 % of the line, ≤ 101 setpoints/s.
-tests/e2e/flood_uplink.sh "$FCC_DDS_PYTHON"
 # Command safety through the real pty + bridge (issue 14): cmd/arm false, cmd/mode disarm and arm
 # toggled at 100 Hz at 5 m refused and counted with the vehicle holding ±0.5 m on the CSV truth,
 # the emergency kill only by cmd/kill "KILL"; bridge parameters outside their safe range refused.
@@ -176,6 +174,11 @@ bg_wait "waiting cargo tests + run_stack"
 bg_wait soak
 bg_wait churn
 # --- phase 2, alone --------------------------------------------------------------------------------
+# Uplink budget (issue 14): a 10 kHz setpoint flood through a 921600-baud line (fcc-wire-fault --baud):
+# land/hold at the MCU ≤ 100 ms after the peer's write (wall clock), uplink ≤ 25 % of the line,
+# ≤ 101 setpoints/s. Alone: beside the lanes the flooding peer and the pty fell behind (CI).
+mark "flood_uplink"
+tests/e2e/flood_uplink.sh "$FCC_DDS_PYTHON"
 # Four vehicles on one DDS domain (/uav1 … /uav4, each its own SITL, bridge and mission): every
 # namespaced topic seen by the Cyclone peer, no message crossing namespaces, CPU use printed.
 mark "four_uav"

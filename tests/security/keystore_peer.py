@@ -58,6 +58,14 @@ def run_roles(script, keystore, enclaves, roles, seconds, pythonpath=None):
             env["CYCLONEDDS_URI"] = security_xml(os.path.join(keystore, "enclaves", enclaves[role]))
         else:
             env.pop("CYCLONEDDS_URI", None)
+        # Debugging: FCC_CYCLONE_TRACE_DIR=DIR writes each role's Cyclone trace to DIR/ROLE.log.
+        trace_dir = os.environ.get("FCC_CYCLONE_TRACE_DIR")
+        if trace_dir:
+            prior = env.get("CYCLONEDDS_URI")
+            env["CYCLONEDDS_URI"] = (prior + "," if prior else "") + (
+                '<CycloneDDS><Domain id="any"><Tracing><Verbosity>finest</Verbosity>'
+                f'<OutputFile>{os.path.join(trace_dir, role + ".log")}</OutputFile>'
+                '</Tracing></Domain></CycloneDDS>')
         procs[role] = subprocess.Popen(
             [sys.executable, script, "--role", role, "--seconds", str(seconds)],
             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
