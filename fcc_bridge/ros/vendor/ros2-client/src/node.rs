@@ -74,6 +74,9 @@ pub enum SecurityEvent {
   },
 }
 
+/// fcc (vendored): the depth of each [`Node::status_receiver`] queue.
+const STATUS_EVENT_QUEUE_DEPTH: usize = 256;
+
 #[cfg(feature = "security")]
 fn security_event(e: &DomainParticipantStatusEvent) -> Option<SecurityEvent> {
   match e {
@@ -947,7 +950,11 @@ impl Node {
   /// because without a Spinner no events would ever be delivered.
   pub fn status_receiver(&self) -> Option<Receiver<NodeEvent>> {
     if self.have_spinner() {
-      let (status_event_sender, status_event_receiver) = async_channel::bounded(8);
+      // fcc (vendored): 256 events, not 8: a burst of discovery events (five participants
+      // joining at once) filled 8 before a busy receiver ran, and the events after it were
+      // dropped by `try_send` without a word, a security refusal among them.
+      let (status_event_sender, status_event_receiver) =
+        async_channel::bounded(STATUS_EVENT_QUEUE_DEPTH);
       self
         .status_event_senders
         .lock()
