@@ -201,7 +201,7 @@ tests/security/secure_stack.sh
 # loopback-only namespace: node/topic list (one type per topic), echo of every topic with the
 # CLI's and sensor-data QoS vs the simulator's truth, TF, parameters (describe with
 # ranges/read-only), the arm/hold/land services, setpoints on rclpy's default QoS flying the
-# vehicle, a late joiner, a restarted peer, use_sim_time at speed 2, no ERROR line from the stack
+# vehicle, a late joiner, a restarted peer, use_sim_time at speed 1.5, no ERROR line from the stack
 # (ROS_DISTRO unset, jazzy, kilted); and (part d, issue 17) the mission node's FollowWaypoints
 # action through rclpy's ActionClient: the square as one goal (cross-track vs the YAML flight's),
 # a goal outside the geofence refused, a lat/lon goal's feedback and result on the truth,

@@ -3,7 +3,7 @@
 # everything in ONE loopback-only network namespace. Needs scripts/ros2-setup.sh run before
 # (target/ros2/{jazzy,kilted}/env.sh) and release builds of fcc-sitl, fcc-bridge, fcc-mission and
 # fcc-launch (FCC_BIN_DIR).
-#   (a) Jazzy, ROS_DISTRO unset: fcc-launch flies the square (speed 2, clock_source:=mcu, the
+#   (a) Jazzy, ROS_DISTRO unset: fcc-launch flies the square (speed 1.5, clock_source:=mcu, the
 #       mission node on use_sim_time) while rclpy_peer.py `observe` does node/topic list, echoes
 #       every topic, TF, parameters, a late joiner, use_sim_time; then values vs the CSV truth.
 #   (b) Jazzy, ROS_DISTRO=jazzy: fcc-sitl ⇄ fcc-bridge (speed 1, clock_source:=sync); the rclpy
