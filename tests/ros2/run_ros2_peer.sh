@@ -67,8 +67,9 @@ stop_sitl_bridge() { kill -TERM "$bridge" "$sitl" 2>/dev/null || true; wait "$si
 part_a() {
   local d="$tmp/a" t0 lrc prc; mkdir -p "$d"; t0=$(date +%s)
   # Speed 1.5: three Python processes read every topic; at speed 2 the observer fell behind
-  # alone in CI once (/clock 37.4 Hz of 100, a 10-s service timeout). Not 1: the use_sim_time
-  # check must tell the simulator's time from wall time.
+  # alone in CI once (/clock 37.4 Hz of 100). Not 1: the use_sim_time check must tell the
+  # simulator's time from wall time. (The 10-s list_parameters timeout seen in the same run also
+  # came at 1.5: open, see the session note.)
   local speed=1.5
   echo "=== (a) Jazzy rclpy observing the square through the full stack (speed $speed, ROS_DISTRO unset)"
   # Three rclpy processes, as three terminals: the observer (graph, parameters, TF, values) and

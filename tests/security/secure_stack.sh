@@ -100,7 +100,7 @@ part2() {
   authenticated=$(grep -c "Authenticated successfully" "$tmp/bridge$n.log" || true)
 }
 part2 1
-# An open defect (README, "Security"): now and then (about 1 run in 5 here, more under load) one
+# An open defect (README, "Security"): now and then (1 run in ~7 alone, ~1 in 4 under load) one
 # of the three Cyclone participants with credentials never completes its handshake with the
 # bridge (neither side reports an error; it gets nothing). Only that case is retried, once, and
 # said: any other failure, or the same stall twice, fails the test.
