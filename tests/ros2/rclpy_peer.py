@@ -83,9 +83,12 @@ def tf_chain(edges, child="base_link"):
 
 class Recorder:
     """Subscriptions to every topic, each made once its first publisher is discovered (as a user
-    runs `ros2 topic echo` on a listed topic): with the CLI's QoS choice (full messages), or, in
-    the separate `echo-sensor` process (a second terminal), with sensor-data QoS (raw bytes,
-    decoded after the run so the callbacks stay cheap)."""
+    runs `ros2 topic echo` on a listed topic): with the CLI's QoS choice, or, in the separate
+    `echo-sensor` process (a second terminal), with sensor-data QoS. Every callback only keeps the
+    serialized bytes (rclpy's `raw=True`); they are decoded by rclpy's type support when read
+    (`msgs`, cached), so three Python processes reading ~1,500 messages/s each keep up on a
+    loaded 2-core machine (decoding in the callbacks, the reliable echo fell behind in CI:
+    imu/data_raw 150 Hz of 200, /clock 33-37 Hz of 100 with one CPU hog beside)."""
 
     def __init__(self, node, sensor=False, topics=None):
         from rclpy.clock import Clock, ClockType
@@ -93,7 +96,8 @@ class Recorder:
         self.node = node
         self.sensor = sensor
         self.topics = list(topics or TOPICS)
-        self.got = {t: [] for t in self.topics}  # (wall, msg or raw bytes)
+        self.got = {t: [] for t in self.topics}  # (wall, raw bytes)
+        self.decoded = {t: [] for t in self.topics}  # the first len(...) of got[t], decoded
         self.qos = {}
         self.subs = []
         self.cls = {t: msg_class(TOPICS[t][0]) for t in self.topics}
@@ -108,16 +112,18 @@ class Recorder:
             # depth 1000: a loaded machine delays the Python callbacks; keep-last must not drop.
             self.qos[t] = echo_qos(self.node, t, depth=1000)
             cb = (lambda t: lambda m: self.got[t].append((time.monotonic(), m)))(t)
-            if self.sensor:
-                self.subs.append(self.node.create_subscription(self.cls[t], t, cb, qos_profile_sensor_data, raw=True))
-            else:
-                self.subs.append(self.node.create_subscription(self.cls[t], t, cb, self.qos[t]))
+            qos = qos_profile_sensor_data if self.sensor else self.qos[t]
+            self.subs.append(self.node.create_subscription(self.cls[t], t, cb, qos, raw=True))
 
     def msgs(self, t):
-        if self.sensor:
-            from rclpy.serialization import deserialize_message
-            return [deserialize_message(b, self.cls[t]) for _, b in self.got[t]]
-        return [m for _, m in self.got[t]]
+        from rclpy.serialization import deserialize_message
+        done = self.decoded[t]
+        done.extend(deserialize_message(b, self.cls[t]) for _, b in self.got[t][len(done):])
+        return list(done)
+
+    def stamped(self, t):
+        """[(wall, message)] of one topic."""
+        return list(zip((w for w, _ in self.got[t]), self.msgs(t)))
 
 
 def rates(rec, t):
@@ -443,7 +449,7 @@ def slope(pts):
 def check_sim_time(c, rec, pairs, speed):
     """use_sim_time: the peer node's clock is the latest /clock (sampled every 0.2 s of wall time:
     node time minus the newest /clock received by then), and /clock runs at about `speed` × wall."""
-    clk = [(w, stamp_of(m)) for w, m in rec.got["/clock"]]
+    clk = [(w, stamp_of(m)) for w, m in rec.stamped("/clock")]
     p = [(w, r, last) for w, r, last in pairs if r > 0 and last is not None]
     if len(p) < 20 or len(clk) < 20:
         c.check("use_sim_time: the node clock follows /clock", False, f"{len(p)} samples, {len(clk)} /clock msgs")

@@ -50,7 +50,10 @@ class Peer:
         """A service call as `ros2 service call` makes it: wait for the server, call, wait."""
         cli = node.create_client(srv_type, name)
         try:
-            self.wait(cli.service_is_ready, secs, f"service {name}")
+            try:
+                self.wait(cli.service_is_ready, secs, f"service {name}")
+            except Timeout as e:
+                raise Timeout(f"{e}; {service_graph(node, cli.srv_name)}") from None
             fut = cli.call_async(request)
             self.wait(fut.done, secs, f"the answer of {name}")
             return fut.result()
@@ -61,6 +64,16 @@ class Peer:
         for n in self.nodes:
             n.destroy_node()
         rclpy.shutdown()
+
+
+def service_graph(node, srv_name):
+    """What this participant's graph holds of a service's two topics (after a timeout: did the
+    server's endpoints never arrive, or did they arrive and not match?)."""
+    req, rep = f"rq{srv_name}Request", f"rr{srv_name}Reply"
+    subs = node.get_subscriptions_info_by_topic(req, no_mangle=True)
+    pubs = node.get_publishers_info_by_topic(rep, no_mangle=True)
+    return (f"graph: {req} readers {[i.node_namespace + '/' + i.node_name for i in subs]}, "
+            f"{rep} writers {[i.node_namespace + '/' + i.node_name for i in pubs]}")
 
 
 def node_list(node):
