@@ -374,6 +374,24 @@ impl Writer {
     self.guid().entity_id.as_token()
   }
 
+  // fcc (vendored): how new samples and their heartbeats go out. A reliable
+  // built-in (discovery) writer sends them to each reader's unicast locator,
+  // as Fast DDS and Cyclone DDS do, not to the SPDP multicast group. A Fast DDS
+  // peer receives its multicast and unicast metatraffic on two sockets, each
+  // with its own thread; SEDP samples of one writer arriving on both (new ones
+  // by multicast, repairs by unicast) were acknowledged but some endpoints
+  // never reached its graph (rclpy: a topic's publisher or a service missing
+  // for good, on a loaded machine; Fast DDS' EDP listener drops a change that
+  // changed while it released the reader's lock: `PREVENT_PDP_DEADLOCK`).
+  // See VENDOR.md.
+  fn new_data_delivery_mode(&self) -> DeliveryMode {
+    if self.is_reliable() && !self.like_stateless && self.entity_id().kind().is_built_in() {
+      DeliveryMode::Unicast
+    } else {
+      DeliveryMode::Multicast
+    }
+  }
+
   pub fn is_reliable(&self) -> bool {
     self.qos_policies.is_reliable()
   }
@@ -756,7 +774,7 @@ impl Writer {
 
     let message = builder.add_header_and_build(self.my_guid.prefix);
     let blocked = self.send_message_to_readers(
-      DeliveryMode::Multicast,
+      self.new_data_delivery_mode(),
       message,
       &mut self.readers.values(),
       TrafficClass::Bulk,
@@ -927,7 +945,7 @@ impl Writer {
           )
           .add_header_and_build(self.my_guid.prefix);
         self.send_message_to_readers(
-          DeliveryMode::Multicast,
+          self.new_data_delivery_mode(),
           hb_message,
           &mut self.readers.values(),
           TrafficClass::Control,
@@ -1014,7 +1032,7 @@ impl Writer {
     for (resume_cursor, msg) in messages_to_send {
       let blocked = match target_reader_opt {
         None => self.send_message_to_readers(
-          DeliveryMode::Multicast,
+          self.new_data_delivery_mode(),
           msg,
           &mut self.readers.values(),
           class,
@@ -1121,7 +1139,7 @@ impl Writer {
       } else {
         // Normal case
         self.send_control_to_readers(
-          DeliveryMode::Multicast,
+          self.new_data_delivery_mode(),
           hb_message,
           &mut self.readers.values(),
         );
@@ -1888,6 +1906,19 @@ impl Writer {
             ) {
               (DeliveryMode::Multicast, _, Some(_)) => send_legacy!(reader.multicast_locator_list),
               (DeliveryMode::Unicast, Some(_), _) => send_legacy!(reader.unicast_locator_list),
+              // fcc (vendored): a reader that advertises only loopback unicast
+              // locators is on this host (nothing else can reach them), so a
+              // unicast send goes there instead of to its multicast group. Until
+              // the peer's first packet is observed every route is a fallback,
+              // and on a loopback-only host (ROS_LOCALHOST_ONLY, a private
+              // namespace) the same writer's samples went first by multicast and
+              // later by loopback unicast: two receive threads at a Fast DDS peer
+              // (see new_data_delivery_mode).
+              (DeliveryMode::Unicast, None, _)
+                if reader.loopback_unicast_locators.iter().any(Locator::is_udp) =>
+              {
+                send_legacy!(reader.loopback_unicast_locators)
+              }
               (_, _, Some(_)) => send_legacy!(reader.multicast_locator_list),
               (_, Some(_), _) => send_legacy!(reader.unicast_locator_list),
               (_, None, None) => warn!("send_message_to_readers: No locators for {reader:?}"),
