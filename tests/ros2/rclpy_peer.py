@@ -88,8 +88,8 @@ class Recorder:
     `echo-sensor` process (a second terminal), with sensor-data QoS. Every callback only keeps the
     serialized bytes (rclpy's `raw=True`); they are decoded by rclpy's type support when read
     (`msgs`, cached), so three Python processes reading ~1,500 messages/s each keep up on a
-    loaded 2-core machine (decoding in the callbacks, the reliable echo fell behind in CI:
-    imu/data_raw 150 Hz of 200, /clock 33-37 Hz of 100 with one CPU hog beside)."""
+    loaded 2-core machine (decoding in the callbacks, the reliable echo fell behind: imu/data_raw
+    150 Hz of 200 in a CI run, /clock 33-35 Hz of 100 with one CPU hog beside)."""
 
     def __init__(self, node, sensor=False, topics=None):
         from rclpy.clock import Clock, ClockType

@@ -68,8 +68,8 @@ part_a() {
   local d="$tmp/a" t0 lrc prc; mkdir -p "$d"; t0=$(date +%s)
   # Speed 1.5: three Python processes read every topic; at speed 2 the observer fell behind
   # alone in CI once (/clock 37.4 Hz of 100). Not 1: the use_sim_time check must tell the
-  # simulator's time from wall time. (The 10-s list_parameters timeout seen in the same run also
-  # came at 1.5: open, see the session note.)
+  # simulator's time from wall time. (The 10-s list_parameters timeouts of two CI runs were our
+  # endpoints lost by Fast DDS' discovery, fixed in the vendored rustdds: its VENDOR.md.)
   local speed=1.5
   echo "=== (a) Jazzy rclpy observing the square through the full stack (speed $speed, ROS_DISTRO unset)"
   # Three rclpy processes, as three terminals: the observer (graph, parameters, TF, values) and
