@@ -118,12 +118,10 @@ pub struct Navigator {
 impl Navigator {
     pub fn new(params: NavParams) -> Self {
         let mut horiz = HorizontalEstimator::new(params.horiz_gains());
-        horiz
-            .n
-            .set_bias_gain(params.horiz_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
-        horiz
-            .e
-            .set_bias_gain(params.horiz_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
+        // The horizontal accelerometer bias is learnt from the GPS velocity (gps_update), not
+        // from the position: the position crossover is far below the bias pole.
+        horiz.n.set_bias_limit(ACCEL_BIAS_LIMIT_MPS2);
+        horiz.e.set_bias_limit(ACCEL_BIAS_LIMIT_MPS2);
         let mut vert = VerticalEstimator::new(params.vert_gains());
         vert.down
             .set_bias_gain(params.vert_bias_pole_radps, ACCEL_BIAS_LIMIT_MPS2);
@@ -366,8 +364,10 @@ impl Navigator {
                 self.horiz.reset([0.0, 0.0], [0.0, 0.0]);
                 self.state.pos_ned_m = [0.0, 0.0, p[2]];
             }
+            let mut fix_interval_s = 0.2;
             if let Some((t0, v0)) = self.last_gps_vel {
                 let dt = now_us.saturating_sub(t0) as f32 * 1e-6;
+                fix_interval_s = dt.clamp(0.05, 1.0);
                 if dt > 0.05 && dt < 1.0 {
                     // First-order smoothing (~0.5 s) of the differenced GPS velocity.
                     let k = (dt / 0.5).min(1.0);
@@ -391,10 +391,16 @@ impl Navigator {
                 } else {
                     self.horiz.gps([ned[0] as f32, ned[1] as f32], delay_steps);
                     if g.vel_ned_mps.iter().all(|v| v.is_finite()) {
+                        let k_v = self.params.gps_vel_gain;
                         self.horiz.gps_velocity(
                             [g.vel_ned_mps[0], g.vel_ned_mps[1]],
                             delay_steps,
-                            self.params.gps_vel_gain,
+                            k_v,
+                            fcc_nav::complementary::bias_gain_per_fix(
+                                self.params.horiz_bias_pole_radps,
+                                k_v,
+                                fix_interval_s,
+                            ),
                         );
                     }
                 }

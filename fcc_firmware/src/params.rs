@@ -49,7 +49,10 @@ pub struct NavParams {
     /// Yaw: tilt-compensated magnetometer through F_L (rides through short disturbances).
     pub yaw_omega_radps: f32,
     pub yaw_zeta: f32,
-    /// Horizontal: GPS position through F_L, NED acceleration through F_H.
+    /// Horizontal: GPS position through F_L, NED acceleration through F_H. Low (≈ 2-min
+    /// time constant): the GPS Doppler velocity ([`Self::gps_vel_gain`]) carries the short
+    /// term, and the position follows the receiver's slowly wandering error (σ ≈ 1 m, τ ≈ 1
+    /// min) only slowly — with ω = 0.3 the hold point wandered with it (BENCHMARKS.md, campaign).
     pub horiz_omega_radps: f32,
     pub horiz_zeta: f32,
     /// Vertical: barometric altitude through F_L, vertical acceleration through F_H (eqs. 5–6).
@@ -72,7 +75,9 @@ pub struct NavParams {
     /// Magnetometer hard-iron offsets from the compass calibration (subtracted), FRD.
     pub mag_offset_frd_ut: [f32; 3],
     /// Third pole of the vertical/horizontal filters that estimates the remaining accelerometer
-    /// bias (vibration rectification, drift); 0 = the paper's plain 2nd-order filter.
+    /// bias (vibration rectification, drift); 0 = the paper's plain 2nd-order filter. Vertical:
+    /// learnt from the altitude innovation; horizontal: from the GPS velocity innovation
+    /// (`fcc_nav::complementary::bias_gain_per_fix`), the position crossover being far slower.
     pub vert_bias_pole_radps: f32,
     pub horiz_bias_pole_radps: f32,
     /// Range-aided height (`fcc_nav::range_aid`): paper B's fused height above ground replaces
@@ -94,7 +99,7 @@ impl Default for NavParams {
             tilt_zeta: 1.0,
             yaw_omega_radps: 0.1,
             yaw_zeta: 1.0,
-            horiz_omega_radps: 0.3,
+            horiz_omega_radps: 0.005,
             horiz_zeta: 0.8,
             vert_omega_radps: 0.08,
             vert_zeta: 0.7,

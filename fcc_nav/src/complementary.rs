@@ -133,6 +133,16 @@ impl GainCache {
     }
 }
 
+/// Per-fix bias gain `k_b` for [`PosVelCf::velocity_measurement_with_bias`]: with velocity gain
+/// `k_v` per fix and fixes every `fix_interval_s`, the slow pole of `s² + K·s + K_b` lands at
+/// `pole_radps` (`K = k_v/T`, `K_b = p·(K − p)`, `k_b = K_b·T = p·(k_v − p·T)`); 0 when `p` is 0
+/// or not below `K`.
+pub fn bias_gain_per_fix(pole_radps: f32, vel_gain: f32, fix_interval_s: f32) -> f32 {
+    let p = pole_radps.max(0.0);
+    let t = fix_interval_s.max(0.0);
+    (p * (vel_gain - p * t)).max(0.0)
+}
+
 /// Wrap an angle to (−π, π].
 #[inline]
 pub fn wrap_pi(a_rad: f32) -> f32 {
@@ -371,6 +381,25 @@ impl<const HIST: usize> PosVelCf<HIST> {
     /// (the history beside the positions). With `k_v` per fix at the fix rate `f`, the velocity
     /// error decays at ≈ `k_v·f` 1/s and the measurement noise is averaged over ≈ `2/k_v` fixes.
     pub fn velocity_measurement(&mut self, v: f32, delay_steps: usize, gain: f32) {
+        self.velocity_measurement_with_bias(v, delay_steps, gain, 0.0);
+    }
+
+    /// [`Self::velocity_measurement`] that also learns the input (accelerometer) bias from the
+    /// velocity innovation: `b̂ ← b̂ − k_b·(v − v̂(t − d))`, clamped to the limit of
+    /// [`Self::set_bias_gain`] (a zero limit keeps `b̂` at 0). Per fix at rate `f` the velocity
+    /// error `ṽ` and the bias error `β = b − b̂` obey `ṽ' = β − K·ṽ`, `β' = −K_b·ṽ` with
+    /// `K = k_v·f`, `K_b = k_b·f`: poles at the roots of `s² + K·s + K_b`. [`bias_gain_per_fix`]
+    /// places the slow one at `p` (`K_b = p·(K − p)`). With the bias learnt from the velocity,
+    /// a constant bias leaves no steady velocity or position error even when the position
+    /// crossover `ω` is far below `p` (a filter that trusts the Doppler velocity and follows
+    /// the GPS position only slowly).
+    pub fn velocity_measurement_with_bias(
+        &mut self,
+        v: f32,
+        delay_steps: usize,
+        gain: f32,
+        bias_gain: f32,
+    ) {
         let idx = (self.head + HIST - delay_steps.min(HIST - 1)) % HIST;
         let e = v - self.vhist[idx];
         let k = gain.clamp(0.0, 1.0);
@@ -378,6 +407,17 @@ impl<const HIST: usize> PosVelCf<HIST> {
         for x in self.vhist.iter_mut() {
             *x += k * e;
         }
+        if bias_gain > 0.0 {
+            self.bias = (self.bias - bias_gain * e)
+                .max(-self.bias_limit)
+                .min(self.bias_limit);
+        }
+    }
+
+    /// Set the input-bias limit alone (no position-driven bias gain): for a filter whose bias
+    /// is learnt from velocity measurements ([`Self::velocity_measurement_with_bias`]).
+    pub fn set_bias_limit(&mut self, limit: f32) {
+        self.bias_limit = limit.abs();
     }
 
     /// Drop the held measurement (pure dead reckoning from now on).
