@@ -207,6 +207,9 @@ mod tests {
         assert!(vel.abs() < 0.01, "mean vel {vel}");
         let (bias, pos, vel) = run(0.0);
         std::println!("not learnt: bias {bias} pos {pos} vel {vel}");
-        assert!(bias == 0.0 && pos > 4.0 && vel.abs() > 0.03, "pos {pos} mean vel {vel}");
+        assert!(
+            bias == 0.0 && pos > 4.0 && vel.abs() > 0.03,
+            "pos {pos} mean vel {vel}"
+        );
     }
 }
