@@ -79,9 +79,9 @@ pub struct Outcome {
 /// - `gps_loss` (GPS lost in a hover; the vehicle lands on baro, accelerometer and rangefinders
 ///   alone): without GPS nothing this airframe carries observes the velocity over the ground (a
 ///   slow acceleration and a tilt error look alike to the accelerometer), and the dead-reckoned
-///   velocity's error grows ≈ 0.05–0.1 m/s per second from the loss — the attitude error of the
-///   moment (≈ 0.3–0.5°, the complementary filter reading gust accelerations as tilt) read as an
-///   acceleration. The landing is made as short as is safe (`fcc_firmware::flight`: down at the
+///   velocity's error grows ≈ 0.03–0.1 m/s per second from the loss — the attitude error of the
+///   moment (≈ 0.1–0.5°, the complementary filter having read gust accelerations as tilt; after
+///   the loss the tilt is held on the gyro, `fcc_firmware::nav`) read as an acceleration. The landing is made as short as is safe (`fcc_firmware::flight`: down at the
 ///   descent limit, the slow part from 0.6 m, no wait at the touchdown gate), which bounds the
 ///   slide at contact but not to 0.3 m/s.
 pub const OPEN_CHECKS: [(&str, &[&str]); 2] = [
