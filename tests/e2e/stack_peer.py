@@ -55,8 +55,12 @@ RELIABLE = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.
 BEST_EFFORT = Qos(Policy.Reliability.BestEffort, Policy.History.KeepLast(200))
 LATCHED = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.Durability.TransientLocal,
               Policy.History.KeepLast(10))
+# ros_discovery_info is keyless: one instance for every participant's writer, so a depth of 1
+# kept only the newest of the bridge's and the mission node's announcements when both arrived
+# between two polls (their transient-local replays come at the same match, t ≈ 1.6 s): CI saw
+# only fcc_mission once. The depth keeps every participant's sample until it is taken.
 DISCOVERY_QOS = Qos(Policy.Reliability.Reliable(duration(seconds=1)),
-                    Policy.Durability.TransientLocal, Policy.History.KeepLast(1))
+                    Policy.Durability.TransientLocal, Policy.History.KeepLast(64))
 
 # name: (type, min rate in ROS-time Hz, expected frame_id or None)
 TOPICS = {
