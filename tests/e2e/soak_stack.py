@@ -23,7 +23,7 @@ Host stalls: this driver notes every pass of its 50 ms loop that came ≥ 0.5 s 
 starved it, e.g. a parallel build on a small machine); losses within 2 s of such a stall are
 printed apart (the simulator then catches up in a burst its pty cannot hold), not hidden.
 Each slope is printed with its standard error (what the window can resolve). The test command
-runs a short form (3.5 min, --goal-mb-h 10: catches a gross leak, cannot certify 1 MB/h).
+runs a short form (6 min, --goal-mb-h 10: catches a gross leak, cannot certify 1 MB/h).
 Exit 0 when every slope ≤ goal and no loss is unexplained; 1 otherwise; 2 on a set-up failure.
 Wall-clock figures are the soak's own (RSS over time); no check depends on timing otherwise.
 """
