@@ -481,8 +481,20 @@ fn velocity_truth(log: &FlightLog) -> [f64; 3] {
 
 /// Fly `per_family` seeds of each family on `threads` threads (seeds `first_seed..`).
 pub fn run(per_family: usize, first_seed: u64, long: bool, threads: usize) -> Vec<Outcome> {
-    let flights: Vec<Flight> = FAMILIES
+    run_families(&FAMILIES, per_family, first_seed, long, threads)
+}
+
+/// [`run`] over the given families only.
+pub fn run_families(
+    families: &[&'static str],
+    per_family: usize,
+    first_seed: u64,
+    long: bool,
+    threads: usize,
+) -> Vec<Outcome> {
+    let flights: Vec<Flight> = families
         .iter()
+        .copied()
         .flat_map(|f| (0..per_family as u64).map(move |i| generate(f, first_seed + i, long)))
         .collect();
     let next = std::sync::atomic::AtomicUsize::new(0);

@@ -42,6 +42,9 @@ struct Args {
     /// With --only: the CSV log.
     #[arg(long)]
     csv: Option<std::path::PathBuf>,
+    /// Fly only this family (repeatable; default: every family).
+    #[arg(long, value_name = "FAMILY")]
+    family: Vec<String>,
     /// Also write the table here (Markdown).
     #[arg(long)]
     out: Option<std::path::PathBuf>,
@@ -61,8 +64,32 @@ fn main() -> ExitCode {
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let families: Vec<&'static str> = if args.family.is_empty() {
+        campaign::FAMILIES.to_vec()
+    } else {
+        let mut v = Vec::new();
+        for f in &args.family {
+            match campaign::FAMILIES.iter().find(|x| **x == f.as_str()) {
+                Some(x) => v.push(*x),
+                None => {
+                    eprintln!(
+                        "fcc-campaign: --family {f}: expected one of {}",
+                        campaign::FAMILIES.join(", ")
+                    );
+                    return ExitCode::from(2);
+                }
+            }
+        }
+        v
+    };
     let t0 = std::time::Instant::now();
-    let out = campaign::run(args.per_family as usize, args.seed, args.long, threads);
+    let out = campaign::run_families(
+        &families,
+        args.per_family as usize,
+        args.seed,
+        args.long,
+        threads,
+    );
     let table = campaign::table(&out);
     say!("{table}");
     say!(
