@@ -45,6 +45,9 @@ struct Args {
     /// Fly only this family (repeatable; default: every family).
     #[arg(long, value_name = "FAMILY")]
     family: Vec<String>,
+    /// Also print every flight's figures, one line each (`FLIGHT family seed name=value …`).
+    #[arg(long)]
+    per_flight: bool,
     /// Also write the table here (Markdown).
     #[arg(long)]
     out: Option<std::path::PathBuf>,
@@ -90,6 +93,16 @@ fn main() -> ExitCode {
         args.long,
         threads,
     );
+    if args.per_flight {
+        for o in &out {
+            let f: Vec<String> = o
+                .figures
+                .iter()
+                .map(|(k, v)| format!("{k}={v:.3}"))
+                .collect();
+            say!("FLIGHT {} {} {}", o.family, o.seed, f.join(" "));
+        }
+    }
     let table = campaign::table(&out);
     say!("{table}");
     say!(
