@@ -145,6 +145,7 @@ mark "e2e phase 1 (two lanes beside the soak)"
 # - participant churn: 40 cycles of 20 Cyclone DDS participants joining and leaving the bridge,
 #   RSS growth ≤ 20 MB and flat over the second half (tests/e2e/churn.sh, ~75 s);
 # - the soak's short form started before the workspace tests (below the release builds).
+bg_start churn tests/e2e/churn.sh "$FCC_DDS_PYTHON"
 # --- lane 2 ----------------------------------------------------------------------------------------
 # The waiting cargo tests (above), then the full stack (fcc-sitl --link-pty ⇄ fcc-bridge ⇄
 # fcc-mission, started by fcc-launch) against the independent Cyclone DDS peer, in ONE

@@ -60,13 +60,23 @@ pub fn cdr_bytes<T: serde::Serialize>(m: &T) -> Vec<u8> {
     // Room for the common messages at once (sensor_msgs/Imu is 324 bytes): the serializer
     // writes field by field, and growing from 4 bytes cost a fifth of the recorder's
     // instructions in reallocations (callgrind of fcc-record-bench).
-    let mut v = Vec::with_capacity(CDR_START_CAPACITY);
+    cdr_into(Vec::with_capacity(CDR_START_CAPACITY), m)
+}
+
+/// [`cdr_bytes`] into a buffer that is reused (cleared first).
+fn cdr_into<T: serde::Serialize>(mut v: Vec<u8>, m: &T) -> Vec<u8> {
+    v.clear();
     v.extend_from_slice(&[0u8, 1, 0, 0]);
     if let Err(e) = cdr_encoding::to_writer::<T, byteorder::LittleEndian, _>(&mut v, m) {
         tracing::error!("CDR serialisation failed: {e}");
     }
     v
 }
+
+/// Message buffers the writer thread hands back for reuse, at most this many. Freed on the
+/// writer thread, each buffer malloc'd by the bridge's threads went back to their malloc arena
+/// under its lock: glibc's futex wait/wake on every message (`perf` of fcc-record-bench).
+const RECYCLED_BUFFERS: usize = 1024;
 
 /// Decode a CDR payload (with its 4-byte header) into `T`.
 pub fn from_cdr<T: serde::de::DeserializeOwned>(data: &[u8]) -> Option<T> {
@@ -169,6 +179,8 @@ struct TapInner {
     raw_in: Vec<u8>,
     raw_decoder: fcc_msgs::FrameDecoder,
     armed: Option<bool>,
+    /// Message buffers back from the writer thread ([`RECYCLED_BUFFERS`]).
+    recycled: Option<mpsc::Receiver<Vec<u8>>>,
 }
 
 impl Tap {
@@ -184,6 +196,7 @@ impl Tap {
                 raw_in: Vec::new(),
                 raw_decoder: fcc_msgs::FrameDecoder::new(),
                 armed: None,
+                recycled: None,
             }),
             tx: None,
             thread: Mutex::new(None),
@@ -199,7 +212,9 @@ impl Tap {
         }
         let (tx, rx) = mpsc::channel();
         let path = opts.path.clone();
+        let (recycle_tx, recycle_rx) = mpsc::sync_channel(RECYCLED_BUFFERS);
         let mut w = WriterThread::new(opts);
+        w.recycle = Some(recycle_tx);
         if !w.opts.on_arm {
             w.open();
         }
@@ -210,6 +225,7 @@ impl Tap {
             .ok()
             .expect("fresh Arc");
         t.tx = Some(tx);
+        t.inner.get_mut().expect("fresh mutex").recycled = Some(recycle_rx);
         t.thread = Mutex::new(Some(th));
         t.path = Some(path);
         Ok(Arc::new(t))
@@ -266,16 +282,21 @@ impl Tap {
             return;
         }
         let ch = self.channel_id(inner, topic, || channel_desc::<T>(topic, qos));
-        self.send_msg(ch, m, t_ns);
+        self.send_msg(inner, ch, m, t_ns);
     }
 
     /// One message on channel `ch` to the writer thread.
-    fn send_msg<T: serde::Serialize>(&self, ch: u16, m: &T, t_ns: i64) {
+    fn send_msg<T: serde::Serialize>(&self, inner: &mut TapInner, ch: u16, m: &T, t_ns: i64) {
         if let Some(tx) = &self.tx {
+            let buf = inner
+                .recycled
+                .as_ref()
+                .and_then(|r| r.try_recv().ok())
+                .unwrap_or_else(|| Vec::with_capacity(CDR_START_CAPACITY));
             let _ = tx.send(Ev::Msg {
                 ch,
                 t: t_ns.max(0) as u64,
-                data: cdr_bytes(m),
+                data: cdr_into(buf, m),
             });
         }
     }
@@ -354,7 +375,7 @@ impl Tap {
                 c
             }
         };
-        self.send_msg(ch, m, t_ns);
+        self.send_msg(g, ch, m, t_ns);
     }
 
     /// Bytes read from the MCU (any split): recorded frame by frame at each 0x00.
@@ -597,6 +618,8 @@ struct WriterThread {
     report: RecorderReport,
     /// Messages written per channel id (→ `report.recorded` at the end).
     written: Vec<u64>,
+    /// Written messages' buffers go back to the tap ([`RECYCLED_BUFFERS`]).
+    recycle: Option<mpsc::SyncSender<Vec<u8>>>,
 }
 
 impl WriterThread {
@@ -612,6 +635,7 @@ impl WriterThread {
             failed: false,
             report: RecorderReport::default(),
             written: Vec::new(),
+            recycle: None,
         }
     }
 
@@ -682,7 +706,7 @@ impl WriterThread {
         }
     }
 
-    fn on_msg(&mut self, ch: u16, t: u64, data: Vec<u8>) {
+    fn on_msg(&mut self, ch: u16, t: u64, data: &[u8]) {
         if !matches!(self.channels.get(ch as usize), Some(Some(_)))
             || self.failed
             || (self.opts.on_arm && !self.armed)
@@ -712,7 +736,7 @@ impl WriterThread {
             self.report.not_recorded += 1;
             return;
         };
-        if let Err(e) = bag.write(ch, desc, t, &data) {
+        if let Err(e) = bag.write(ch, desc, t, data) {
             self.report.not_recorded += 1;
             self.fail("write", err_text(&e));
             return;
@@ -789,7 +813,12 @@ impl WriterThread {
     fn handle(&mut self, ev: Ev, rx: &mpsc::Receiver<Ev>) -> bool {
         match ev {
             Ev::Channel(id, d) => self.add_desc(id, d),
-            Ev::Msg { ch, t, data } => self.on_msg(ch, t, data),
+            Ev::Msg { ch, t, data } => {
+                self.on_msg(ch, t, &data);
+                if let Some(r) = &self.recycle {
+                    let _ = r.try_send(data);
+                }
+            }
             Ev::Armed(a) => {
                 self.armed = a;
                 if self.opts.on_arm {
@@ -806,7 +835,7 @@ impl WriterThread {
                 // Whatever is still queued was sent before Finish: drain it first.
                 while let Ok(ev) = rx.try_recv() {
                     match ev {
-                        Ev::Msg { ch, t, data } => self.on_msg(ch, t, data),
+                        Ev::Msg { ch, t, data } => self.on_msg(ch, t, &data),
                         Ev::Channel(id, d) => self.add_desc(id, d),
                         _ => {}
                     }
