@@ -239,15 +239,14 @@ def main():
     print(f"=== RSS slope after warm-up (least squares; goal ≤ {a.goal_mb_h:g} MB/h each)")
     pick = lambda series, key, gen, t0: [(t, r) for t, r, g in series[key] if g == gen and t >= t0]  # noqa: E731
     window = {n: (n, 1, warm) for n in ["sitl", "relay", "mission"]}  # row → (series, generation, from t)
-    b1 = pick(samples, "bridge", 1, warm)
-    if b1 and b1[-1][0] - b1[0][0] >= 0.5 * warm:
-        window["bridge (1st, to the kill)"] = ("bridge", 1, warm)
-    b2 = pick(samples, "bridge", 2, (restart_t or 0.0) + warm)
-    if b2 and b2[-1][0] - b2[0][0] >= 0.5 * warm:
-        window["bridge (restarted)"] = ("bridge", 2, (restart_t or 0.0) + warm)
-    else:
-        print("  bridge (restarted): too little time after its warm-up for a slope (--kill-at late); "
-              "its losses are counted below")
+    # Each bridge instance gets a row when its span after its own warm-up is long enough.
+    for row, gen, since in [("bridge (1st, to the kill)", 1, warm),
+                            ("bridge (restarted)", 2, (restart_t or 0.0) + warm)]:
+        span = pick(samples, "bridge", gen, since)
+        if span and span[-1][0] - span[0][0] >= 0.5 * warm:
+            window[row] = ("bridge", gen, since)
+        else:
+            print(f"  {row}: too little time after its warm-up for a slope; its losses are counted below")
     if not any(k.startswith("bridge") for k in window):
         fails.append("bridge: no instance ran long enough after its warm-up for a slope")
     rows = [(n, pick(samples, *w)) for n, w in window.items()]

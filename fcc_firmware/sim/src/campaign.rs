@@ -99,6 +99,11 @@ pub const OPEN_CHECKS: [(&str, &[&str]); 2] = [
     ("gps_loss", &["touchdown_horiz_mps", "touchdown_tilt_deg"]),
 ];
 
+/// The family named `name` (one of [`FAMILIES`]).
+pub fn family(name: &str) -> Option<&'static str> {
+    FAMILIES.iter().copied().find(|f| *f == name)
+}
+
 /// Is `check` of a flight of `family` one the vehicle does not meet yet (not asserted)?
 pub fn is_open(family: &str, check: &str) -> bool {
     OPEN_CHECKS

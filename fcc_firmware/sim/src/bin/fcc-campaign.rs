@@ -72,8 +72,8 @@ fn main() -> ExitCode {
     } else {
         let mut v = Vec::new();
         for f in &args.family {
-            match campaign::FAMILIES.iter().find(|x| **x == f.as_str()) {
-                Some(x) => v.push(*x),
+            match campaign::family(f) {
+                Some(x) => v.push(x),
                 None => {
                     eprintln!(
                         "fcc-campaign: --family {f}: expected one of {}",
@@ -123,10 +123,9 @@ fn main() -> ExitCode {
 }
 
 fn fly_one(only: &str, csv: &std::path::Path, long: bool) -> ExitCode {
-    let parsed = only.split_once(':').and_then(|(f, s)| {
-        let fam = campaign::FAMILIES.iter().find(|x| **x == f)?;
-        Some((*fam, s.parse::<u64>().ok()?))
-    });
+    let parsed = only
+        .split_once(':')
+        .and_then(|(f, s)| Some((campaign::family(f)?, s.parse::<u64>().ok()?)));
     let Some((family, seed)) = parsed else {
         eprintln!(
             "fcc-campaign: --only {only}: expected FAMILY:SEED with FAMILY one of {}",
