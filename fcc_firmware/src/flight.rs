@@ -41,6 +41,11 @@ const LAND_LEVEL_HEIGHT_M: f32 = 0.15;
 /// drives the vehicle sideways near the ground is braked with the full tilt (sliding into the
 /// ground tips a vehicle over sooner than a tilted gear does), m/s.
 const LAND_LEVEL_MAX_SPEED_MPS: f32 = 0.4;
+/// LAND's last [`LAND_LEVEL_HEIGHT_M`], sliding faster than [`LAND_LEVEL_MAX_SPEED_MPS`]: the
+/// brake's tilt limit, deg. A gear meeting the ground at the full tilt limit (45°) while still
+/// sliding tips over (`hover` in 16 m/s + W20 30 kt, `tests/tests/safety.rs`: 0.84 m/s at
+/// 35.5°); the tip-over margin at 25° still holds to ≈ 0.85 m/s (`fcc_sim::truth`).
+const LAND_BRAKE_TILT_DEG: f32 = 25.0;
 /// LAND with GPS lost and the ground in the rangefinders' view: the final descent starts
 /// this high (sensor height above the ground, m; the gear stands at 0.25 m). Measured on
 /// `launch_configs/scenarios/gps_loss.yaml` (24 flights, 4 wind directions): 2.0 m (the usual
@@ -760,6 +765,7 @@ impl FlightCore {
         let slow = speed < LAND_LEVEL_MAX_SPEED_MPS || !nav.gps_ok;
         let level = self.mode == Mode::Land
             && ((self.touchdown_gate.committed()
+                && !self.touchdown_gate.unlevel()
                 && self.ground_usable(nav)
                 && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M
                 && slow)
@@ -767,8 +773,14 @@ impl FlightCore {
                 // ground contact).
                 || self.land.state() != LandState::Airborne);
         let l = self.params.limits;
+        let near_ground = self.mode == Mode::Land
+            && self.touchdown_gate.committed()
+            && self.ground_usable(nav)
+            && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M;
         if level {
             l.max_tilt_deg.min(LAND_LEVEL_TILT_DEG).to_radians()
+        } else if near_ground {
+            l.max_tilt_deg.min(LAND_BRAKE_TILT_DEG).to_radians()
         } else {
             l.max_tilt_deg.to_radians()
         }

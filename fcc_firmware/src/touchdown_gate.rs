@@ -25,7 +25,10 @@
 //! with a demand within the level limit and a speed within `k_last·ABORT_SPEED` commits without
 //! the calm time, and after [`LAST_CHANCE_S`] it commits whatever the wind (a vehicle hovering
 //! over its landing spot until the battery ends is worse); both are **forced** (never held
-//! again), and [`TouchdownGate::forced`] reports it.
+//! again), and [`TouchdownGate::forced`] reports it. A last-chance commit in a wind whose
+//! demand the level limit would clip is **unlevel** ([`TouchdownGate::unlevel`]): the vehicle
+//! cannot touch down level there without sliding with the wind, so it touches down holding its
+//! position, its tilt capped near the ground (flight.rs).
 //!
 //! ```text
 //!   clearance c = h_agl − h_on_ground;  d = max(tilt, |θ_cmd| unlimited);  v = |v_NE|
@@ -100,6 +103,7 @@ pub struct TouchdownGate {
     arrived: bool,
     committed: bool,
     forced: bool,
+    unlevel: bool,
 }
 
 impl TouchdownGate {
@@ -110,6 +114,7 @@ impl TouchdownGate {
             arrived: false,
             committed: false,
             forced: false,
+            unlevel: false,
         }
     }
 
@@ -163,6 +168,7 @@ impl TouchdownGate {
         } else if last_chance || self.wait_s >= LAST_CHANCE_S {
             self.committed = true;
             self.forced = true;
+            self.unlevel = !last_chance && demand_rad > LEVEL_TILT_DEG.to_radians();
         }
         if self.committed {
             GateAction::Descend
@@ -180,6 +186,15 @@ impl TouchdownGate {
     pub fn commit_blind(&mut self) {
         self.committed = true;
         self.forced = true;
+    }
+
+    /// Committed at [`LAST_CHANCE_S`] with a tilt demand beyond [`LEVEL_TILT_DEG`]: a wind the
+    /// vehicle cannot touch down level in (the wind limit's landing, beyond the vehicle's
+    /// authority). Leveled, it would slide with the wind into the ground (`hover` in 16 m/s
+    /// + W20 30 kt: 1.3 m/s, tipped over); it touches down holding its position instead, the
+    /// tilt capped by flight.rs.
+    pub fn unlevel(&self) -> bool {
+        self.unlevel
     }
 
     /// The final descent is committed (the level tilt limit applies).
@@ -237,6 +252,24 @@ mod tests {
         run(&mut g, 0.1, GATE_CLEARANCE_M + ARRIVED_M, 20.0, 1.0);
         run(&mut g, 0.1, 0.3, 20.0, 1.0);
         assert!((g.wait_s() - 0.2).abs() < 0.01, "{}", g.wait_s());
+    }
+
+    #[test]
+    fn the_last_chance_in_a_wind_beyond_the_level_limit_is_unlevel() {
+        // 40 s of a gust the level limit would clip: committed, forced, unlevel.
+        let mut g = waited(LAST_CHANCE_S - 0.01);
+        assert!(!g.committed());
+        run(&mut g, 0.05, 0.15, 20.0, 1.0);
+        assert!(g.committed() && g.forced() && g.unlevel());
+        assert_eq!(run(&mut g, 0.5, 0.1, 20.0, 1.0), GateAction::Descend);
+        // The 30-s path commits only within the level limit: level.
+        let mut g = waited(MAX_WAIT_S - 0.01);
+        run(&mut g, 0.05, 0.15, LEVEL_TILT_DEG - 0.5, 0.0);
+        assert!(g.committed() && g.forced() && !g.unlevel());
+        // A lull: level.
+        let mut g = TouchdownGate::new();
+        run(&mut g, 1.0, 0.15, 0.0, 0.0);
+        assert!(g.committed() && !g.forced() && !g.unlevel());
     }
 
     #[test]

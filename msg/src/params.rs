@@ -22,7 +22,10 @@ macro_rules! for_each_mcu_param {
         $m! {
             // id CONST                section.field                unit    default min   max   doc
             1, MAX_HORIZ_SPEED_MPS, limits.max_horiz_speed_mps, "m/s", 8.0, 0.1, 30.0, "Horizontal speed limit of velocity setpoints and the pilot's sticks";
-            2, MAX_TILT_DEG, limits.max_tilt_deg, "deg", 35.0, 5.0, 60.0, "Tilt limit of the attitude command";
+            // 45° (PX4's MPC_TILTMAX_AIR default): at 35° the gale hold (8 m/s + W20 30 kt)
+            // ran out of authority in gusts (excursions to 3–5 m); with T/W 2.2 (8 × 12 N for
+            // 4.5 kg) 45° keeps 1/cos 45° = 1.41× hover thrust, 65 % of the maximum.
+            2, MAX_TILT_DEG, limits.max_tilt_deg, "deg", 45.0, 5.0, 60.0, "Tilt limit of the attitude command";
             3, CROSS_TRACK_K_PER_S, control.cross_track_k_per_s, "1/s", 2.0, 0.0, 5.0, "Cross-track compensation gain K_ct (paper A eq. 9)";
             4, VEL_P_PER_S, control.vel_p_per_s, "1/s", 3.0, 0.05, 10.0, "Horizontal velocity loop: acceleration command per m/s of error";
             5, MAX_CLIMB_MPS, limits.max_climb_mps, "m/s", 2.5, 0.1, 10.0, "Climb speed limit";

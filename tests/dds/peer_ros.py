@@ -13,6 +13,7 @@ usage: peer_ros.py --mcu-log FILE [--ns /uav1] [--node fcc_bridge]
 import argparse
 import json
 import math
+import os
 import sys
 import time
 
@@ -25,6 +26,9 @@ from cyclonedds.util import duration
 
 import ros_types as rt
 import ros_srv_types as st
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "lib"))
+import mcu_params  # noqa: E402
 
 RELIABLE = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepLast(50))
 TF_STATIC_QOS = Qos(Policy.Reliability.Reliable(duration(seconds=1)),
@@ -141,8 +145,9 @@ def main():
     v = get("ttl_ms", "limits.max_tilt_deg", "limits.max_horiz_speed_mps", "use_sim_time")
     c.check("get_parameters: ttl_ms integer 300", v and v[0].type == P_INT and v[0].integer_value == 300,
             v and v[0])
-    c.check("get_parameters: MCU's max_tilt_deg 35 (the firmware default, read from the MCU)",
-            v and v[1].type == P_DOUBLE and abs(v[1].double_value - 35.0) < 1e-6, v and v[1])
+    tilt_default = mcu_params.default("limits.max_tilt_deg")
+    c.check(f"get_parameters: MCU's max_tilt_deg {tilt_default:g} (the firmware default, read from the MCU)",
+            v and v[1].type == P_DOUBLE and abs(v[1].double_value - tilt_default) < 1e-6, v and v[1])
     c.check("--params-file value for the MCU (max_horiz_speed_mps 6)",
             v and abs(v[2].double_value - 6.0) < 1e-6, v and v[2])
     c.check("use_sim_time true", v and v[3].type == P_BOOL and v[3].bool_value, v and v[3])

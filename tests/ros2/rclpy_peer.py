@@ -32,6 +32,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "lib"))
 
+import mcu_params  # noqa: E402
 import truth  # noqa: E402
 from truth import Checks, pct, stamp_of  # noqa: E402
 
@@ -539,8 +540,9 @@ def check_params_fly(c, peer, node):
             {"ttl_ms", "max_speed_mps", "ping_period_ms", "clock_source", "limits.max_tilt_deg"} <= set(names), len(names))
     g = param_get(peer, node, BRIDGE, ["ttl_ms", "max_speed_mps", "limits.max_tilt_deg", "clock_source"])
     print(f"ros2 param get: {g}", flush=True)
-    c.check("param get: defaults (ttl_ms 300, max_speed_mps 20.0, limits.max_tilt_deg 35.0, clock_source sync)",
-            g == {"ttl_ms": 300, "max_speed_mps": 20.0, "limits.max_tilt_deg": 35.0, "clock_source": "sync"}, g)
+    tilt = mcu_params.default("limits.max_tilt_deg")
+    c.check(f"param get: defaults (ttl_ms 300, max_speed_mps 20.0, limits.max_tilt_deg {tilt}, clock_source sync)",
+            g == {"ttl_ms": 300, "max_speed_mps": 20.0, "limits.max_tilt_deg": tilt, "clock_source": "sync"}, g)
     # (name, integer?, from, to, read_only)
     want = [("ttl_ms", True, 50, 3000, False), ("max_speed_mps", False, 0.1, 30.0, False),
             ("ping_period_ms", True, 100, 10000, True), ("limits.max_tilt_deg", False, 5.0, 60.0, False)]
@@ -577,7 +579,7 @@ def check_params_fly(c, peer, node):
     ok, why = param_set(peer, node, BRIDGE, "ping_period_ms", 500)
     c.check("param set ping_period_ms (read-only after start): refused", not ok, why)
     param_set(peer, node, BRIDGE, "ttl_ms", 300)
-    param_set(peer, node, BRIDGE, "limits.max_tilt_deg", 35.0)
+    param_set(peer, node, BRIDGE, "limits.max_tilt_deg", tilt)
 
 
 def check_link_rates(c, peer, node):

@@ -487,8 +487,7 @@ impl Sim {
         } else {
             let p = self.body.state.pos_ned_m;
             let height = (self.board.terrain.ground_down_at(p.x, p.y) - p.z).max(0.0);
-            let air = (self.body.state.vel_ned_mps - self.wind_ned).norm();
-            self.wind_ned = self.wind.step(height, air, dt);
+            self.wind_ned = self.wind.step(height, self.body.state.vel_ned_mps, dt);
             let sub = dt / PHYSICS_SUBSTEPS as f64;
             let p = self.body.state.pos_ned_m;
             let ground_down =

@@ -21,8 +21,18 @@
 //! medium/high-altitude model applies, with L = 1750 ft); we clamp h to 1000 ft. As h → 0 the
 //! scale lengths vanish and the filters become singular, so h is also clamped to ≥ 3 ft (a floor
 //! chosen for the simulator — a multirotor sitting on the ground is outside the model's range
-//! anyway). `V = max(airspeed, mean wind, 1 m/s)` keeps the frozen-field time constants finite
-//! in hover.
+//! anyway).
+//!
+//! Convection speed: `V` is the vehicle's speed through the frozen turbulence field, i.e.
+//! relative to the **mean** air at its own height, `V = max(|v − w_mean(h)|, 1 m/s)` (Taylor's
+//! frozen-turbulence hypothesis: the field moves with the local mean wind; in hover it sweeps
+//! past at the mean wind speed, as rotorcraft turbulence models convect it — the 1 m/s floor
+//! keeps the time constants finite in calm hover). The gusts are not part of `V` (the spec's
+//! `V` is the mean airspeed the spatial spectrum is converted with), and the mean is the
+//! shear law's at `h`, not the 20-ft value: near the ground the air, and with it the gust
+//! pattern, moves slower (at 0.4 m about 0.44× the 20-ft wind), so a hovering vehicle's gusts
+//! there last longer, not shorter. Until 2026-11-28 `V` was `max(airspeed, 20-ft mean, 1)`,
+//! which swept the ground-level field past at the 20-ft speed plus the gust itself.
 //!
 //! Axes: u along the mean-wind direction (the way the air moves), v horizontal and 90° to the
 //! right of u (seen from above), w down; rotated into NED. With no mean wind, u points along
@@ -176,14 +186,15 @@ impl Wind {
     }
 
     /// Advance by `dt_s` and return the wind velocity (mean + turbulence), NED, m/s.
-    /// `height_m` is height above ground, `airspeed_mps` the vehicle's airspeed.
-    pub fn step(&mut self, height_m: f64, airspeed_mps: f64, dt_s: f64) -> Vector3<f64> {
+    /// `height_m` is height above ground, `vel_ned_mps` the vehicle's velocity over the ground.
+    pub fn step(&mut self, height_m: f64, vel_ned_mps: Vector3<f64>, dt_s: f64) -> Vector3<f64> {
         let mean = self.mean_ned_mps() * shear_factor(height_m, self.params.shear_z0_m);
         if self.params.w20_kt <= 0.0 || dt_s.is_nan() || dt_s <= 0.0 {
             self.last_turbulence_uvw = Vector3::zeros();
             return mean;
         }
-        let v = airspeed_mps.max(self.params.mean_speed_mps).max(1.0);
+        // Speed through the frozen field: relative to the mean air at this height.
+        let v = (vel_ned_mps - mean).norm().max(1.0);
         let h_m = height_m.max(DRYDEN_MIN_HEIGHT_FT / FT_PER_M);
         let c = self.coeffs_for(v, h_m, dt_s);
 
@@ -238,7 +249,7 @@ mod tests {
             1,
         );
         for _ in 0..100 {
-            let v = w.step(10.0, 0.0, 0.002);
+            let v = w.step(10.0, Vector3::zeros(), 0.002);
             assert_eq!(v, Vector3::new(-5.0, 0.0, 0.0)); // from north → towards south
         }
         let mut w = Wind::new(
@@ -250,7 +261,7 @@ mod tests {
             },
             1,
         );
-        let v = w.step(10.0, 0.0, 0.002);
+        let v = w.step(10.0, Vector3::zeros(), 0.002);
         assert!((v - Vector3::new(0.0, 4.0, 0.0)).norm() < 1e-9, "{v:?}"); // from west → east
     }
 
@@ -274,7 +285,7 @@ mod tests {
             shear_z0_m: 0.0,
         };
         let mut w = Wind::new(p.clone(), 42);
-        let (h, v, dt) = (10.0, 15.0, 0.01);
+        let (h, v, dt) = (10.0, Vector3::new(15.0, 0.0, 0.0), 0.01);
         let (sigma, l) = dryden_low_altitude(h, p.w20_kt);
         let n = 400_000; // 4000 s ≈ 900 correlation times of u
         let mut us = Vec::with_capacity(n);
@@ -306,6 +317,38 @@ mod tests {
         );
     }
 
+    /// Near the ground a hovering vehicle's gusts decorrelate at the local mean wind's pace
+    /// (the frozen field moves with the sheared mean), not the 20-ft wind's: the u
+    /// autocorrelation at lag τ is exp(−τ·V/L_u) with V = the mean at that height.
+    #[test]
+    fn gusts_near_the_ground_move_with_the_local_mean_wind() {
+        let p = WindParams {
+            mean_speed_mps: 7.0,
+            from_direction_deg: 0.0,
+            w20_kt: W20_MODERATE_KT,
+            shear_z0_m: SHEAR_Z0_CAT_C_M,
+        };
+        let (h, dt, lag_s) = (0.5, 0.01, 0.5);
+        let mut w = Wind::new(p.clone(), 3);
+        let us: Vec<f64> = (0..600_000)
+            .map(|_| {
+                w.step(h, Vector3::zeros(), dt);
+                w.last_turbulence_uvw_mps().x
+            })
+            .collect();
+        let k = (lag_s / dt) as usize;
+        let m = us.iter().sum::<f64>() / us.len() as f64;
+        let var = us.iter().map(|u| (u - m) * (u - m)).sum::<f64>();
+        let cov = us.windows(k + 1).map(|x| (x[0] - m) * (x[k] - m)).sum::<f64>();
+        let rho = cov / var;
+        let (_, l) = dryden_low_altitude(h, p.w20_kt);
+        let v_local = p.mean_speed_mps * shear_factor(h, p.shear_z0_m);
+        let expect = (-lag_s * v_local / l[0]).exp();
+        let at_20ft_speed = (-lag_s * p.mean_speed_mps / l[0]).exp();
+        assert!((rho - expect).abs() < 0.05, "ρ {rho} vs {expect}");
+        assert!(rho - at_20ft_speed > 0.1, "ρ {rho} vs 20-ft {at_20ft_speed}");
+    }
+
     #[test]
     fn deterministic_and_rotated() {
         let p = WindParams {
@@ -319,9 +362,9 @@ mod tests {
         let mut c = Wind::new(p, 8);
         let mut diff = 0.0;
         for _ in 0..1000 {
-            let x = a.step(5.0, 1.0, 0.002);
-            assert_eq!(x, b.step(5.0, 1.0, 0.002));
-            diff += (x - c.step(5.0, 1.0, 0.002)).norm();
+            let x = a.step(5.0, Vector3::zeros(), 0.002);
+            assert_eq!(x, b.step(5.0, Vector3::zeros(), 0.002));
+            diff += (x - c.step(5.0, Vector3::zeros(), 0.002)).norm();
             // from east → u towards west (−E); v to the right of west = north.
             let t = a.last_turbulence_uvw_mps();
             let m = Vector3::new(0.0, -2.0, 0.0);
