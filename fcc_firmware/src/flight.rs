@@ -41,8 +41,8 @@ const LAND_LEVEL_HEIGHT_M: f32 = 0.15;
 /// drives the vehicle sideways near the ground is braked with the full tilt (sliding into the
 /// ground tips a vehicle over sooner than a tilted gear does), m/s.
 const LAND_LEVEL_MAX_SPEED_MPS: f32 = 0.4;
-/// LAND's last [`LAND_LEVEL_HEIGHT_M`], sliding faster than [`LAND_LEVEL_MAX_SPEED_MPS`]: the
-/// brake's tilt limit, deg. A gear meeting the ground at the full tilt limit (45°) while still
+/// LAND's committed last [`LAND_LEVEL_HEIGHT_M`] when not levelled (sliding faster than
+/// [`LAND_LEVEL_MAX_SPEED_MPS`], or the gate's unlevel touchdown): the tilt limit, deg. A gear meeting the ground at the full tilt limit (45°) while still
 /// sliding tips over (`hover` in 16 m/s + W20 30 kt, `tests/tests/safety.rs`: 0.84 m/s at
 /// 35.5°); the tip-over margin at 25° still holds to ≈ 0.85 m/s (`fcc_sim::truth`).
 const LAND_BRAKE_TILT_DEG: f32 = 25.0;
@@ -763,20 +763,17 @@ impl FlightCore {
         // The speed exception needs a speed over the ground: dead-reckoned (GPS lost), the
         // estimate drifts, and braking a slide it only imagines leans the vehicle over.
         let slow = speed < LAND_LEVEL_MAX_SPEED_MPS || !nav.gps_ok;
-        let level = self.mode == Mode::Land
-            && ((self.touchdown_gate.committed()
-                && !self.touchdown_gate.unlevel()
-                && self.ground_usable(nav)
-                && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M
-                && slow)
-                // On the gear: a lean there tips the vehicle over (PX4 levels the thrust on
-                // ground contact).
-                || self.land.state() != LandState::Airborne);
-        let l = self.params.limits;
+        // The committed descent's last LAND_LEVEL_HEIGHT_M.
         let near_ground = self.mode == Mode::Land
             && self.touchdown_gate.committed()
             && self.ground_usable(nav)
             && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M;
+        let level = self.mode == Mode::Land
+            && ((near_ground && !self.touchdown_gate.unlevel() && slow)
+                // On the gear: a lean there tips the vehicle over (PX4 levels the thrust on
+                // ground contact).
+                || self.land.state() != LandState::Airborne);
+        let l = self.params.limits;
         if level {
             l.max_tilt_deg.min(LAND_LEVEL_TILT_DEG).to_radians()
         } else if near_ground {

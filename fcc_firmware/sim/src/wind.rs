@@ -339,14 +339,20 @@ mod tests {
         let k = (lag_s / dt) as usize;
         let m = us.iter().sum::<f64>() / us.len() as f64;
         let var = us.iter().map(|u| (u - m) * (u - m)).sum::<f64>();
-        let cov = us.windows(k + 1).map(|x| (x[0] - m) * (x[k] - m)).sum::<f64>();
+        let cov = us
+            .windows(k + 1)
+            .map(|x| (x[0] - m) * (x[k] - m))
+            .sum::<f64>();
         let rho = cov / var;
         let (_, l) = dryden_low_altitude(h, p.w20_kt);
         let v_local = p.mean_speed_mps * shear_factor(h, p.shear_z0_m);
         let expect = (-lag_s * v_local / l[0]).exp();
         let at_20ft_speed = (-lag_s * p.mean_speed_mps / l[0]).exp();
         assert!((rho - expect).abs() < 0.05, "ρ {rho} vs {expect}");
-        assert!(rho - at_20ft_speed > 0.1, "ρ {rho} vs 20-ft {at_20ft_speed}");
+        assert!(
+            rho - at_20ft_speed > 0.1,
+            "ρ {rho} vs 20-ft {at_20ft_speed}"
+        );
     }
 
     #[test]
