@@ -29,9 +29,10 @@ const TILT_CHECK_EVERY: u8 = 10;
 /// air, seed 2, 2 s after the loss, 0.78° → 0.47° (0.5 s: 0.56°); campaign family `gps_loss`,
 /// touchdown horizontal worst 0.83 → 0.61 m/s, every other family unchanged.
 const GPS_ACCEL_MAX_AGE_S: f32 = 0.3;
-/// After the GPS is lost in flight the tilt is held on the gyro alone for this long, s (a
-/// GPS-lost LAND from 8 m touches down within ≈ 8 s); then the accelerometer corrects it again
-/// (a longer descent would otherwise integrate the gyro's residual bias). Campaign family
+/// Once the GPS-differenced acceleration is stale ([`GPS_ACCEL_MAX_AGE_S`] after the last GPS
+/// velocity) in flight, the tilt is held on the gyro alone until the last GPS fix is this old,
+/// s (a GPS-lost LAND from 8 m touches down within ≈ 8 s); then the accelerometer corrects it
+/// again (a longer descent would otherwise integrate the gyro's residual bias). Campaign family
 /// `gps_loss` (`fcc-campaign --per-family 72 --long`): touchdown horizontal worst 0.50 → 0.43
 /// m/s, 8 → 5 landings above 0.3 m/s; the drift from the loss to contact p95 1.05 → 0.89 m.
 const GYRO_ONLY_TILT_MAX_S: f32 = 20.0;
@@ -193,16 +194,26 @@ impl Navigator {
         }
     }
 
-    /// Whether the tilt is held on the gyro alone: in flight, GPS lost less than
-    /// [`GYRO_ONLY_TILT_MAX_S`] ago. Without the GPS-differenced acceleration every gust
-    /// acceleration the accelerometer reads would pull the tilt, and the dead-reckoned velocity
-    /// integrates the tilt error (g·δ); the calibrated gyro drifts far less over a landing.
+    /// Whether the tilt is held on the gyro alone: in flight, with the GPS-differenced
+    /// acceleration no longer compensating the accelerometer (GPS lost, or its last velocity
+    /// older than [`GPS_ACCEL_MAX_AGE_S`]), the last GPS fix younger than
+    /// [`GYRO_ONLY_TILT_MAX_S`]. Without that compensation every gust acceleration the
+    /// accelerometer reads would pull the tilt, and the dead-reckoned velocity integrates the
+    /// tilt error (g·δ); the calibrated gyro drifts far less over a landing. From the stale
+    /// compensation, not from the GPS timeout (1 s): in between the gusts pulled the tilt too
+    /// (campaign family `gps_loss`, touchdowns beyond 0.3 m/s in seed sets 1000 / 3000 / 5000:
+    /// 1 / 2 / 9 → 0 / 2 / 8).
     fn gyro_only_tilt(&self, now_us: u64, on_ground_disarmed: bool) -> bool {
+        let age_s = |t: u64| now_us.saturating_sub(t) as f32 * 1e-6;
+        let stale = !self.state.gps_ok
+            || self
+                .last_gps_vel
+                .is_some_and(|(t, _)| age_s(t) > GPS_ACCEL_MAX_AGE_S);
         !on_ground_disarmed
-            && !self.state.gps_ok
+            && stale
             && self
                 .last_gps_us
-                .is_some_and(|t| now_us.saturating_sub(t) as f32 * 1e-6 <= GYRO_ONLY_TILT_MAX_S)
+                .is_some_and(|t| age_s(t) <= GYRO_ONLY_TILT_MAX_S)
     }
 
     pub fn home(&self) -> Option<Lla> {
