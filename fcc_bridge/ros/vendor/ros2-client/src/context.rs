@@ -321,6 +321,20 @@ impl Context {
   pub(crate) fn ros_discovery_topic(&self) -> Topic {
     self.inner.lock().unwrap().ros_discovery_topic.clone()
   }
+
+  /// fcc (vendored): a remote reader matched `local_writer`; if that is this
+  /// participant's `ros_discovery_info` writer, publish the node list again,
+  /// as a live sample to every matched reader. A reader that matched after the
+  /// last update otherwise depends on the transient-local history alone, and
+  /// a Jazzy rclpy peer that joined before the nodes were created sometimes
+  /// never listed them (its graph stayed without our nodes for 20 s while
+  /// their topics' data arrived).
+  pub(crate) fn remote_reader_matched(&self, local_writer: GUID) {
+    let inner = self.inner.lock().unwrap();
+    if inner.node_writer.guid() == local_writer {
+      inner.broadcast_node_infos();
+    }
+  }
 }
 
 struct ContextInner {

@@ -428,6 +428,9 @@ impl Spinner {
           }
           let graph_event = match dp_status_event {
             DomainParticipantStatusEvent::RemoteReaderMatched { local_writer, remote_reader } => {
+              // fcc (vendored): a new reader of our ros_discovery_info gets the node
+              // list as a live sample too.
+              self.ros_context.remote_reader_matched(local_writer);
               self.writers_to_remote_readers.lock().unwrap()
                 .entry(local_writer)
                 .and_modify(|s| {s.insert(remote_reader);} )
