@@ -29,6 +29,9 @@ const TILT_CHECK_EVERY: u8 = 10;
 /// air, seed 2, 2 s after the loss, 0.78° → 0.47° (0.5 s: 0.56°); campaign family `gps_loss`,
 /// touchdown horizontal worst 0.83 → 0.61 m/s, every other family unchanged.
 const GPS_ACCEL_MAX_AGE_S: f32 = 0.3;
+/// [`GPS_ACCEL_MAX_AGE_S`] in µs: the per-step age checks compare integers (a u64 → f32
+/// conversion is a library call on the Cortex-M4F).
+const GPS_ACCEL_MAX_AGE_US: u64 = (GPS_ACCEL_MAX_AGE_S * 1e6) as u64;
 /// Once the GPS-differenced acceleration is stale ([`GPS_ACCEL_MAX_AGE_S`] after the last GPS
 /// velocity) in flight, the tilt is held on the gyro alone until the last GPS fix is this old,
 /// s (a GPS-lost LAND from 8 m touches down within ≈ 8 s); then the accelerometer corrects it
@@ -36,6 +39,8 @@ const GPS_ACCEL_MAX_AGE_S: f32 = 0.3;
 /// `gps_loss` (`fcc-campaign --per-family 72 --long`): touchdown horizontal worst 0.50 → 0.43
 /// m/s, 8 → 5 landings above 0.3 m/s; the drift from the loss to contact p95 1.05 → 0.89 m.
 const GYRO_ONLY_TILT_MAX_S: f32 = 20.0;
+/// [`GYRO_ONLY_TILT_MAX_S`] in µs.
+const GYRO_ONLY_TILT_MAX_US: u64 = (GYRO_ONLY_TILT_MAX_S * 1e6) as u64;
 /// A fused ground height with a larger variance than this does not aid the height, m².
 const AID_MAX_VAR_M2: f32 = 0.05;
 
@@ -184,9 +189,9 @@ impl Navigator {
     /// force before the tilt correction: the smoothed GPS-differenced acceleration while GPS
     /// velocities arrive (the last one at most [`GPS_ACCEL_MAX_AGE_S`] old), else zero.
     pub fn tilt_accel_comp_ned_mps2(&self) -> [f32; 3] {
-        let fresh = self.last_gps_vel.is_some_and(|(t, _)| {
-            self.state.t_us.saturating_sub(t) as f32 * 1e-6 <= GPS_ACCEL_MAX_AGE_S
-        });
+        let fresh = self
+            .last_gps_vel
+            .is_some_and(|(t, _)| self.state.t_us.saturating_sub(t) <= GPS_ACCEL_MAX_AGE_US);
         if self.state.gps_ok && fresh {
             self.gps_accel_ned_mps2
         } else {
@@ -204,16 +209,15 @@ impl Navigator {
     /// (campaign family `gps_loss`, touchdowns beyond 0.3 m/s in seed sets 1000 / 3000 / 5000:
     /// 1 / 2 / 9 → 0 / 2 / 8).
     fn gyro_only_tilt(&self, now_us: u64, on_ground_disarmed: bool) -> bool {
-        let age_s = |t: u64| now_us.saturating_sub(t) as f32 * 1e-6;
-        let stale = !self.state.gps_ok
-            || self
-                .last_gps_vel
-                .is_some_and(|(t, _)| age_s(t) > GPS_ACCEL_MAX_AGE_S);
+        let age_us = |t: u64| now_us.saturating_sub(t);
         !on_ground_disarmed
-            && stale
+            && (!self.state.gps_ok
+                || self
+                    .last_gps_vel
+                    .is_some_and(|(t, _)| age_us(t) > GPS_ACCEL_MAX_AGE_US))
             && self
                 .last_gps_us
-                .is_some_and(|t| age_s(t) <= GYRO_ONLY_TILT_MAX_S)
+                .is_some_and(|t| age_us(t) <= GYRO_ONLY_TILT_MAX_US)
     }
 
     pub fn home(&self) -> Option<Lla> {
