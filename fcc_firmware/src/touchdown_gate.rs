@@ -51,7 +51,7 @@
 //! between "descend" just above it and "climb" just below it that made the vehicle bob ±0.3 m/s
 //! at the gate.
 //!
-//! Measured on the simulator's truth (504-flight campaign, `fcc-campaign --per-family 72
+//! Measured on the simulator's truth (576-flight campaign, `fcc-campaign --per-family 72
 //! --long`): see BENCHMARKS.md. Pure logic, time passed in (`dt_s`).
 
 /// Gear clearance at which the final descent waits, m (0.4 s at the final descent speed: the
