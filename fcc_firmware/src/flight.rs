@@ -42,9 +42,10 @@ const LAND_LEVEL_HEIGHT_M: f32 = 0.15;
 /// ground tips a vehicle over sooner than a tilted gear does), m/s.
 const LAND_LEVEL_MAX_SPEED_MPS: f32 = 0.4;
 /// LAND's committed last [`LAND_LEVEL_HEIGHT_M`] when not levelled (sliding faster than
-/// [`LAND_LEVEL_MAX_SPEED_MPS`], or the gate's unlevel touchdown): the tilt limit, deg. A gear meeting the ground at the full tilt limit (45°) while still
-/// sliding tips over (`hover` in 16 m/s + W20 30 kt, `tests/tests/safety.rs`: 0.84 m/s at
-/// 35.5°); the tip-over margin at 25° still holds to ≈ 0.85 m/s (`fcc_sim::truth`).
+/// [`LAND_LEVEL_MAX_SPEED_MPS`], or the gate's unlevel touchdown): the tilt limit, deg. A gear
+/// meeting the ground at the full tilt limit (45°) while still sliding tips over (`hover` in
+/// 16 m/s + W20 30 kt, `tests/tests/safety.rs`: 0.84 m/s at 35.5°); the tip-over margin at 25°
+/// still holds to ≈ 0.85 m/s (`fcc_sim::truth`).
 const LAND_BRAKE_TILT_DEG: f32 = 25.0;
 /// LAND with GPS lost and the ground in the rangefinders' view: the final descent starts
 /// this high (sensor height above the ground, m; the gear stands at 0.25 m). Measured on
@@ -56,10 +57,10 @@ const GPS_LOST_SLOW_ALT_M: f32 = 0.6;
 const LAND_LEVEL_TILT_DEG: f32 = crate::touchdown_gate::LEVEL_TILT_DEG;
 /// Velocity mode: command reduction per m/s of estimated speed over the limit. The term raises
 /// the velocity loop's gain along the velocity above the limit: at 2.0 a cruise commanded at
-/// 7.9 of 8 m/s in gusts fell into a limit cycle (the tilt swinging 4° ↔ 36° every 0.7 s; campaign
-/// family `velocity`, `cruise_tilt_wobble_deg` worst 3.8–3.9° against 1.3° median), at 1.0 it
-/// wobbles 2.4° at worst while the true speed stays within 4.6 % of the limit (2.0: 4.6 %; 0.5:
-/// 5.1 %; 0: 6.0 %; seed sets 1000 / 3000 / 5000).
+/// 7.9 of 8 m/s in gusts fell into a limit cycle (the tilt swinging 4° ↔ 36° every 0.7 s;
+/// campaign family `velocity`, `cruise_tilt_wobble_deg` worst 3.8–3.9° against 1.3° median),
+/// at 1.0 it wobbles 2.4° at worst while the true speed stays within 4.6 % of the limit (2.0:
+/// 4.1–4.6 %; 0.5: 5.1 %; 0: 6.0 %; seed sets 1000 / 3000 / 5000).
 const SPEED_LIMIT_GAIN: f32 = 1.0;
 /// Velocity mode: largest rate of change of the horizontal velocity command, m/s².
 const VEL_SLEW_MPS2: f32 = 2.0;

@@ -17,6 +17,7 @@
 //! failures but not asserted: the vehicle does not meet them yet (the issue stays open on them).
 
 use fcc_sim::campaign;
+use fcc_sim::scenario::FlightPlan;
 
 #[test]
 fn short_campaign_on_truth() {
@@ -57,13 +58,7 @@ fn velocity_at_the_limit_holds_without_a_limit_cycle() {
     let fast: Vec<_> = (1000u64..)
         .map(|seed| campaign::generate("velocity", seed, false))
         .filter(|f| {
-            let v: f64 = f
-                .what
-                .split(' ')
-                .next()
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(0.0);
-            v >= 7.8
+            matches!(f.scenario.flight, FlightPlan::Velocity { speed_mps, .. } if speed_mps >= 7.8)
         })
         .take(3)
         .collect();

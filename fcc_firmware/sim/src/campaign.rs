@@ -485,25 +485,18 @@ const CRUISE_WOBBLE_MAX_DEG: f64 = 3.0;
 /// attitude's fast swings (a limit cycle, or the turbulence's buffeting), not the slow lean
 /// into the wind around the circle.
 fn cruise_tilt_wobble_deg(log: &FlightLog) -> f64 {
-    use super::log::PlanPhase;
-    let pts: Vec<(f64, f64)> = log
-        .samples
-        .iter()
-        .filter(|s| matches!(s.plan, PlanPhase::Cruise { .. }) && s.armed)
-        .map(|s| {
-            let (r, p) = (s.true_euler_rad[0], s.true_euler_rad[1]);
-            (
-                s.t_s,
-                (r.cos() * p.cos()).clamp(-1.0, 1.0).acos().to_degrees(),
-            )
-        })
+    let pts: Vec<(f64, f64)> = cruise_samples(log)
+        .map(|s| (s.t_s, true_tilt_deg(s)))
         .collect();
+    if pts.is_empty() {
+        return f64::NAN;
+    }
     // Prefix sums for the moving mean over [t − 1 s, t + 1 s].
     let mut prefix = vec![0.0f64; pts.len() + 1];
     for (i, (_, v)) in pts.iter().enumerate() {
         prefix[i + 1] = prefix[i] + v;
     }
-    let (mut lo, mut hi, mut sum_sq, mut n) = (0usize, 0usize, 0.0f64, 0usize);
+    let (mut lo, mut hi, mut sum_sq) = (0usize, 0usize, 0.0f64);
     for &(t, v) in &pts {
         while pts[lo].0 < t - 1.0 {
             lo += 1;
@@ -513,30 +506,33 @@ fn cruise_tilt_wobble_deg(log: &FlightLog) -> f64 {
         }
         let mean = (prefix[hi] - prefix[lo]) / (hi - lo) as f64;
         sum_sq += (v - mean) * (v - mean);
-        n += 1;
     }
-    if n == 0 {
-        f64::NAN
-    } else {
-        (sum_sq / n as f64).sqrt()
-    }
+    (sum_sq / pts.len() as f64).sqrt()
+}
+
+/// The armed samples of the velocity plan's cruise.
+fn cruise_samples(log: &FlightLog) -> impl Iterator<Item = &super::log::LogSample> {
+    use super::log::PlanPhase;
+    log.samples
+        .iter()
+        .filter(|s| matches!(s.plan, PlanPhase::Cruise { .. }) && s.armed)
+}
+
+/// The true tilt (angle of the body z axis from the vertical), deg.
+fn true_tilt_deg(s: &super::log::LogSample) -> f64 {
+    let (r, p) = (s.true_euler_rad[0], s.true_euler_rad[1]);
+    (r.cos() * p.cos()).clamp(-1.0, 1.0).acos().to_degrees()
 }
 
 /// Velocity cruise, truth: max |alt − commanded|, max horizontal speed, max tilt (deg).
 fn velocity_truth(log: &FlightLog) -> [f64; 3] {
-    use super::log::PlanPhase;
     let mut m = [0.0f64; 3];
     let start = log.truth.start_down_m;
     let cmd = log.commanded_alt_m.unwrap_or(0.0);
-    for s in log
-        .samples
-        .iter()
-        .filter(|s| matches!(s.plan, PlanPhase::Cruise { .. }) && s.armed)
-    {
+    for s in cruise_samples(log) {
         m[0] = m[0].max((start - s.true_pos_ned_m[2] - cmd).abs());
         m[1] = m[1].max(s.true_vel_ned_mps[0].hypot(s.true_vel_ned_mps[1]));
-        let (r, p) = (s.true_euler_rad[0], s.true_euler_rad[1]);
-        m[2] = m[2].max((r.cos() * p.cos()).clamp(-1.0, 1.0).acos().to_degrees());
+        m[2] = m[2].max(true_tilt_deg(s));
     }
     m
 }
