@@ -256,10 +256,8 @@ impl LinkState {
     pub fn on_bytes(&mut self, bytes: &[u8], now_ns: i64) -> Result<Vec<Out>, Fatal> {
         let mut out = Vec::new();
         let mut frames = Vec::new();
-        for &b in bytes {
-            let Some(r) = self.decoder.push(b) else {
-                continue;
-            };
+        let mut rest = bytes;
+        while let Some(r) = self.decoder.next_from(&mut rest) {
             let after = seq_counters(self.decoder.counters());
             // Errors are counted by the decoder.
             if let Ok(f) = r {

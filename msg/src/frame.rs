@@ -2,7 +2,6 @@
 
 use crate::messages::{Message, PayloadError, MAX_PAYLOAD_LEN};
 use crate::{LinkCounters, PROTOCOL_VERSION};
-use crc::{Crc, CRC_32_ISCSI};
 
 /// Header length: version (1) | msg_id (1) | seq (2, LE) | t_us (8, LE).
 pub const HEADER_LEN: usize = 12;
@@ -15,10 +14,8 @@ pub const MAX_FRAME_LEN: usize = cobs::max_encoding_length(MAX_RAW_FRAME_LEN) + 
 // Frames stay small: a decoder costs one buffer of this size, a 2 ms tick carries 184 B.
 const _: () = assert!(MAX_FRAME_LEN <= 128);
 
-/// CRC-32C (Castagnoli, the iSCSI polynomial 0x1EDC6F41, reflected, init/xorout 0xFFFFFFFF).
-/// Chosen over CRC-32/ISO-HDLC for its larger Hamming distance at these frame lengths
-/// (HD 6 up to ~5 kbit vs ~270 bit for ISO-HDLC).
-pub const CRC32C: Crc<u32> = Crc::<u32>::new(&CRC_32_ISCSI);
+use crate::crc32c::crc32c;
+pub use crate::crc32c::CRC32C;
 
 /// The fixed frame header.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,7 +105,7 @@ pub fn encode(msg: &Message, seq: u16, t_us: u64, out: &mut [u8]) -> Result<usiz
         .serialize_payload(payload)
         .map_err(|_| EncodeError::Serialize)?;
     let crc_at = HEADER_LEN + n;
-    let crc = CRC32C.checksum(raw.get(..crc_at).ok_or(EncodeError::Serialize)?);
+    let crc = crc32c(raw.get(..crc_at).ok_or(EncodeError::Serialize)?);
     raw.get_mut(crc_at..crc_at + CRC_LEN)
         .ok_or(EncodeError::Serialize)?
         .copy_from_slice(&crc.to_le_bytes());
@@ -280,6 +277,52 @@ impl FrameDecoder {
         Some(self.finish(len))
     }
 
+    /// Feed a run of non-zero bytes (no delimiter): one copy; an overrun is reported once, as
+    /// [`Self::push`] reports it on the byte that does not fit.
+    fn absorb(&mut self, run: &[u8]) -> Option<Result<Frame, DecodeError>> {
+        let c = &mut self.counters;
+        c.rx_bytes = c.rx_bytes.wrapping_add(run.len() as u32);
+        if self.discarding || run.is_empty() {
+            return None;
+        }
+        let end = self.len + run.len();
+        match self.buf.get_mut(self.len..end) {
+            Some(slot) => {
+                slot.copy_from_slice(run);
+                self.len = end;
+                None
+            }
+            None => {
+                self.discarding = true;
+                self.len = 0;
+                c.overruns = c.overruns.wrapping_add(1);
+                c.resyncs = c.resyncs.wrapping_add(1);
+                Some(Err(DecodeError::Overrun))
+            }
+        }
+    }
+
+    /// Take bytes from the front of `bytes` until a frame (or the reason a candidate was
+    /// rejected) completes, and return it; `None` once `bytes` is used up (it is then empty).
+    /// Bytes are taken a run at a time: everything up to the next 0x00 is copied in one piece
+    /// (byte-at-a-time [`Self::push`] gives the same frames, errors and counters).
+    pub fn next_from(&mut self, bytes: &mut &[u8]) -> Option<Result<Frame, DecodeError>> {
+        while !bytes.is_empty() {
+            let (run, rest) = bytes.split_at(find_zero(bytes).unwrap_or(bytes.len()));
+            *bytes = rest;
+            if let Some(r) = self.absorb(run) {
+                return Some(r);
+            }
+            if let Some((_, rest)) = bytes.split_first() {
+                *bytes = rest;
+                if let Some(r) = self.push(0) {
+                    return Some(r);
+                }
+            }
+        }
+        None
+    }
+
     /// Feed a chunk; iterate over the frames (and errors) it completes. Bytes after the last
     /// item taken stay unconsumed if the iterator is dropped early, so drain it.
     pub fn push_slice<'a, 'b>(&'a mut self, bytes: &'b [u8]) -> PushSlice<'a, 'b> {
@@ -312,7 +355,7 @@ impl FrameDecoder {
 
     fn check(&mut self, len: usize) -> Result<Frame, DecodeError> {
         let candidate = self.buf.get_mut(..len).ok_or(DecodeError::Overrun)?;
-        let raw_len = cobs::decode_in_place(candidate).map_err(|_| DecodeError::Framing)?;
+        let raw_len = cobs_decode_in_place(candidate).ok_or(DecodeError::Framing)?;
         if raw_len < HEADER_LEN + CRC_LEN {
             return Err(DecodeError::Framing);
         }
@@ -322,11 +365,11 @@ impl FrameDecoder {
             counters,
             ..
         } = self;
-        let raw = buf.get(..raw_len).ok_or(DecodeError::Framing)?;
+        let raw = buf.get(1..1 + raw_len).ok_or(DecodeError::Framing)?;
         let (body, crc_bytes) = raw.split_at(raw_len - CRC_LEN);
         let mut crc = [0u8; 4];
         crc.copy_from_slice(crc_bytes);
-        if CRC32C.checksum(body) != u32::from_le_bytes(crc) {
+        if crc32c(body) != u32::from_le_bytes(crc) {
             return Err(DecodeError::Crc);
         }
         let header = Header::read(raw);
@@ -375,12 +418,70 @@ pub struct PushSlice<'a, 'b> {
 impl Iterator for PushSlice<'_, '_> {
     type Item = Result<Frame, DecodeError>;
     fn next(&mut self) -> Option<Self::Item> {
-        while let Some((&b, rest)) = self.bytes.split_first() {
-            self.bytes = rest;
-            if let Some(r) = self.decoder.push(b) {
-                return Some(r);
+        self.decoder.next_from(&mut self.bytes)
+    }
+}
+
+/// Index of the first 0x00 in `bytes`, 8 bytes per step: a word `x` holds a 0x00 iff
+/// `(x − 0x01…01) & !x & 0x80…80 ≠ 0`, and its lowest set bit marks the first one (a borrow
+/// can only flag bytes above a real 0x00).
+fn find_zero(bytes: &[u8]) -> Option<usize> {
+    const LO: u64 = 0x0101_0101_0101_0101;
+    const HI: u64 = 0x8080_8080_8080_8080;
+    let mut words = bytes.chunks_exact(8);
+    let mut at = 0;
+    for w in &mut words {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(w);
+        let x = u64::from_le_bytes(b);
+        let z = x.wrapping_sub(LO) & !x & HI;
+        if z != 0 {
+            return Some(at + (z.trailing_zeros() / 8) as usize);
+        }
+        at += 8;
+    }
+    words
+        .remainder()
+        .iter()
+        .position(|&b| b == 0)
+        .map(|p| at + p)
+}
+
+/// COBS-decode `buf` in place (it holds no 0x00: the delimiters split frames); the decoded
+/// bytes are `buf[1..1 + len]`, `None` for a code that runs past the end.
+///
+/// Each code byte stands for the 0x00 that ends its block (except a 0xFF block's and the last
+/// block's), and sits exactly where that 0x00 belongs one byte later: so the decoding is a hop
+/// from code to code writing 0x00 over each, the data never moving. Only after a 0xFF block
+/// (254 data bytes, no 0x00: never in our frames, which are shorter) does the rest shift down
+/// by one, a byte at a time. The `cobs` crate's decoding, without its per-byte copy.
+pub(crate) fn cobs_decode_in_place(buf: &mut [u8]) -> Option<usize> {
+    let n = buf.len();
+    // The current block's code byte is at `r`; its data goes to `w` (= r + 1 until a 0xFF
+    // block shifts the rest, then w <= r).
+    let (mut r, mut w) = (0usize, 1usize);
+    let mut code = usize::from(*buf.first()?);
+    loop {
+        if code == 0 || r + code > n {
+            return None;
+        }
+        if w != r + 1 {
+            for i in 1..code {
+                let b = *buf.get(r + i)?;
+                *buf.get_mut(w + i - 1)? = b;
             }
         }
-        None
+        w += code - 1;
+        r += code;
+        if r >= n {
+            return Some(w - 1);
+        }
+        // Read the next code before its place may take this block's 0x00.
+        let next = usize::from(*buf.get(r)?);
+        if code != 0xFF {
+            *buf.get_mut(w)? = 0;
+            w += 1;
+        }
+        code = next;
     }
 }

@@ -5,9 +5,11 @@
 //!
 //! ## Layers (bottom-up)
 //! 1. **Bytes**: a UART (921600 baud 8N1 = 92,160 B/s) or a pseudo-terminal.
-//! 2. **Framing** ([`frame`]): COBS (`cobs` crate) with a `0x00` delimiter after every frame. A
-//!    receiver that starts mid-stream or meets garbage resynchronises at the next `0x00`.
-//! 3. **Integrity**: CRC-32C (Castagnoli, `crc::CRC_32_ISCSI`) over header and payload.
+//! 2. **Framing** ([`frame`]): COBS (the `cobs` crate encodes; the decoder hops from code to
+//!    code in place) with a `0x00` delimiter after every frame. A receiver that starts
+//!    mid-stream or meets garbage resynchronises at the next `0x00`.
+//! 3. **Integrity** ([`crc32c`]): CRC-32C (Castagnoli, `crc::CRC_32_ISCSI`) over header and
+//!    payload; the CPU's CRC instruction where a host has one.
 //! 4. **Header**: protocol version, message id, per-direction sequence number, timestamp.
 //! 5. **Payload** ([`messages`]): one struct per message, serialised with `postcard`
 //!    (serde); the message id in the header says which struct. Decoding must consume the
@@ -25,7 +27,7 @@
 //! Where the messages' lat/lon live: [`geodesy`] (WGS-84 geodetic ↔ ECEF ↔ the local NED tangent
 //! plane at home, `f64`), which the firmware's navigation and the mission node's lat/lon goals
 //! both use.
-//! Modules: [`frame`], [`geodesy`], [`handshake`], [`messages`], [`params`], [`rates`], [`vocab`], `ros`
+//! Modules: [`crc32c`], [`frame`], [`geodesy`], [`handshake`], [`messages`], [`params`], [`rates`], [`vocab`], `ros`
 //! (feature `ros`).
 //!
 //! ## Frame layout
@@ -62,6 +64,7 @@
 //! ```
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 
+pub mod crc32c;
 pub mod frame;
 pub mod geodesy;
 pub mod handshake;

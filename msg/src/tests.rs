@@ -710,3 +710,97 @@ proptest! {
         prop_assert_eq!((sp.ttl_ms, header.seq, header.t_us), (ttl, seq, t));
     }
 }
+
+/// The `cobs` crate's in-place decoding: the decoded bytes, or `None` where it errs.
+fn cobs_reference(mut buf: Vec<u8>) -> Option<Vec<u8>> {
+    let n = cobs::decode_in_place(&mut buf).ok()?;
+    buf.truncate(n);
+    Some(buf)
+}
+
+/// Ours, the same way.
+fn cobs_ours(mut buf: Vec<u8>) -> Option<Vec<u8>> {
+    let n = crate::frame::cobs_decode_in_place(&mut buf)?;
+    Some(buf[1..1 + n].to_vec())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4000))]
+
+    /// The block-hopping COBS decoder agrees with the `cobs` crate: on valid encodings of
+    /// 0..700 bytes (sparse zeros, so 0xFF blocks and the shift after them occur) and on
+    /// arbitrary zero-free bytes (what the delimiter split hands it).
+    #[test]
+    fn cobs_decoding_matches_the_cobs_crate(
+        data in proptest::collection::vec(prop_oneof![4 => 1u8..=255, 1 => Just(0u8)], 0..700),
+        junk in proptest::collection::vec(1u8..=255, 1..300),
+    ) {
+        let mut enc = vec![0u8; cobs::max_encoding_length(data.len())];
+        let n = cobs::try_encode(&data, &mut enc).unwrap();
+        enc.truncate(n);
+        prop_assert_eq!(cobs_ours(enc.clone()), Some(data));
+        prop_assert_eq!(cobs_ours(enc.clone()), cobs_reference(enc));
+        prop_assert_eq!(cobs_ours(junk.clone()), cobs_reference(junk));
+    }
+}
+
+/// Long runs without a zero: 0xFF blocks at the start, the middle and the end.
+#[test]
+fn cobs_decoding_handles_full_blocks() {
+    for len in [253, 254, 255, 508, 509, 600] {
+        for zero_at in [None, Some(0), Some(100), Some(len - 1)] {
+            let mut data: Vec<u8> = (0..len).map(|i| (i % 255 + 1) as u8).collect();
+            if let Some(z) = zero_at {
+                data[z] = 0;
+            }
+            let mut enc = vec![0u8; cobs::max_encoding_length(data.len())];
+            let n = cobs::try_encode(&data, &mut enc).unwrap();
+            enc.truncate(n);
+            assert_eq!(
+                cobs_ours(enc.clone()),
+                Some(data),
+                "len {len} zero at {zero_at:?}"
+            );
+            assert_eq!(cobs_ours(enc.clone()), cobs_reference(enc));
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    /// The run-at-a-time `push_slice` and the byte-at-a-time `push` agree on every item (frame
+    /// or error, in order) and every counter, on streams of valid frames, random bytes, bit
+    /// flips and long runs without a delimiter (overruns), in any chunking.
+    #[test]
+    fn slice_decoding_matches_byte_decoding(
+        parts in proptest::collection::vec((0usize..16, proptest::collection::vec(any::<u8>(), 0..40), any::<u16>(), 0u8..4), 1..12),
+        chunk in 1usize..200,
+    ) {
+        let sample = samples();
+        let mut stream = Vec::new();
+        for (i, (which, junk, flip, kind)) in parts.iter().enumerate() {
+            let mut f = enc(&sample[which % sample.len()], i as u16, 1_000 * i as u64);
+            match kind {
+                0 => {}
+                1 => {
+                    let at = usize::from(*flip) % f.len();
+                    f[at] ^= 1 << (flip % 8);
+                }
+                2 => stream.extend_from_slice(junk),
+                _ => stream.extend(core::iter::repeat_n(0x55u8, MAX_FRAME_LEN + usize::from(*flip % 50))),
+            }
+            stream.extend_from_slice(&f);
+        }
+        let mut by_byte = FrameDecoder::new();
+        let items_b: Vec<_> = stream.iter().filter_map(|&b| by_byte.push(b)).collect();
+        let mut by_run = FrameDecoder::new();
+        let mut items_r = Vec::new();
+        for c in stream.chunks(chunk) {
+            items_r.extend(by_run.push_slice(c));
+        }
+        // Compared as text: the samples carry NaN (not equal to itself).
+        prop_assert_eq!(std::format!("{items_r:?}"), std::format!("{items_b:?}"));
+        prop_assert_eq!(by_run.counters(), by_byte.counters());
+    }
+}

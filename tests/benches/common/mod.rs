@@ -211,6 +211,26 @@ pub fn best_of<T>(reps: usize, mut f: impl FnMut() -> T) -> f64 {
     best
 }
 
+/// Best wall time of `a` and of `b` over `reps` rounds, the two run alternately in each round
+/// so that both see the same machine (a shared, noisy host drifts between two back-to-back
+/// series more than within one round).
+pub fn best_of_interleaved<T, U>(
+    reps: usize,
+    mut a: impl FnMut() -> T,
+    mut b: impl FnMut() -> U,
+) -> (f64, f64) {
+    let (mut best_a, mut best_b) = (f64::MAX, f64::MAX);
+    for _ in 0..reps {
+        let t0 = Instant::now();
+        std::hint::black_box(a());
+        best_a = best_a.min(t0.elapsed().as_secs_f64());
+        let t0 = Instant::now();
+        std::hint::black_box(b());
+        best_b = best_b.min(t0.elapsed().as_secs_f64());
+    }
+    (best_a, best_b)
+}
+
 /// One table row for `scripts/bench.sh`:
 /// `ROW|id|what|ours|peer|ratio|goal|verdict`. No `|` inside the fields.
 pub fn row(id: &str, what: &str, ours: &str, peer: &str, ratio: &str, goal: &str, verdict: &str) {
