@@ -121,17 +121,17 @@ pub fn baro(m: &link::BaroRaw, stamp: Time, cfg: &Config) -> FluidPressure {
 
 /// The MCU's home (the origin of `map` and `odom`) → `NavSatFix` on `home`: latitude and
 /// longitude (WGS-84, deg) and altitude as the MCU's GPS gave them when it set home, frame `map`,
-/// covariance unknown (valid only when `home_set`).
-pub fn home(m: &link::NavState, stamp: Time, cfg: &Config) -> NavSatFix {
+/// covariance unknown. `NavState` carries it about once a second ([`link::NavState::home`]).
+pub fn home(m: &link::HomePosition, stamp: Time, cfg: &Config) -> NavSatFix {
     NavSatFix {
         header: Header::new(stamp, &cfg.map_frame),
         status: NavSatStatus {
             status: NavSatStatus::STATUS_FIX,
             service: NavSatStatus::SERVICE_GPS,
         },
-        latitude: m.home_lat_deg,
-        longitude: m.home_lon_deg,
-        altitude: m.home_alt_m as f64,
+        latitude: m.lat_deg,
+        longitude: m.lon_deg,
+        altitude: m.alt_m as f64,
         position_covariance: [0.0; 9],
         position_covariance_type: NavSatFix::COVARIANCE_TYPE_UNKNOWN,
     }

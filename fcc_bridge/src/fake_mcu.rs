@@ -147,6 +147,9 @@ pub fn open_pty() -> std::io::Result<Pty> {
     })
 }
 
+/// `--imu-counter`: the IMU frame counter travels in gyro x as this many distinct counts.
+pub const IMU_COUNTER_MOD: u64 = 32_767;
+
 /// Frames sent by [`run_stats`].
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FakeStats {
@@ -469,7 +472,9 @@ impl<'a> FakeMcu<'a> {
         if every(rates.imu_raw_hz) {
             let mut gyro = s.gyro_frd_radps;
             if self.o.imu_counter {
-                gyro[0] = stats.imu_frames as f32;
+                // The counter in gyro counts (the link carries gyro x as an i16 count of
+                // `fixed::gyro::LSB`), modulo 32767: the peer unwraps it.
+                gyro[0] = (stats.imu_frames % IMU_COUNTER_MOD) as f32 * link::fixed::gyro::LSB;
             }
             self.push(
                 &link::Message::ImuRaw(link::ImuRaw {
@@ -607,9 +612,11 @@ fn script_nav_state(s: &Script) -> link::NavState {
         accel_ned_mps2: [0.0; 3],
         // A fixed observer estimate (north 0.5, east −0.25 m/s²): peers check the ENU map.
         accel_obs_ne_mps2: [0.5, -0.25],
-        home_lat_deg: s.lat_deg,
-        home_lon_deg: s.lon_deg,
-        home_alt_m: s.gps_alt_m,
+        home: Some(link::HomePosition {
+            lat_deg: s.lat_deg,
+            lon_deg: s.lon_deg,
+            alt_m: s.gps_alt_m,
+        }),
         gps_ok: true,
         home_set: true,
         calibrated: true,

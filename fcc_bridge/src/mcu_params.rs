@@ -180,14 +180,23 @@ mod tests {
         assert!(fast > share);
         let low = check_link_budget(imu(0.0), 921_600).unwrap();
         assert!(low < share);
-        // IMU at 1 kHz and odometry at 500 Hz: more than the whole line.
+        // IMU at 1 kHz and odometry at 500 Hz, the highest rates: within 921600 baud's budget,
+        // more than a whole 460800-baud line.
         let both = |id: u16| match id {
             RATES_IMU_HZ => Some(1000.0),
             RATES_NAV_STATE_HZ => Some(500.0),
             _ => None,
         };
-        let e = check_link_budget(both, 921_600).unwrap_err();
+        let most = check_link_budget(both, 921_600).unwrap();
+        assert!(most > 0.6 && most <= 0.9, "{most}");
+        let e = check_link_budget(both, 460_800).unwrap_err();
         assert!(e.worst_case_bytes_per_s > e.line_bytes_per_s, "{e}");
+        println!(
+            "921600 baud, IMU 1 kHz + odometry 500 Hz: {:.1} %; 460800 baud: {e}",
+            100.0 * most
+        );
+        let slow = check_link_budget(|_| None, 115_200).unwrap_err();
+        println!("115200 baud, the defaults: {slow}");
     }
 
     #[test]

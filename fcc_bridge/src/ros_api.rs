@@ -503,7 +503,7 @@ mod tests {
             live: AtomicBool::new(false),
             mcu_values: Mutex::new(BTreeMap::new()),
             link: tx,
-            baud: 921_600,
+            baud: 460_800,
         };
         let d = ParameterValue::Double;
         assert!(validate(&sh, "limits.max_tilt_deg", &d(30.0)).is_ok());
@@ -522,7 +522,7 @@ mod tests {
             "{e}"
         );
         assert!(
-            e.contains("% of the 92160 B/s a 921600-baud link carries (budget 90 %)"),
+            e.contains("% of the 46080 B/s a 460800-baud link carries (budget 90 %)"),
             "{e}"
         );
         assert!(validate(&sh, "clock_source", &ParameterValue::String("mcu".into())).is_err());

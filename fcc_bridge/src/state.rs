@@ -168,7 +168,7 @@ pub struct LinkState {
     /// of this connection (one clock on every stamp).
     pub tf_static_due: bool,
     /// The home last published on `home` (latitude, longitude, altitude), if any.
-    pub home_published: Option<(f64, f64, f32)>,
+    pub home_published: Option<link::HomePosition>,
 }
 
 fn seq_counters(c: &link::LinkCounters) -> [u32; 3] {
@@ -384,10 +384,11 @@ impl LinkState {
                 if self.clock == ClockSource::Mcu {
                     out.push(Out::Clock(Clock { clock: st }));
                 }
-                let home = (m.home_lat_deg, m.home_lon_deg, m.home_alt_m);
-                if m.home_set && self.home_published != Some(home) {
-                    self.home_published = Some(home);
-                    out.push(Out::Home(convert::home(&m, st, cfg)));
+                if let Some(home) = m.home.filter(|_| m.home_set) {
+                    if self.home_published != Some(home) {
+                        self.home_published = Some(home);
+                        out.push(Out::Home(convert::home(&home, st, cfg)));
+                    }
                 }
             }
             link::Message::AltitudeFusion(m) => {

@@ -1,23 +1,45 @@
 //! Framing: header, CRC-32C, COBS, the encoder and the byte-at-a-time decoder.
 
+use crate::crc32c::crc32c;
+pub use crate::crc32c::CRC32C;
 use crate::messages::{Message, PayloadError, MAX_PAYLOAD_LEN};
 use crate::{LinkCounters, PROTOCOL_VERSION};
 
-/// Header length: version (1) | msg_id (1) | seq (2, LE) | t_us (8, LE).
-pub const HEADER_LEN: usize = 12;
+/// Header length of most frames: version (1) | msg_id (1) | seq (2, LE) | t_us low 32 bits
+/// (4, LE).
+pub const HEADER_LEN: usize = 8;
+/// Header length of the frames that carry the whole 64-bit `t_us` ([`long_header`]: the
+/// handshake's, frozen across versions, and `Status`, ten a second): version (1) | msg_id (1) |
+/// seq (2, LE) | t_us (8, LE).
+pub const LONG_HEADER_LEN: usize = 12;
 /// Trailer length: CRC-32C (4, LE).
 pub const CRC_LEN: usize = 4;
 /// Largest unencoded frame (header + payload + CRC).
-pub const MAX_RAW_FRAME_LEN: usize = HEADER_LEN + MAX_PAYLOAD_LEN + CRC_LEN;
+pub const MAX_RAW_FRAME_LEN: usize = LONG_HEADER_LEN + MAX_PAYLOAD_LEN + CRC_LEN;
 /// Largest frame on the wire: COBS of the raw frame plus the 0x00 delimiter.
 pub const MAX_FRAME_LEN: usize = cobs::max_encoding_length(MAX_RAW_FRAME_LEN) + 1;
 // Frames stay small: a decoder costs one buffer of this size, a 2 ms tick carries 184 B.
 const _: () = assert!(MAX_FRAME_LEN <= 128);
 
-use crate::crc32c::crc32c;
-pub use crate::crc32c::CRC32C;
+/// Whether frames of `msg_id` carry the 64-bit time (else its low 32 bits, which the decoder
+/// extends from the frames before: [`FrameDecoder`]).
+pub const fn long_header(msg_id: u8) -> bool {
+    matches!(
+        msg_id,
+        crate::id::HELLO | crate::id::HELLO_REQUEST | crate::id::STATUS
+    )
+}
 
-/// The fixed frame header.
+/// Header length of frames of `msg_id`.
+pub const fn header_len(msg_id: u8) -> usize {
+    if long_header(msg_id) {
+        LONG_HEADER_LEN
+    } else {
+        HEADER_LEN
+    }
+}
+
+/// The frame header.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Header {
     pub version: u8,
@@ -25,28 +47,20 @@ pub struct Header {
     /// Per-direction sequence number, wrapping.
     pub seq: u16,
     /// Sender's clock in µs: MCU µs since boot on MCU → Linux frames (the time the payload
-    /// refers to); the Linux side's monotonic µs on Linux → MCU frames (informational).
+    /// refers to); the Linux side's monotonic µs on Linux → MCU frames (informational). Whole
+    /// in long headers; extended from the low 32 bits in the others ([`FrameDecoder`]).
     pub t_us: u64,
 }
 
 impl Header {
-    fn write(&self, out: &mut [u8; HEADER_LEN]) {
+    /// Write the header for `msg_id`'s length into `out` (at least [`LONG_HEADER_LEN`]);
+    /// returns its length.
+    fn write(&self, out: &mut [u8; LONG_HEADER_LEN]) -> usize {
         out[0] = self.version;
         out[1] = self.msg_id;
         out[2..4].copy_from_slice(&self.seq.to_le_bytes());
         out[4..12].copy_from_slice(&self.t_us.to_le_bytes());
-    }
-    fn read(b: &[u8]) -> Header {
-        let mut seq = [0u8; 2];
-        seq.copy_from_slice(&b[2..4]);
-        let mut t = [0u8; 8];
-        t.copy_from_slice(&b[4..12]);
-        Header {
-            version: b[0],
-            msg_id: b[1],
-            seq: u16::from_le_bytes(seq),
-            t_us: u64::from_le_bytes(t),
-        }
+        header_len(self.msg_id)
     }
 }
 
@@ -83,7 +97,8 @@ impl core::fmt::Display for EncodeError {
 /// Encode `msg` as one complete frame (COBS + trailing 0x00) into `out`; returns its length.
 ///
 /// `out` must hold the worst-case encoding of the message
-/// (`cobs::max_encoding_length(HEADER_LEN + len + CRC_LEN) + 1`); [`MAX_FRAME_LEN`] always does.
+/// (`cobs::max_encoding_length(header_len(id) + len + CRC_LEN) + 1`); [`MAX_FRAME_LEN`] always
+/// does.
 pub fn encode(msg: &Message, seq: u16, t_us: u64, out: &mut [u8]) -> Result<usize, EncodeError> {
     let mut raw = [0u8; MAX_RAW_FRAME_LEN];
     let header = Header {
@@ -92,19 +107,21 @@ pub fn encode(msg: &Message, seq: u16, t_us: u64, out: &mut [u8]) -> Result<usiz
         seq,
         t_us,
     };
-    let mut h = [0u8; HEADER_LEN];
-    header.write(&mut h);
+    let mut h = [0u8; LONG_HEADER_LEN];
+    let h_len = header.write(&mut h);
     // Slices by `get`, not indexing: no panic path in the MCU image (scripts/build-mcu.sh
     // lists them); the lengths are constants, so these never fail.
-    let (head, rest) = raw.split_at_mut(HEADER_LEN);
-    head.copy_from_slice(&h);
-    let payload = rest
-        .get_mut(..MAX_PAYLOAD_LEN)
+    raw.get_mut(..LONG_HEADER_LEN)
+        .ok_or(EncodeError::Serialize)?
+        .copy_from_slice(&h);
+    // The payload follows the header (over a short header's unused high time bytes).
+    let payload = raw
+        .get_mut(h_len..h_len + MAX_PAYLOAD_LEN)
         .ok_or(EncodeError::Serialize)?;
     let n = msg
         .serialize_payload(payload)
         .map_err(|_| EncodeError::Serialize)?;
-    let crc_at = HEADER_LEN + n;
+    let crc_at = h_len + n;
     let crc = crc32c(raw.get(..crc_at).ok_or(EncodeError::Serialize)?);
     raw.get_mut(crc_at..crc_at + CRC_LEN)
         .ok_or(EncodeError::Serialize)?
@@ -199,12 +216,18 @@ impl core::fmt::Display for DecodeError {
 /// After any error the decoder waits for the next 0x00 and starts afresh, so garbage costs at
 /// most the frame it hits. Empty frames (consecutive 0x00) are ignored, so a sender may send a
 /// 0x00 first to flush a half frame at the receiver.
+///
+/// Short headers carry the low 32 bits of the time; the decoder extends them from the previous
+/// frame's time ([`extend_time`]), which a long header (`Status`, ten a second) sets whole. A
+/// sequence restart (the sender rebooted) forgets the time, as [`Self::reset`] does.
 pub struct FrameDecoder {
     buf: [u8; MAX_FRAME_LEN],
     len: usize,
     /// Overran: drop bytes until the next 0x00.
     discarding: bool,
     last_seq: Option<u16>,
+    /// The last frame's full time (µs), which extends the next short header's.
+    last_t_us: Option<u64>,
     counters: LinkCounters,
 }
 
@@ -221,6 +244,7 @@ impl FrameDecoder {
             len: 0,
             discarding: false,
             last_seq: None,
+            last_t_us: None,
             counters: LinkCounters {
                 rx_bytes: 0,
                 rx_frames: 0,
@@ -247,6 +271,7 @@ impl FrameDecoder {
         self.len = 0;
         self.discarding = false;
         self.last_seq = None;
+        self.last_t_us = None;
     }
 
     /// Feed one byte; returns a frame (or the reason a candidate was rejected) when a 0x00
@@ -362,27 +387,54 @@ impl FrameDecoder {
         let Self {
             buf,
             last_seq,
+            last_t_us,
             counters,
             ..
         } = self;
-        let raw = buf.get(1..1 + raw_len).ok_or(DecodeError::Framing)?;
-        let (body, crc_bytes) = raw.split_at(raw_len - CRC_LEN);
-        let mut crc = [0u8; 4];
-        crc.copy_from_slice(crc_bytes);
+        // The decoded frame is buf[1..1 + raw_len]: body, then the CRC. Ranges by `get` and
+        // `try_from`, which cannot panic (an MCU image without panic paths: build-mcu.sh).
+        let crc_at = 1 + raw_len.checked_sub(CRC_LEN).ok_or(DecodeError::Framing)?;
+        let body = buf.get(1..crc_at).ok_or(DecodeError::Framing)?;
+        let crc_bytes = buf.get(crc_at..1 + raw_len).ok_or(DecodeError::Framing)?;
+        let crc = <[u8; CRC_LEN]>::try_from(crc_bytes).map_err(|_| DecodeError::Framing)?;
         if crc32c(body) != u32::from_le_bytes(crc) {
             return Err(DecodeError::Crc);
         }
-        let header = Header::read(raw);
-        track_seq(last_seq, counters, header.seq);
-        let frozen = header.msg_id == crate::id::HELLO || header.msg_id == crate::id::HELLO_REQUEST;
+        let msg_id = body.get(1).copied().ok_or(DecodeError::Framing)?;
+        let h_len = header_len(msg_id);
+        let head = body.get(..h_len).ok_or(DecodeError::Framing)?;
+        let mut seq = [0u8; 2];
+        seq.copy_from_slice(head.get(2..4).ok_or(DecodeError::Framing)?);
+        let seq = u16::from_le_bytes(seq);
+        if track_seq(last_seq, counters, seq) {
+            // The sender restarted: its clock did too.
+            *last_t_us = None;
+        }
+        let mut t = [0u8; 8];
+        let t_bytes = head.get(4..).ok_or(DecodeError::Framing)?;
+        t.get_mut(..t_bytes.len())
+            .ok_or(DecodeError::Framing)?
+            .copy_from_slice(t_bytes);
+        let t_us = if h_len == LONG_HEADER_LEN {
+            u64::from_le_bytes(t)
+        } else {
+            extend_time(*last_t_us, u64::from_le_bytes(t) as u32)
+        };
+        *last_t_us = Some(t_us);
+        let header = Header {
+            version: body.first().copied().ok_or(DecodeError::Framing)?,
+            msg_id,
+            seq,
+            t_us,
+        };
+        let frozen = msg_id == crate::id::HELLO || msg_id == crate::id::HELLO_REQUEST;
         if header.version != PROTOCOL_VERSION && !frozen {
             return Err(DecodeError::VersionMismatch {
                 ours: PROTOCOL_VERSION,
                 theirs: header.version,
             });
         }
-        let msg_id = header.msg_id;
-        let payload = body.get(HEADER_LEN..).ok_or(DecodeError::Framing)?;
+        let payload = body.get(h_len..).ok_or(DecodeError::Framing)?;
         let message = Message::deserialize_payload(msg_id, payload).map_err(|e| match e {
             PayloadError::UnknownId => DecodeError::UnknownId { msg_id },
             PayloadError::Invalid => DecodeError::Payload { msg_id },
@@ -392,7 +444,25 @@ impl FrameDecoder {
     }
 }
 
-fn track_seq(last_seq: &mut Option<u16>, c: &mut LinkCounters, seq: u16) {
+/// The full time of a short header from its low 32 bits: the value closest to the previous
+/// frame's time `last_us` (±35.8 min), or the low bits alone when there is none (the first
+/// 71.6 min after the sender's start, as after a restart). Never before 0.
+pub fn extend_time(last_us: Option<u64>, low_us: u32) -> u64 {
+    let Some(last) = last_us else {
+        return u64::from(low_us);
+    };
+    let d = i64::from(low_us.wrapping_sub(last as u32) as i32);
+    let t = (last as i64).saturating_add(d);
+    if t < 0 {
+        u64::from(low_us)
+    } else {
+        t as u64
+    }
+}
+
+/// Count a gap or a restart; true when the sequence restarted.
+fn track_seq(last_seq: &mut Option<u16>, c: &mut LinkCounters, seq: u16) -> bool {
+    let mut restarted = false;
     {
         if let Some(last) = *last_seq {
             let gap = seq.wrapping_sub(last.wrapping_add(1));
@@ -402,11 +472,13 @@ fn track_seq(last_seq: &mut Option<u16>, c: &mut LinkCounters, seq: u16) {
                     c.frames_lost = c.frames_lost.wrapping_add(gap as u32);
                 } else {
                     c.seq_resets = c.seq_resets.wrapping_add(1);
+                    restarted = true;
                 }
             }
         }
         *last_seq = Some(seq);
     }
+    restarted
 }
 
 /// Iterator returned by [`FrameDecoder::push_slice`].

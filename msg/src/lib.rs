@@ -27,22 +27,31 @@
 //! Where the messages' lat/lon live: [`geodesy`] (WGS-84 geodetic ↔ ECEF ↔ the local NED tangent
 //! plane at home, `f64`), which the firmware's navigation and the mission node's lat/lon goals
 //! both use.
-//! Modules: [`crc32c`], [`frame`], [`geodesy`], [`handshake`], [`messages`], [`params`], [`rates`], [`vocab`], `ros`
+//! Modules: [`crc32c`], [`fixed`], [`frame`], [`geodesy`], [`handshake`], [`messages`], [`params`], [`rates`], [`vocab`], `ros`
 //! (feature `ros`).
 //!
 //! ## Frame layout
 //! ```text
 //! wire:  COBS( raw ) | 0x00
-//! raw:   version u8 | msg_id u8 | seq u16 LE | t_us u64 LE | payload (postcard) | crc32c u32 LE
-//!        \_____________________ header, 12 B _____________/                      CRC over all
-//!                                                                                 bytes before it
+//! raw:   version u8 | msg_id u8 | seq u16 LE | t_us low u32 LE | payload (postcard) | crc32c u32 LE
+//!        \_______________ header, 8 B ______________________/                      CRC over all
+//!   or:  version u8 | msg_id u8 | seq u16 LE | t_us u64 LE     | …                   bytes before it
+//!        \_______________ long header, 12 B: Hello, HelloRequest, Status ______/
 //! ```
 //! - `seq` counts frames per direction and wraps; the decoder counts gaps as lost frames.
 //! - `t_us`: MCU µs since boot on MCU → Linux frames (the time the payload refers to: sample
-//!   arrival for raw sensors, the navigation step for `NavState`). u64 so it never wraps
-//!   (a u32 would wrap every 71.6 min, within one flight day); on Linux → MCU frames it is the
-//!   Linux side's monotonic µs, for logs only.
-//! - Overhead: 12 B header + 4 B CRC + 1–2 B COBS + 1 B delimiter ≈ 18 B per frame.
+//!   arrival for raw sensors, the navigation step for `NavState`); on Linux → MCU frames the
+//!   Linux side's monotonic µs, for logs only. Most headers carry its low 32 bits (they wrap
+//!   every 71.6 min); the decoder extends them from the previous frame's time
+//!   ([`extend_time`]), and the long headers (`Status`, ten a second, and the handshake's,
+//!   frozen across versions) carry all 64, so the time never wraps and is right after any gap
+//!   shorter than 35 min. A sequence restart (the MCU rebooted) starts the time afresh.
+//! - Payloads: fixed-point where a field's resolution is known ([`fixed`]: the IMU and
+//!   magnetometer as the sensor's 16-bit counts, the navigation state's attitude, rates,
+//!   velocity and accelerations, the baro temperature), `f32`/`f64` elsewhere; the home rides
+//!   in one `NavState` a second. Link v6: 0.59× MAVLink v2's bytes for the same telemetry
+//!   (BENCHMARKS.md row 1a).
+//! - Overhead: 8 B header + 4 B CRC + 1–2 B COBS + 1 B delimiter ≈ 14 B per frame.
 //!   The longest frame is [`MAX_FRAME_LEN`] bytes.
 //!
 //! ## Units and frames
@@ -65,6 +74,7 @@
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 
 pub mod crc32c;
+pub mod fixed;
 pub mod frame;
 pub mod geodesy;
 pub mod handshake;
@@ -81,8 +91,8 @@ mod fuzz;
 mod tests;
 
 pub use frame::{
-    encode, DecodeError, EncodeError, Encoder, Frame, FrameDecoder, Header, CRC_LEN, HEADER_LEN,
-    MAX_FRAME_LEN, MAX_RAW_FRAME_LEN,
+    encode, extend_time, header_len, long_header, DecodeError, EncodeError, Encoder, Frame,
+    FrameDecoder, Header, CRC_LEN, HEADER_LEN, LONG_HEADER_LEN, MAX_FRAME_LEN, MAX_RAW_FRAME_LEN,
 };
 pub use handshake::{check_peer, HandshakeError};
 pub use messages::*;
@@ -91,4 +101,4 @@ pub use rates::{max_frame_len, period_us, Stream, StreamRates, BAUD_921600_BYTES
 
 /// Version of the frame layout and message set. Bump it for any incompatible change
 /// (the schema hash catches changes that were not bumped).
-pub const PROTOCOL_VERSION: u8 = 5;
+pub const PROTOCOL_VERSION: u8 = 6;

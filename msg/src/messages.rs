@@ -178,23 +178,41 @@ pub struct Hello {
 }
 
 /// One raw IMU sample, body FRD. Specific force: level and at rest `accel = [0, 0, -9.81]`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+/// On the wire: the sensor's 16-bit counts ([`crate::fixed::gyro`], [`crate::fixed::accel`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ImuRaw {
+    #[serde(with = "crate::fixed::gyro")]
     pub gyro_frd_radps: [f32; 3],
+    #[serde(with = "crate::fixed::accel")]
     pub accel_frd_mps2: [f32; 3],
 }
 
-/// Raw magnetometer, body FRD, microtesla.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+impl MaxSize for ImuRaw {
+    const POSTCARD_MAX_SIZE: usize = 2 * 6;
+}
+
+/// Raw magnetometer, body FRD, microtesla. On the wire: 16-bit counts ([`crate::fixed::mag`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MagRaw {
+    #[serde(with = "crate::fixed::mag")]
     pub mag_frd_ut: [f32; 3],
 }
 
-/// Raw barometer.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+impl MaxSize for MagRaw {
+    const POSTCARD_MAX_SIZE: usize = 2 * 3;
+}
+
+/// Raw barometer. On the wire the temperature is 16-bit at the sensor's 0.01 °C
+/// ([`crate::fixed::temp`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct BaroRaw {
     pub pressure_pa: f32,
+    #[serde(with = "crate::fixed::temp::scalar")]
     pub temperature_c: f32,
+}
+
+impl MaxSize for BaroRaw {
+    const POSTCARD_MAX_SIZE: usize = 4 + 2;
 }
 
 /// Raw GPS solution (header time = arrival at the MCU).
@@ -227,8 +245,11 @@ pub struct Battery {
     pub current_a: f32,
 }
 
-/// Navigation solution: NED relative to home, body FRD.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+/// Navigation solution: NED relative to home, body FRD. On the wire the attitude, rates,
+/// velocity and accelerations are fixed-point ([`crate::fixed`]), the position stays `f32`, and
+/// the three flags share one byte (bit 0 `gps_ok`, 1 `home_set`, 2 `calibrated`; other bits
+/// set = an invalid payload).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NavState {
     /// Attitude quaternion rotating body FRD vectors into NED, `[w, x, y, z]`.
     pub q_body_to_ned: [f32; 4],
@@ -241,11 +262,10 @@ pub struct NavState {
     /// Horizontal acceleration estimated by the Luenberger observer (paper A eqs. 15-17) that
     /// the acceleration controller feeds back on, NED (north, east).
     pub accel_obs_ne_mps2: [f32; 2],
-    /// Home = NED origin (valid when `home_set`).
-    pub home_lat_deg: f64,
-    pub home_lon_deg: f64,
-    /// Home height above the WGS-84 ellipsoid.
-    pub home_alt_m: f32,
+    /// Home = NED origin, in about one frame a second and in the first after it changes
+    /// (`None` in the others: the receiver keeps the last; `home_set` says whether there is
+    /// one).
+    pub home: Option<HomePosition>,
     /// GPS currently feeds the horizontal filter.
     pub gps_ok: bool,
     pub home_set: bool,
@@ -253,15 +273,92 @@ pub struct NavState {
     pub calibrated: bool,
 }
 
+/// [`NavState`] as it is on the wire.
+#[derive(Serialize, Deserialize)]
+struct NavStateWire {
+    #[serde(with = "crate::fixed::unit")]
+    q_body_to_ned: [f32; 4],
+    #[serde(with = "crate::fixed::gyro")]
+    rate_frd_radps: [f32; 3],
+    pos_ned_m: [f32; 3],
+    #[serde(with = "crate::fixed::vel")]
+    vel_ned_mps: [f32; 3],
+    #[serde(with = "crate::fixed::accel_est")]
+    accel_ned_mps2: [f32; 3],
+    #[serde(with = "crate::fixed::accel_est")]
+    accel_obs_ne_mps2: [f32; 2],
+    home: Option<HomePosition>,
+    flags: u8,
+}
+
+const NAV_GPS_OK: u8 = 1;
+const NAV_HOME_SET: u8 = 2;
+const NAV_CALIBRATED: u8 = 4;
+
+impl Serialize for NavState {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let flag = |on: bool, bit: u8| if on { bit } else { 0 };
+        NavStateWire {
+            q_body_to_ned: self.q_body_to_ned,
+            rate_frd_radps: self.rate_frd_radps,
+            pos_ned_m: self.pos_ned_m,
+            vel_ned_mps: self.vel_ned_mps,
+            accel_ned_mps2: self.accel_ned_mps2,
+            accel_obs_ne_mps2: self.accel_obs_ne_mps2,
+            home: self.home,
+            flags: flag(self.gps_ok, NAV_GPS_OK)
+                | flag(self.home_set, NAV_HOME_SET)
+                | flag(self.calibrated, NAV_CALIBRATED),
+        }
+        .serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for NavState {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let w = NavStateWire::deserialize(d)?;
+        if w.flags & !(NAV_GPS_OK | NAV_HOME_SET | NAV_CALIBRATED) != 0 {
+            return Err(serde::de::Error::custom("unknown NavState flag bits"));
+        }
+        Ok(NavState {
+            q_body_to_ned: w.q_body_to_ned,
+            rate_frd_radps: w.rate_frd_radps,
+            pos_ned_m: w.pos_ned_m,
+            vel_ned_mps: w.vel_ned_mps,
+            accel_ned_mps2: w.accel_ned_mps2,
+            accel_obs_ne_mps2: w.accel_obs_ne_mps2,
+            home: w.home,
+            gps_ok: w.flags & NAV_GPS_OK != 0,
+            home_set: w.flags & NAV_HOME_SET != 0,
+            calibrated: w.flags & NAV_CALIBRATED != 0,
+        })
+    }
+}
+
+impl MaxSize for NavState {
+    const POSTCARD_MAX_SIZE: usize =
+        2 * (4 + 3) + 4 * 3 + 2 * (3 + 3 + 2) + <Option<HomePosition>>::POSTCARD_MAX_SIZE + 1;
+}
+
+/// Home: the NED origin as WGS-84 coordinates.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+pub struct HomePosition {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    /// Height above the WGS-84 ellipsoid.
+    pub alt_m: f32,
+}
+
 /// Altitude fusion: barometric/inertial altitude and the above-ground estimate from the
 /// rangefinders. `NaN` = not available.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize, MaxSize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct AltitudeFusion {
     /// Barometric altitude above the calibration point (up).
     pub baro_alt_m: f32,
     /// Fused altitude above home (up) = −pos_ned_m[2].
     pub alt_m: f32,
-    /// Vertical speed, NED down positive.
+    /// Vertical speed, NED down positive (16-bit on the wire, [`crate::fixed::vel`]).
+    #[serde(with = "crate::fixed::vel::scalar")]
     pub vel_down_mps: f32,
     /// Fused height above ground (up).
     pub ground_height_m: f32,
@@ -272,6 +369,10 @@ pub struct AltitudeFusion {
     /// Latest raw sonar range (NaN if none).
     pub sonar_m: f32,
     pub source: AltitudeSource,
+}
+
+impl MaxSize for AltitudeFusion {
+    const POSTCARD_MAX_SIZE: usize = 6 * 4 + 2 + AltitudeSource::POSTCARD_MAX_SIZE;
 }
 
 /// Health of the navigation sensors as the MCU's filters see them.
@@ -506,6 +607,14 @@ macro_rules! impl_message {
 
             /// Decode a payload for `msg_id`; the payload must be consumed exactly.
             pub(crate) fn deserialize_payload(msg_id: u8, payload: &[u8]) -> Result<Message, PayloadError> {
+                if let Some(r) = fast::decode(msg_id, payload) {
+                    return r;
+                }
+                Self::deserialize_payload_postcard(msg_id, payload)
+            }
+
+            /// [`Self::deserialize_payload`] through serde and postcard, for every message.
+            pub(crate) fn deserialize_payload_postcard(msg_id: u8, payload: &[u8]) -> Result<Message, PayloadError> {
                 match msg_id {
                     $(id::$id => {
                         let (p, rest) = postcard::take_from_bytes::<$variant>(payload)
@@ -542,6 +651,112 @@ macro_rules! impl_message {
 
 for_each_message!(impl_message);
 
+/// Fixed-layout decoding of the busiest payloads (IMU 200 Hz, navigation 100 Hz, magnetometer
+/// 50 Hz: their serde path makes one call per byte of a fixed-point field): the same bytes,
+/// values and errors as postcard's (the test `fast_decoding_equals_postcard` feeds both
+/// arbitrary payloads).
+mod fast {
+    use super::{HomePosition, ImuRaw, MagRaw, Message, NavState, PayloadError};
+    use crate::fixed::{self, from_count};
+    use crate::id;
+
+    /// The payload read from the front.
+    struct Rd<'a>(&'a [u8]);
+
+    impl Rd<'_> {
+        fn take<const N: usize>(&mut self) -> Result<[u8; N], PayloadError> {
+            let (head, tail) = self
+                .0
+                .split_first_chunk::<N>()
+                .ok_or(PayloadError::Invalid)?;
+            self.0 = tail;
+            Ok(*head)
+        }
+        fn counts<const N: usize>(&mut self, lsb: f32) -> Result<[f32; N], PayloadError> {
+            let mut out = [0.0f32; N];
+            for o in &mut out {
+                *o = from_count(i16::from_le_bytes(self.take::<2>()?), lsb);
+            }
+            Ok(out)
+        }
+        fn f32s<const N: usize>(&mut self) -> Result<[f32; N], PayloadError> {
+            let mut out = [0.0f32; N];
+            for o in &mut out {
+                *o = f32::from_le_bytes(self.take::<4>()?);
+            }
+            Ok(out)
+        }
+        fn f64(&mut self) -> Result<f64, PayloadError> {
+            Ok(f64::from_le_bytes(self.take::<8>()?))
+        }
+        fn u8(&mut self) -> Result<u8, PayloadError> {
+            Ok(self.take::<1>()?[0])
+        }
+        /// `v` if the payload is used up, else the trailing bytes.
+        fn end<T>(self, v: T) -> Result<T, PayloadError> {
+            if self.0.is_empty() {
+                Ok(v)
+            } else {
+                Err(PayloadError::TrailingBytes(self.0.len()))
+            }
+        }
+    }
+
+    /// The message, or `None` for an id this module leaves to postcard.
+    pub(super) fn decode(msg_id: u8, payload: &[u8]) -> Option<Result<Message, PayloadError>> {
+        let mut r = Rd(payload);
+        Some(match msg_id {
+            id::IMU_RAW => (|| {
+                let m = ImuRaw {
+                    gyro_frd_radps: r.counts(fixed::gyro::LSB)?,
+                    accel_frd_mps2: r.counts(fixed::accel::LSB)?,
+                };
+                r.end(Message::ImuRaw(m))
+            })(),
+            id::MAG_RAW => (|| {
+                let m = MagRaw {
+                    mag_frd_ut: r.counts(fixed::mag::LSB)?,
+                };
+                r.end(Message::MagRaw(m))
+            })(),
+            id::NAV_STATE => (|| {
+                let q_body_to_ned = r.counts(fixed::unit::LSB)?;
+                let rate_frd_radps = r.counts(fixed::gyro::LSB)?;
+                let pos_ned_m = r.f32s()?;
+                let vel_ned_mps = r.counts(fixed::vel::LSB)?;
+                let accel_ned_mps2 = r.counts(fixed::accel_est::LSB)?;
+                let accel_obs_ne_mps2 = r.counts(fixed::accel_est::LSB)?;
+                let home = match r.u8()? {
+                    0 => None,
+                    1 => Some(HomePosition {
+                        lat_deg: r.f64()?,
+                        lon_deg: r.f64()?,
+                        alt_m: f32::from_le_bytes(r.take::<4>()?),
+                    }),
+                    _ => return Err(PayloadError::Invalid),
+                };
+                let flags = r.u8()?;
+                if flags & !(super::NAV_GPS_OK | super::NAV_HOME_SET | super::NAV_CALIBRATED) != 0 {
+                    return Err(PayloadError::Invalid);
+                }
+                r.end(Message::NavState(NavState {
+                    q_body_to_ned,
+                    rate_frd_radps,
+                    pos_ned_m,
+                    vel_ned_mps,
+                    accel_ned_mps2,
+                    accel_obs_ne_mps2,
+                    home,
+                    gps_ok: flags & super::NAV_GPS_OK != 0,
+                    home_set: flags & super::NAV_HOME_SET != 0,
+                    calibrated: flags & super::NAV_CALIBRATED != 0,
+                }))
+            })(),
+            _ => return None,
+        })
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum PayloadError {
     UnknownId,
@@ -563,7 +778,9 @@ impl Message {
 /// Wire schema: every message with its id, payload fields in order with their postcard types,
 /// and the payload's maximum encoded size (`max=`, checked against the types by a test).
 /// Integers other than u8 are postcard varints; f32/f64 are little-endian IEEE 754; bool is one
-/// byte 0/1; enums are a varint variant index in the order listed. The full schema is this text,
+/// byte 0/1; enums are a varint variant index in the order listed; `Option` is a 0/1 byte then
+/// the value; `[i16 NAME; N]` is `N` little-endian i16 counts of the LSB of [`crate::fixed`]'s
+/// encoding `NAME`. The full schema is this text,
 /// then the `params` line derived from the parameter table ([`crate::param_id::ALL`]: `params
 /// 1=limits.max_horiz_speed_mps 2=…`), then [`SCHEMA_MESSAGES`]; [`SCHEMA_HASH`] is FNV-1a 32
 /// over the whole (`schema_text()`, with std, writes it out).
@@ -581,16 +798,17 @@ enum YawSetpoint { Keep, Heading { yaw_ned_rad: f32 }, Rate { yaw_rate_ned_radps
 /// The schema's messages (after the `params` line): see [`SCHEMA`].
 pub const SCHEMA_MESSAGES: &str = "\
 struct LinkCounters max=60 { rx_bytes: u32, rx_frames: u32, crc_errors: u32, framing_errors: u32, overruns: u32, resyncs: u32, decode_errors: u32, unknown_ids: u32, version_errors: u32, seq_gaps: u32, frames_lost: u32, seq_resets: u32 }
+struct HomePosition max=20 { lat_deg: f64, lon_deg: f64, alt_m: f32 }
 struct SensorHealth max=13 { gps_ok: bool, mag_disturbed: bool, mag_rejects: u32, laser_ok: bool, sonar_ok: bool, mag_disturbed_ds: u16, nav_faults: u8 }
 msg 0x01 Hello max=9 { protocol_version: u8, schema_hash: u32, firmware_version: [u8; 3] }
-msg 0x02 ImuRaw max=24 { gyro_frd_radps: [f32; 3], accel_frd_mps2: [f32; 3] }
-msg 0x03 MagRaw max=12 { mag_frd_ut: [f32; 3] }
-msg 0x04 BaroRaw max=8 { pressure_pa: f32, temperature_c: f32 }
+msg 0x02 ImuRaw max=12 { gyro_frd_radps: [i16 gyro; 3], accel_frd_mps2: [i16 accel; 3] }
+msg 0x03 MagRaw max=6 { mag_frd_ut: [i16 mag; 3] }
+msg 0x04 BaroRaw max=6 { pressure_pa: f32, temperature_c: i16 temp }
 msg 0x05 GpsRaw max=38 { lat_deg: f64, lon_deg: f64, alt_m: f32, vel_ned_mps: [f32; 3], h_acc_m: f32, num_sats: u8, fix_ok: bool }
 msg 0x06 RangeRaw max=5 { sensor: RangeSensor, range_m: f32 }
 msg 0x07 Battery max=8 { voltage_v: f32, current_a: f32 }
-msg 0x08 NavState max=95 { q_body_to_ned: [f32; 4], rate_frd_radps: [f32; 3], pos_ned_m: [f32; 3], vel_ned_mps: [f32; 3], accel_ned_mps2: [f32; 3], accel_obs_ne_mps2: [f32; 2], home_lat_deg: f64, home_lon_deg: f64, home_alt_m: f32, gps_ok: bool, home_set: bool, calibrated: bool }
-msg 0x09 AltitudeFusion max=29 { baro_alt_m: f32, alt_m: f32, vel_down_mps: f32, ground_height_m: f32, ground_var_m2: f32, laser_m: f32, sonar_m: f32, source: AltitudeSource }
+msg 0x08 NavState max=64 { q_body_to_ned: [i16 unit; 4], rate_frd_radps: [i16 gyro; 3], pos_ned_m: [f32; 3], vel_ned_mps: [i16 vel; 3], accel_ned_mps2: [i16 accel_est; 3], accel_obs_ne_mps2: [i16 accel_est; 2], home: Option<HomePosition>, flags: u8 (1 gps_ok, 2 home_set, 4 calibrated) }
+msg 0x09 AltitudeFusion max=27 { baro_alt_m: f32, alt_m: f32, vel_down_mps: i16 vel, ground_height_m: f32, ground_var_m2: f32, laser_m: f32, sonar_m: f32, source: AltitudeSource }
 msg 0x0A Status max=108 { mode: FlightMode, armed: bool, landed: bool, failsafe: FailsafeCause, sensors: SensorHealth, loop_time_max_us: u32, loop_time_avg_us: u32, link_rx: LinkCounters, tx_frames: u32, tx_dropped: u32, setpoint_rejects: u32, command_rejects: u32, last_reject: CommandResult }
 msg 0x0B TimeSyncPong max=30 { linux_time_ns: u64, mcu_rx_time_us: u64, mcu_tx_time_us: u64 }
 msg 0x0C CommandAck max=2 { command: CommandKind, result: CommandResult }
@@ -684,6 +902,7 @@ mod tests {
                     $(stringify!($variant) => <$variant as MaxSize>::POSTCARD_MAX_SIZE,)*
                     "LinkCounters" => LinkCounters::POSTCARD_MAX_SIZE,
                     "SensorHealth" => SensorHealth::POSTCARD_MAX_SIZE,
+                    "HomePosition" => HomePosition::POSTCARD_MAX_SIZE,
                     _ => panic!("no type {name}"),
                 }
             };

@@ -1,6 +1,6 @@
 //! Per-stream telemetry rates (MCU → Linux) and the link budget they imply.
 
-use crate::frame::{CRC_LEN, HEADER_LEN};
+use crate::frame::{header_len, CRC_LEN};
 use crate::messages::{id, max_payload_len};
 
 /// 921600 baud, 8N1: 10 bits per byte.
@@ -140,7 +140,7 @@ impl StreamRates {
 /// Largest encoded frame (COBS + delimiter) of a message id; 0 for an unknown id.
 pub const fn max_frame_len(msg_id: u8) -> usize {
     match max_payload_len(msg_id) {
-        Some(p) => cobs::max_encoding_length(HEADER_LEN + p + CRC_LEN) + 1,
+        Some(p) => cobs::max_encoding_length(header_len(msg_id) + p + CRC_LEN) + 1,
         None => 0,
     }
 }

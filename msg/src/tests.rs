@@ -26,11 +26,11 @@ pub(crate) fn samples() -> Vec<Message> {
     vec![
         Message::Hello(Hello::ours([0, 1, 0])),
         Message::ImuRaw(ImuRaw {
-            gyro_frd_radps: [0.01, -0.02, 0.003],
-            accel_frd_mps2: [0.1, -0.2, -9.81],
+            gyro_frd_radps: on_grid([0.01, -0.02, 0.003], fixed::gyro::LSB),
+            accel_frd_mps2: on_grid([0.1, -0.2, -9.81], fixed::accel::LSB),
         }),
         Message::MagRaw(MagRaw {
-            mag_frd_ut: [21.0, -3.5, 43.2],
+            mag_frd_ut: on_grid([21.0, -3.5, 43.2], fixed::mag::LSB),
         }),
         Message::BaroRaw(BaroRaw {
             pressure_pa: 101_325.0,
@@ -54,15 +54,17 @@ pub(crate) fn samples() -> Vec<Message> {
             current_a: 31.0,
         }),
         Message::NavState(NavState {
-            q_body_to_ned: [0.999, 0.01, -0.02, 0.03],
-            rate_frd_radps: [0.1, 0.2, -0.3],
+            q_body_to_ned: on_grid([0.999, 0.01, -0.02, 0.03], fixed::unit::LSB),
+            rate_frd_radps: on_grid([0.1, 0.2, -0.3], fixed::gyro::LSB),
             pos_ned_m: [10.0, -5.0, -20.0],
-            vel_ned_mps: [2.0, 0.5, -0.1],
-            accel_ned_mps2: [0.1, 0.0, 0.05],
-            accel_obs_ne_mps2: [0.08, -0.01],
-            home_lat_deg: 47.397_742,
-            home_lon_deg: 8.545_594,
-            home_alt_m: 488.0,
+            vel_ned_mps: on_grid([2.0, 0.5, -0.1], fixed::vel::LSB),
+            accel_ned_mps2: on_grid([0.1, 0.0, 0.05], fixed::accel_est::LSB),
+            accel_obs_ne_mps2: on_grid([0.08, -0.01], fixed::accel_est::LSB),
+            home: Some(HomePosition {
+                lat_deg: 47.397_742,
+                lon_deg: 8.545_594,
+                alt_m: 488.0,
+            }),
             gps_ok: true,
             home_set: true,
             calibrated: true,
@@ -134,6 +136,11 @@ pub(crate) fn samples() -> Vec<Message> {
     ]
 }
 
+/// `v` rounded to the fixed-point grid of `lsb` (what crosses the link unchanged).
+pub(crate) fn on_grid<const N: usize>(v: [f32; N], lsb: f32) -> [f32; N] {
+    v.map(|x| fixed::from_count(fixed::to_count(x, lsb), lsb))
+}
+
 pub(crate) fn enc(msg: &Message, seq: u16, t_us: u64) -> Vec<u8> {
     let mut buf = [0u8; MAX_FRAME_LEN];
     let n = encode(msg, seq, t_us, &mut buf).unwrap();
@@ -144,7 +151,7 @@ pub(crate) fn enc(msg: &Message, seq: u16, t_us: u64) -> Vec<u8> {
 fn raw_frame(version: u8, msg_id: u8, seq: u16, t_us: u64, payload: &[u8]) -> Vec<u8> {
     let mut raw = vec![version, msg_id];
     raw.extend_from_slice(&seq.to_le_bytes());
-    raw.extend_from_slice(&t_us.to_le_bytes());
+    raw.extend_from_slice(&t_us.to_le_bytes()[..header_len(msg_id) - 4]);
     raw.extend_from_slice(payload);
     let crc = CRC32C.checksum(&raw);
     raw.extend_from_slice(&crc.to_le_bytes());
@@ -208,7 +215,13 @@ fn round_trip_every_message() {
                 version: PROTOCOL_VERSION,
                 msg_id: m.id(),
                 seq: 40_000 + i as u16,
-                t_us: u64::MAX - i as u64
+                // A fresh decoder extends a short header's low 32 bits with none (its first
+                // frame): the long headers carry the whole.
+                t_us: if long_header(m.id()) {
+                    u64::MAX - i as u64
+                } else {
+                    u64::from((u64::MAX - i as u64) as u32)
+                }
             }
         );
         assert_eq!(dec.counters().rx_frames, 1);
@@ -413,7 +426,7 @@ fn trailing_bytes_and_short_payloads_are_counted() {
     );
     let out = decode_all(
         &mut dec,
-        &raw_frame(PROTOCOL_VERSION, id::IMU_RAW, 1, 0, &[0u8; 23]),
+        &raw_frame(PROTOCOL_VERSION, id::IMU_RAW, 1, 0, &[0u8; 11]),
     );
     assert_eq!(
         out,
@@ -707,7 +720,8 @@ proptest! {
             YawSetpoint::Rate { yaw_rate_ned_radps } => (2, Some(yaw_rate_ned_radps.to_bits())),
         };
         prop_assert_eq!(back, (case, (case != 0).then_some(yaw)));
-        prop_assert_eq!((sp.ttl_ms, header.seq, header.t_us), (ttl, seq, t));
+        // A setpoint's header is short: the low 32 bits of the time (a fresh decoder).
+        prop_assert_eq!((sp.ttl_ms, header.seq, header.t_us), (ttl, seq, u64::from(t as u32)));
     }
 }
 
@@ -803,4 +817,108 @@ proptest! {
         prop_assert_eq!(std::format!("{items_r:?}"), std::format!("{items_b:?}"));
         prop_assert_eq!(by_run.counters(), by_byte.counters());
     }
+}
+
+/// Short headers' times are extended from the frame before: across the 32-bit wrap
+/// (71.6 min), after a gap of half the range less a second, and from the start; a long
+/// header sets the time whole; a sequence restart (reboot) forgets it.
+#[test]
+fn short_header_times_are_extended_from_the_frames_before() {
+    let imu = Message::ImuRaw(ImuRaw::default());
+    let status = samples()
+        .into_iter()
+        .find(|m| m.id() == id::STATUS)
+        .unwrap();
+    let mut dec = FrameDecoder::new();
+    let mut seq = 0u16;
+    let mut times = |dec: &mut FrameDecoder, m: &Message, t: u64| {
+        seq = seq.wrapping_add(1);
+        let out = decode_all(dec, &enc(m, seq, t));
+        out[0].unwrap().header.t_us
+    };
+    // From the start: the low bits are the time.
+    assert_eq!(times(&mut dec, &imu, 5_000), 5_000);
+    // A long header 3 h in, then short ones across two wraps of the low 32 bits.
+    let t0 = 3 * 3_600_000_000u64;
+    assert_eq!(times(&mut dec, &status, t0), t0);
+    let mut t = t0;
+    while t < t0 + 2 * (1u64 << 32) {
+        assert_eq!(times(&mut dec, &imu, t), t);
+        t += 300_000_000; // 5 min between frames
+    }
+    // A gap just under half the range is still right.
+    let last = t - 300_000_000;
+    let gap = (1u64 << 31) - 1_000_000;
+    assert_eq!(times(&mut dec, &imu, last + gap), last + gap);
+    // The sender restarts (its sequence and clock): the time starts again from the low bits.
+    let out = decode_all(&mut dec, &enc(&imu, 40_000, 1_234));
+    assert_eq!(out[0].unwrap().header.t_us, 1_234);
+    assert_eq!(extend_time(None, 7), 7);
+    assert_eq!(extend_time(Some(10), u32::MAX), u64::from(u32::MAX));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(3000))]
+
+    /// The fixed-layout decoders of the busiest payloads give postcard's values and errors on
+    /// any bytes: valid encodings (with and without the home, NaN counts, odd flags) and
+    /// arbitrary ones of any length.
+    #[test]
+    fn fast_decoding_equals_postcard(
+        bytes in proptest::collection::vec(any::<u8>(), 0..80),
+        tag in 0u8..3,
+        flags in any::<u8>(),
+    ) {
+        for id in [id::IMU_RAW, id::MAG_RAW, id::NAV_STATE] {
+            let fast = Message::deserialize_payload(id, &bytes);
+            let slow = Message::deserialize_payload_postcard(id, &bytes);
+            prop_assert_eq!(std::format!("{fast:?}"), std::format!("{slow:?}"));
+        }
+        // A NavState-shaped payload: 42 fixed bytes, the home's tag (0, 1 or invalid), the
+        // home, the flags.
+        let mut nav = bytes.clone();
+        nav.resize(42, 0x80);
+        nav.push(tag);
+        if tag == 1 {
+            nav.extend_from_slice(&bytes.iter().copied().cycle().take(20).collect::<Vec<u8>>());
+            nav.resize(63, 0);
+        }
+        nav.push(flags);
+        let fast = Message::deserialize_payload(id::NAV_STATE, &nav);
+        let slow = Message::deserialize_payload_postcard(id::NAV_STATE, &nav);
+        prop_assert_eq!(std::format!("{fast:?}"), std::format!("{slow:?}"));
+    }
+}
+
+/// The NavState flags byte: bits 0–2, any other bit makes the payload invalid.
+#[test]
+fn nav_state_flags_share_one_byte() {
+    let nav = NavState {
+        gps_ok: true,
+        home_set: false,
+        calibrated: true,
+        ..Default::default()
+    };
+    let bytes = enc(&Message::NavState(nav), 1, 2);
+    let mut dec = FrameDecoder::new();
+    let Ok(f) = decode_all(&mut dec, &bytes)[0] else {
+        panic!()
+    };
+    assert_eq!(f.message, Message::NavState(nav));
+    let mut payload = std::vec![0u8; 42];
+    payload.push(0); // no home
+    payload.push(0b101);
+    assert_eq!(
+        Message::deserialize_payload(id::NAV_STATE, &payload),
+        Ok(Message::NavState(NavState {
+            gps_ok: true,
+            calibrated: true,
+            ..Default::default()
+        }))
+    );
+    *payload.last_mut().unwrap() = 0b1000;
+    assert_eq!(
+        Message::deserialize_payload(id::NAV_STATE, &payload),
+        Err(crate::messages::PayloadError::Invalid)
+    );
 }

@@ -13,8 +13,9 @@ the figure covers: frame written → pty → bridge decode/convert → DDS → p
 error is bounded by half the best ping round trip (tens of µs on a pty). The DDS source
 timestamp (when the bridge called write) splits it into bridge-side and DDS+peer-side parts.
 
-Loss: the fake MCU runs with --imu-counter (its IMU frame counter in gyro x = angular_velocity.x
-in FLU); every jump of the counter counts the frames skipped.
+Loss: the fake MCU runs with --imu-counter (its IMU frame counter modulo 32767 in gyro x =
+angular_velocity.x in FLU, as a count of the link's gyro LSB, 2000 deg/s / 32768); every jump of
+the unwrapped counter counts the frames skipped.
 CPU: utime+stime of --bridge-pid over the window / wall time (percent of one core).
 
 Prints one line `RESULT {json}`. Run only inside a loopback-only namespace (netns-run).
@@ -32,6 +33,11 @@ from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 import ros_types as rt
+
+# The link's gyro resolution (msg/src/fixed.rs, `gyro`): 2000 deg/s / 32768, in rad/s; the
+# fake's counter wraps at COUNTER_MOD.
+GYRO_LSB_RADPS = 2000.0 / 32768.0 * 3.141592653589793 / 180.0
+COUNTER_MOD = 32767
 
 
 def cpu_ticks(pid):
@@ -68,6 +74,7 @@ def main():
     t_start = t_end = None
     cpu0 = cpu1 = None
     lat, bridge_part, dds_part, stamps, seqs = [], [], [], [], []
+    counter_base = 0
     batch_max = 0
     t_begin = time.time()
     while True:
@@ -99,7 +106,10 @@ def main():
             n += 1
             st = s.header.stamp.sec * 1_000_000_000 + s.header.stamp.nanosec
             stamps.append(st)
-            seqs.append(int(round(s.angular_velocity.x)))
+            raw = int(round(s.angular_velocity.x / GYRO_LSB_RADPS))
+            if seqs and raw < seqs[-1] % COUNTER_MOD - COUNTER_MOD // 2:
+                counter_base += COUNTER_MOD
+            seqs.append(counter_base + raw)
             lat.append((now_ns - st) * 1e-6)
             src = s.sample_info.source_timestamp
             if src and src > 0:

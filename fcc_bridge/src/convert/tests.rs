@@ -856,9 +856,11 @@ fn home_published_when_set_and_when_moved() {
     .unwrap();
     let nav = |home_set: bool, lat: f64| link::NavState {
         q_body_to_ned: [1.0, 0.0, 0.0, 0.0],
-        home_lat_deg: lat,
-        home_lon_deg: 8.545_594,
-        home_alt_m: 488.5,
+        home: Some(link::HomePosition {
+            lat_deg: lat,
+            lon_deg: 8.545_594,
+            alt_m: 488.5,
+        }),
         home_set,
         ..Default::default()
     };
@@ -882,5 +884,10 @@ fn home_published_when_set_and_when_moved() {
         (47.397_742, 8.545_594, 488.5)
     );
     assert!(homes(nav(true, 47.397_742), 30).is_empty(), "unchanged");
+    let without = link::NavState {
+        home: None,
+        ..nav(true, 47.4)
+    };
+    assert!(homes(without, 35).is_empty(), "this frame carries no home");
     assert_eq!(homes(nav(true, 47.4), 40).len(), 1, "moved");
 }

@@ -25,8 +25,8 @@ use crate::sensors::{
 };
 use fcc_msgs::{
     period_us, AltitudeFusion, AltitudeSource, BaroRaw, Battery, CommandAck, CommandKind,
-    CommandResult, EncodeError, Encoder, FrameDecoder, GpsRaw, HandshakeError, Hello, ImuRaw,
-    LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult, RangeRaw, RangeSensor,
+    CommandResult, EncodeError, Encoder, FrameDecoder, GpsRaw, HandshakeError, Hello, HomePosition,
+    ImuRaw, LinkCounters, MagRaw, Message, NavState, ParamAck, ParamResult, RangeRaw, RangeSensor,
     SensorHealth, Status, Stream, StreamRates, TimeSyncPong,
 };
 use fcc_nav::ground_altitude::GroundSource;
@@ -191,7 +191,14 @@ pub struct LinkEndpoint {
     loop_max_us: u32,
     loop_sum_us: u64,
     loop_n: u32,
+    /// The home last put in a `NavState` and when (MCU µs): it goes again after
+    /// [`HOME_RESEND_US`], when it changes, and at a new session.
+    home_sent: Option<(HomePosition, u64)>,
 }
+
+/// `NavState` carries the home about once a second (and at once when it changes): it is
+/// 20 of a frame's bytes, at 100 Hz a fifth of the link's, for a value that rarely changes.
+pub const HOME_RESEND_US: u64 = 1_000_000;
 
 impl Default for LinkEndpoint {
     fn default() -> Self {
@@ -218,6 +225,7 @@ impl LinkEndpoint {
             loop_max_us: 0,
             loop_sum_us: 0,
             loop_n: 0,
+            home_sent: None,
         }
     }
 
@@ -285,6 +293,7 @@ impl LinkEndpoint {
                     Err(e) => PeerState::Incompatible(e),
                 };
                 self.pending_hello = true;
+                self.home_sent = None;
             }
             Message::TimeSyncPing(p) => self.pending_pong = Some((p.linux_time_ns, now_us)),
             Message::VelocitySetpoint(sp) => {
@@ -488,7 +497,10 @@ impl LinkEndpoint {
         let l = &mut self.latest;
         Some(match stream {
             Stream::Status => (Message::Status(core_status(core, self.status())), now_us),
-            Stream::NavState => (Message::NavState(nav_state(core)), nav.t_us),
+            Stream::NavState => {
+                let home = self.home_due(core, now_us);
+                (Message::NavState(nav_state(core, home)), nav.t_us)
+            }
             Stream::Altitude => {
                 let range = |s: &Latest<RangeSample>| s.sample.map_or(f32::NAN, |r| r.range_m);
                 let m = AltitudeFusion {
@@ -629,9 +641,32 @@ fn core_status(core: &FlightCore, mut s: Status) -> Status {
     s
 }
 
-fn nav_state(core: &FlightCore) -> NavState {
+impl LinkEndpoint {
+    /// The home to put in this `NavState`: when there is one and it was not sent within
+    /// [`HOME_RESEND_US`] or has changed since.
+    fn home_due(&mut self, core: &FlightCore, now_us: u64) -> Option<HomePosition> {
+        let home = core.navigator().home().map(|h| HomePosition {
+            lat_deg: h.lat_deg,
+            lon_deg: h.lon_deg,
+            alt_m: h.alt_m as f32,
+        })?;
+        // Changed: compared bit for bit (an f64 `==` is a soft-float call on the M4F).
+        let bits = |h: &HomePosition| (h.lat_deg.to_bits(), h.lon_deg.to_bits(), h.alt_m.to_bits());
+        let due = match self.home_sent {
+            Some((sent, at)) => {
+                bits(&sent) != bits(&home) || now_us.saturating_sub(at) >= HOME_RESEND_US
+            }
+            None => true,
+        };
+        if due {
+            self.home_sent = Some((home, now_us));
+        }
+        due.then_some(home)
+    }
+}
+
+fn nav_state(core: &FlightCore, home: Option<HomePosition>) -> NavState {
     let n = core.nav();
-    let home = core.navigator().home();
     NavState {
         q_body_to_ned: quat_from_euler(n.euler.roll_rad, n.euler.pitch_rad, n.euler.yaw_rad),
         rate_frd_radps: n.rate_frd_radps,
@@ -639,9 +674,7 @@ fn nav_state(core: &FlightCore) -> NavState {
         vel_ned_mps: n.vel_ned_mps,
         accel_ned_mps2: n.accel_ned_mps2,
         accel_obs_ne_mps2: core.telemetry().accel_est_ne_mps2,
-        home_lat_deg: home.map_or(f64::NAN, |h| h.lat_deg),
-        home_lon_deg: home.map_or(f64::NAN, |h| h.lon_deg),
-        home_alt_m: home.map_or(f32::NAN, |h| h.alt_m as f32),
+        home,
         gps_ok: n.gps_ok,
         home_set: n.home_set,
         calibrated: n.calibrated,
