@@ -780,7 +780,8 @@ impl Message {
 /// Integers other than u8 are postcard varints; f32/f64 are little-endian IEEE 754; bool is one
 /// byte 0/1; enums are a varint variant index in the order listed; `Option` is a 0/1 byte then
 /// the value; `[i16 NAME; N]` is `N` little-endian i16 counts of the LSB of [`crate::fixed`]'s
-/// encoding `NAME`. The full schema is this text,
+/// encoding `NAME`, whose value the `fixed` line lists (so a changed resolution changes the
+/// hash; the test `schema_lists_the_fixed_point_resolutions` checks the line). The full schema is this text,
 /// then the `params` line derived from the parameter table ([`crate::param_id::ALL`]: `params
 /// 1=limits.max_horiz_speed_mps 2=…`), then [`SCHEMA_MESSAGES`]; [`SCHEMA_HASH`] is FNV-1a 32
 /// over the whole (`schema_text()`, with std, writes it out).
@@ -793,6 +794,7 @@ enum CommandKind { Arm, Disarm, Hold, Land, Velocity, Kill }
 enum CommandResult { Accepted, NotCalibrated, NoHome, NotLanded, Disarmed, InvalidSetpoint, Incompatible, PilotOverride, KillNotConfirmed }
 enum ParamResult { Accepted, UnknownId, NotFinite, OutOfRange, Incompatible }
 enum YawSetpoint { Keep, Heading { yaw_ned_rad: f32 }, Rate { yaw_rate_ned_radps: f32 } }
+fixed gyro=1.0652644e-3 accel=4.7884033e-3 mag=0.15 unit=3.0518509e-5 vel=0.002 accel_est=0.005 temp=0.01
 ";
 
 /// The schema's messages (after the `params` line): see [`SCHEMA`].
@@ -953,6 +955,40 @@ mod tests {
         assert_eq!(ids.len(), ALL_IDS.len(), "every message must be in SCHEMA");
         for (i, (id, _)) in ids.iter().enumerate() {
             assert_eq!(*id, ALL_IDS[i], "SCHEMA lists messages in id order");
+        }
+    }
+
+    /// The `fixed` line of the schema is the encodings' LSBs (within 10⁻⁶): a resolution
+    /// changed in `fixed.rs` alone fails here, and changing the line changes the hash.
+    #[test]
+    fn schema_lists_the_fixed_point_resolutions() {
+        use crate::fixed::*;
+        let line = SCHEMA.lines().find(|l| l.starts_with("fixed ")).unwrap();
+        let listed: Vec<(&str, f64)> = line
+            .split_whitespace()
+            .skip(1)
+            .map(|kv| {
+                let (k, v) = kv.split_once('=').unwrap();
+                (k, v.parse().unwrap())
+            })
+            .collect();
+        let ours = [
+            ("gyro", gyro::LSB),
+            ("accel", accel::LSB),
+            ("mag", mag::LSB),
+            ("unit", unit::LSB),
+            ("vel", vel::LSB),
+            ("accel_est", accel_est::LSB),
+            ("temp", temp::LSB),
+        ];
+        assert_eq!(listed.len(), ours.len(), "{line}");
+        for ((name, v), (ours_name, lsb)) in listed.iter().zip(ours) {
+            assert_eq!(*name, ours_name);
+            let lsb = f64::from(lsb);
+            assert!(
+                (v - lsb).abs() <= 1e-6 * lsb,
+                "{name}: schema {v}, fixed.rs {lsb}"
+            );
         }
     }
 
