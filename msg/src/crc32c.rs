@@ -37,58 +37,64 @@ pub fn crc32c(bytes: &[u8]) -> u32 {
     CRC32C.checksum(bytes)
 }
 
+/// The instruction paths' common walk, given the instruction for 8, 4, 2 and 1 bytes: 8-byte
+/// words, then the 0..7 bytes left in at most three dependent steps (4, 2, 1), not seven; init
+/// and xorout applied here. Inlined into each `#[target_feature]` caller.
+#[cfg(all(feature = "std", any(target_arch = "x86_64", target_arch = "aarch64")))]
+#[inline(always)]
+fn by_words(
+    bytes: &[u8],
+    d: impl Fn(u32, u64) -> u32,
+    w: impl Fn(u32, u32) -> u32,
+    h: impl Fn(u32, u16) -> u32,
+    b: impl Fn(u32, u8) -> u32,
+) -> u32 {
+    let mut crc = u32::MAX;
+    let mut words = bytes.chunks_exact(8);
+    for x in &mut words {
+        let mut le = [0u8; 8];
+        le.copy_from_slice(x);
+        crc = d(crc, u64::from_le_bytes(le));
+    }
+    let mut rest = words.remainder();
+    if let Some((x, r)) = rest.split_first_chunk::<4>() {
+        crc = w(crc, u32::from_le_bytes(*x));
+        rest = r;
+    }
+    if let Some((x, r)) = rest.split_first_chunk::<2>() {
+        crc = h(crc, u16::from_le_bytes(*x));
+        rest = r;
+    }
+    if let Some(&x) = rest.first() {
+        crc = b(crc, x);
+    }
+    !crc
+}
+
 #[cfg(all(feature = "std", target_arch = "x86_64"))]
 #[target_feature(enable = "sse4.2")]
 unsafe fn sse42(bytes: &[u8]) -> u32 {
     use core::arch::x86_64::{_mm_crc32_u16, _mm_crc32_u32, _mm_crc32_u64, _mm_crc32_u8};
-    let mut crc = u64::from(u32::MAX);
-    let mut words = bytes.chunks_exact(8);
-    for w in &mut words {
-        let mut b = [0u8; 8];
-        b.copy_from_slice(w);
-        crc = _mm_crc32_u64(crc, u64::from_le_bytes(b));
-    }
-    // The 0..7 bytes left: at most three dependent steps (4, 2, 1 bytes), not seven.
-    let mut crc = crc as u32;
-    let mut rest = words.remainder();
-    if let Some((w, r)) = rest.split_first_chunk::<4>() {
-        crc = _mm_crc32_u32(crc, u32::from_le_bytes(*w));
-        rest = r;
-    }
-    if let Some((w, r)) = rest.split_first_chunk::<2>() {
-        crc = _mm_crc32_u16(crc, u16::from_le_bytes(*w));
-        rest = r;
-    }
-    if let Some(&b) = rest.first() {
-        crc = _mm_crc32_u8(crc, b);
-    }
-    !crc
+    by_words(
+        bytes,
+        |c, x| _mm_crc32_u64(u64::from(c), x) as u32,
+        |c, x| _mm_crc32_u32(c, x),
+        |c, x| _mm_crc32_u16(c, x),
+        |c, x| _mm_crc32_u8(c, x),
+    )
 }
 
 #[cfg(all(feature = "std", target_arch = "aarch64"))]
 #[target_feature(enable = "crc")]
 unsafe fn armv8(bytes: &[u8]) -> u32 {
     use core::arch::aarch64::{__crc32cb, __crc32cd, __crc32ch, __crc32cw};
-    let mut crc = u32::MAX;
-    let mut words = bytes.chunks_exact(8);
-    for w in &mut words {
-        let mut b = [0u8; 8];
-        b.copy_from_slice(w);
-        crc = __crc32cd(crc, u64::from_le_bytes(b));
-    }
-    let mut rest = words.remainder();
-    if let Some((w, r)) = rest.split_first_chunk::<4>() {
-        crc = __crc32cw(crc, u32::from_le_bytes(*w));
-        rest = r;
-    }
-    if let Some((w, r)) = rest.split_first_chunk::<2>() {
-        crc = __crc32ch(crc, u16::from_le_bytes(*w));
-        rest = r;
-    }
-    if let Some(&b) = rest.first() {
-        crc = __crc32cb(crc, b);
-    }
-    !crc
+    by_words(
+        bytes,
+        |c, x| __crc32cd(c, x),
+        |c, x| __crc32cw(c, x),
+        |c, x| __crc32ch(c, x),
+        |c, x| __crc32cb(c, x),
+    )
 }
 
 #[cfg(test)]

@@ -277,24 +277,12 @@ impl FrameDecoder {
     /// Feed one byte; returns a frame (or the reason a candidate was rejected) when a 0x00
     /// completes one, or when an overrun is detected.
     pub fn push(&mut self, byte: u8) -> Option<Result<Frame, DecodeError>> {
-        let c = &mut self.counters;
-        c.rx_bytes = c.rx_bytes.wrapping_add(1);
         if byte != 0 {
-            if self.discarding {
-                return None;
-            }
-            let Some(slot) = self.buf.get_mut(self.len) else {
-                self.discarding = true;
-                self.len = 0;
-                c.overruns = c.overruns.wrapping_add(1);
-                c.resyncs = c.resyncs.wrapping_add(1);
-                return Some(Err(DecodeError::Overrun));
-            };
-            *slot = byte;
-            self.len += 1;
-            return None;
+            return self.absorb(&[byte]);
         }
         // Delimiter.
+        let c = &mut self.counters;
+        c.rx_bytes = c.rx_bytes.wrapping_add(1);
         let len = core::mem::replace(&mut self.len, 0);
         if core::mem::replace(&mut self.discarding, false) || len == 0 {
             return None;
@@ -302,8 +290,8 @@ impl FrameDecoder {
         Some(self.finish(len))
     }
 
-    /// Feed a run of non-zero bytes (no delimiter): one copy; an overrun is reported once, as
-    /// [`Self::push`] reports it on the byte that does not fit.
+    /// Feed a run of non-zero bytes (no delimiter): one copy. A run that does not fit is an
+    /// overrun, reported once; the bytes up to the next 0x00 are then dropped.
     fn absorb(&mut self, run: &[u8]) -> Option<Result<Frame, DecodeError>> {
         let c = &mut self.counters;
         c.rx_bytes = c.rx_bytes.wrapping_add(run.len() as u32);

@@ -314,11 +314,12 @@ impl Serialize for NavState {
     }
 }
 
-impl<'de> Deserialize<'de> for NavState {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let w = NavStateWire::deserialize(d)?;
+impl TryFrom<NavStateWire> for NavState {
+    type Error = PayloadError;
+    /// Unpack the flags byte; a bit beyond the three is an invalid payload.
+    fn try_from(w: NavStateWire) -> Result<Self, PayloadError> {
         if w.flags & !(NAV_GPS_OK | NAV_HOME_SET | NAV_CALIBRATED) != 0 {
-            return Err(serde::de::Error::custom("unknown NavState flag bits"));
+            return Err(PayloadError::Invalid);
         }
         Ok(NavState {
             q_body_to_ned: w.q_body_to_ned,
@@ -332,6 +333,13 @@ impl<'de> Deserialize<'de> for NavState {
             home_set: w.flags & NAV_HOME_SET != 0,
             calibrated: w.flags & NAV_CALIBRATED != 0,
         })
+    }
+}
+
+impl<'de> Deserialize<'de> for NavState {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        NavState::try_from(NavStateWire::deserialize(d)?)
+            .map_err(|_| serde::de::Error::custom("unknown NavState flag bits"))
     }
 }
 
@@ -656,7 +664,7 @@ for_each_message!(impl_message);
 /// values and errors as postcard's (the test `fast_decoding_equals_postcard` feeds both
 /// arbitrary payloads).
 mod fast {
-    use super::{HomePosition, ImuRaw, MagRaw, Message, NavState, PayloadError};
+    use super::{HomePosition, ImuRaw, MagRaw, Message, NavState, NavStateWire, PayloadError};
     use crate::fixed::{self, from_count};
     use crate::id;
 
@@ -720,37 +728,26 @@ mod fast {
                 r.end(Message::MagRaw(m))
             })(),
             id::NAV_STATE => (|| {
-                let q_body_to_ned = r.counts(fixed::unit::LSB)?;
-                let rate_frd_radps = r.counts(fixed::gyro::LSB)?;
-                let pos_ned_m = r.f32s()?;
-                let vel_ned_mps = r.counts(fixed::vel::LSB)?;
-                let accel_ned_mps2 = r.counts(fixed::accel_est::LSB)?;
-                let accel_obs_ne_mps2 = r.counts(fixed::accel_est::LSB)?;
-                let home = match r.u8()? {
-                    0 => None,
-                    1 => Some(HomePosition {
-                        lat_deg: r.f64()?,
-                        lon_deg: r.f64()?,
-                        alt_m: f32::from_le_bytes(r.take::<4>()?),
-                    }),
-                    _ => return Err(PayloadError::Invalid),
+                let w = NavStateWire {
+                    q_body_to_ned: r.counts(fixed::unit::LSB)?,
+                    rate_frd_radps: r.counts(fixed::gyro::LSB)?,
+                    pos_ned_m: r.f32s()?,
+                    vel_ned_mps: r.counts(fixed::vel::LSB)?,
+                    accel_ned_mps2: r.counts(fixed::accel_est::LSB)?,
+                    accel_obs_ne_mps2: r.counts(fixed::accel_est::LSB)?,
+                    home: match r.u8()? {
+                        0 => None,
+                        1 => Some(HomePosition {
+                            lat_deg: r.f64()?,
+                            lon_deg: r.f64()?,
+                            alt_m: f32::from_le_bytes(r.take::<4>()?),
+                        }),
+                        _ => return Err(PayloadError::Invalid),
+                    },
+                    flags: r.u8()?,
                 };
-                let flags = r.u8()?;
-                if flags & !(super::NAV_GPS_OK | super::NAV_HOME_SET | super::NAV_CALIBRATED) != 0 {
-                    return Err(PayloadError::Invalid);
-                }
-                r.end(Message::NavState(NavState {
-                    q_body_to_ned,
-                    rate_frd_radps,
-                    pos_ned_m,
-                    vel_ned_mps,
-                    accel_ned_mps2,
-                    accel_obs_ne_mps2,
-                    home,
-                    gps_ok: flags & super::NAV_GPS_OK != 0,
-                    home_set: flags & super::NAV_HOME_SET != 0,
-                    calibrated: flags & super::NAV_CALIBRATED != 0,
-                }))
+                let m = NavState::try_from(w)?;
+                r.end(Message::NavState(m))
             })(),
             _ => return None,
         })

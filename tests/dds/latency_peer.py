@@ -34,9 +34,11 @@ from cyclonedds.util import duration
 
 import ros_types as rt
 
-# The link's gyro resolution (msg/src/fixed.rs, `gyro`): 2000 deg/s / 32768, in rad/s; the
-# fake's counter wraps at COUNTER_MOD.
-GYRO_LSB_RADPS = 2000.0 / 32768.0 * 3.141592653589793 / 180.0
+from link_resolution import LSB
+
+# The fake's counter travels as gyro counts (the schema's `fixed` gyro LSB, rad/s) and wraps at
+# COUNTER_MOD (fcc_bridge/src/fake_mcu.rs IMU_COUNTER_MOD).
+GYRO_LSB_RADPS = LSB["gyro"]
 COUNTER_MOD = 32767
 
 

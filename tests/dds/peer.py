@@ -26,6 +26,7 @@ from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 import ros_types as rt
+from link_resolution import LSB
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "lib"))
 from truth import qmul, qrot  # noqa: E402
@@ -86,14 +87,14 @@ class Checks:
         sys.stdout.flush()
 
 
-# The link's fixed-point resolutions (msg/src/fixed.rs): the IMU, magnetometer, attitude,
-# rates and velocity cross the UART as i16 counts, so a value comes back within half a count
-# (a frame or sign error is far larger).
-GYRO_LSB = 2000.0 / 32768.0 * math.pi / 180.0   # rad/s
-ACCEL_LSB = 16.0 * 9.80665 / 32768.0            # m/s^2
-MAG_LSB_T = 0.15e-6                             # tesla
-Q_TOL = 2.0 / 32767.0                           # quaternion components after the frame change
-VEL_TOL = 0.002 + 2.0 * Q_TOL * 2.0             # half a velocity count + the rotation's share
+# The link's fixed-point resolutions (the schema's `fixed` line): the IMU, magnetometer,
+# attitude, rates and velocity cross the UART as i16 counts, so a value comes back within half
+# a count (a frame or sign error is far larger).
+GYRO_LSB = LSB["gyro"]                          # rad/s
+ACCEL_LSB = LSB["accel"]                        # m/s^2
+MAG_LSB_T = LSB["mag"] * 1e-6                   # tesla
+Q_TOL = 2.0 * LSB["unit"]                       # quaternion components after the frame change
+VEL_TOL = LSB["vel"] + 2.0 * Q_TOL * 2.0        # half a velocity count + the rotation's share
 
 
 def close(a, b, tol=1e-4):
