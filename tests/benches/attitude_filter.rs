@@ -2,8 +2,9 @@
 //! (`fcc_nav::attitude::AttitudeEstimator` as `fcc_firmware::nav` runs it in the loop) against
 //! the `ahrs` crate's Madgwick and Mahony filters on the same simulated samples of two flights:
 //! the square (`square.yaml`) and a manoeuvring zig-zag (`manoeuvre.yaml`: 6 m/s, 3 m/s²
-//! velocity-command limit, 90–150° turns without a stop, another seed). Run by
-//! `scripts/bench.sh`; alone: `cargo bench -p fcc_tests --bench attitude_filter`.
+//! velocity-command limit, 90–150° turns without a stop, another seed), each flown with
+//! [`SEEDS`] seeds. Run by `scripts/bench.sh`; alone: `cargo bench -p fcc_tests --features
+//! bench-peers --bench attitude_filter`.
 //!
 //! ## Same inputs for every filter
 //! The samples the flight core received (captured exactly, see `common/mod.rs`), with the
@@ -16,7 +17,9 @@
 //! from the low-passed specific force before reading it as a gravity direction. The peers get
 //! the same: the very NED acceleration the core removed on that tick (captured from
 //! `Navigator::tilt_accel_comp_ned_mps2`), rotated into the body with *their own* current
-//! attitude (ours uses its own; nothing of our estimate reaches theirs).
+//! attitude (ours uses its own; nothing of our estimate reaches theirs). They may also take the
+//! acceleration between the last two GPS velocities unsmoothed (less lag, more noise), which
+//! the core does not use.
 //!
 //! ## Ours is the in-loop estimate
 //! Ours is `AttitudeEstimator` with the production gains fed exactly what `Navigator::imu_update`
@@ -26,11 +29,13 @@
 //!
 //! ## The peers are tuned, per flight
 //! Each peer runs over a grid: gain(s) × accelerometer raw or through the firmware's low-pass ×
-//! with or without the manoeuvre compensation × magnetometer held every tick or only on new
-//! samples; each flight reports the peer's best setting for that flight (lowest RMS over the
-//! three axes). Ours is not tuned per flight: one set of production gains.
+//! the core's manoeuvre compensation, the unsmoothed one or none × magnetometer held every
+//! tick or only on new samples; each flight reports the peer's best setting for that flight
+//! (lowest RMS over the three axes, over all its seeds). Ours is not tuned per flight: one set
+//! of production gains.
 //!
-//! Truth is the physics' attitude at every tick; errors are RMS over the airborne ticks.
+//! Truth is the physics' attitude at every tick; errors are RMS over the airborne ticks of all
+//! the flight's seeds.
 //! Speed: ns per update over the square's prepared sequence (the low-pass output prepared
 //! beforehand for everyone; the compensation's rotation into the body is inside the timed loop
 //! for everyone), best of 5, each peer in its best square setting.
@@ -38,7 +43,7 @@
 mod common;
 
 use ahrs::{Ahrs, Madgwick, Mahony};
-use common::{best_of, capture, note, row, thousands, verdict};
+use common::{best_of, capture_seeded, note, row, thousands, verdict};
 use fcc_firmware::params::NavParams;
 use fcc_nav::attitude::{accel_tilt_rad, mag_heading_rad, AttitudeEstimator, Euler};
 use fcc_nav::lowpass::LowPass2;
@@ -48,6 +53,13 @@ use std::f64::consts::PI;
 /// The flights of the comparison (scenario files), in table order.
 const FLIGHTS: [&str; 2] = ["square", "manoeuvre"];
 
+/// Each flight is flown with this many seeds: the scenario's own, then the next ones (every
+/// random process of the run: sensor noise and biases, the calibration residuals, the wind).
+/// One seed decides too much: the magnetometer calibration's residual sets a heading error of
+/// 0.2–1.5° that every filter starts from, and a filter that hardly corrects its yaw wins or
+/// loses on whether its gyro drift happens to cancel it on that seed.
+const SEEDS: u64 = 12;
+
 /// Prepared inputs of one tick.
 #[derive(Clone, Copy)]
 struct In {
@@ -56,6 +68,10 @@ struct In {
     accel_lpf: [f32; 3],
     /// The manoeuvre acceleration (NED) the core removed from the specific force this tick.
     comp_ned: [f32; 3],
+    /// The acceleration between the last two GPS velocities (NED, unsmoothed; zero when the
+    /// last is over 0.3 s old, as the core's).
+    comp_diff_ned: [f32; 3],
+
     /// New magnetometer sample this tick.
     mag_new: Option<[f32; 3]>,
     /// Newest magnetometer sample so far (held).
@@ -69,7 +85,7 @@ struct In {
 
 /// One captured flight, prepared.
 struct Flight {
-    name: &'static str,
+    seed: u64,
     nav: NavParams,
     xs: Vec<In>,
     init: Euler,
@@ -88,8 +104,12 @@ enum AccelIn {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Comp {
-    /// The manoeuvre acceleration removed (as the core does).
+    /// The manoeuvre acceleration the core's accelerometer path removes (GPS-differenced,
+    /// smoothed) removed.
     Gps,
+    /// The acceleration between the last two GPS velocities (unsmoothed: less lag, more noise)
+    /// removed.
+    GpsDiff,
     /// The specific force as measured.
     Off,
 }
@@ -114,7 +134,7 @@ impl Setting {
     fn all() -> Vec<Setting> {
         let mut v = Vec::new();
         for accel in [AccelIn::Raw, AccelIn::LowPass] {
-            for comp in [Comp::Gps, Comp::Off] {
+            for comp in [Comp::Gps, Comp::GpsDiff, Comp::Off] {
                 for mag in [MagIn::Held, MagIn::NewOnly] {
                     v.push(Setting { accel, comp, mag });
                 }
@@ -125,6 +145,7 @@ impl Setting {
     fn text(&self) -> String {
         let comp = match self.comp {
             Comp::Gps => "compensated",
+            Comp::GpsDiff => "compensated (unsmoothed)",
             Comp::Off => "uncompensated",
         };
         format!("{:?} {comp} accel, mag {:?}", self.accel, self.mag)
@@ -198,8 +219,8 @@ fn v3(a: [f32; 3]) -> Vector3<f32> {
 }
 
 /// Capture `name` and prepare every filter's inputs exactly as `fcc_firmware::nav` does.
-fn prepare(name: &'static str) -> Flight {
-    let cap = capture(name, false);
+fn prepare(name: &'static str, seed_add: u64) -> Flight {
+    let cap = capture_seeded(name, seed_add, false);
     let nav = cap.params.nav;
     let decl_f32 = nav.declination_deg.to_radians();
     // The core's calibration: every tick up to and including the one it completes on (the
@@ -243,6 +264,10 @@ fn prepare(name: &'static str) -> Flight {
     let mut held = m0;
     let mut last_imu_us: Option<u64> = None;
     let mut comp_ned = [0.0f32; 3];
+    let mut comp_diff_ned = [0.0f32; 3];
+    let mut gps_diff = [0.0f32; 3];
+    let mut last_gps: Option<(u64, [f32; 3])> = None;
+
     let mut xs = Vec::new();
     for (k, t) in cap.ticks.iter().enumerate() {
         let imu = t.inputs.imu.unwrap();
@@ -266,6 +291,7 @@ fn prepare(name: &'static str) -> Flight {
                 accel_raw: acc,
                 accel_lpf: acc_lp,
                 comp_ned,
+                comp_diff_ned,
                 mag_new,
                 mag_held: held,
                 dt_s,
@@ -275,11 +301,22 @@ fn prepare(name: &'static str) -> Flight {
             });
         }
         comp_ned = t.tilt_comp_next_ned_mps2;
+        if let Some(g) = t.inputs.gps.filter(|g| g.fix_ok) {
+            if let Some((t0, v0)) = last_gps {
+                let dt = (t.t_us - t0) as f32 * 1e-6;
+                if dt > 0.05 && dt < 1.0 {
+                    gps_diff = std::array::from_fn(|i| (g.vel_ned_mps[i] - v0[i]) / dt);
+                }
+            }
+            last_gps = Some((t.t_us, g.vel_ned_mps));
+        }
+        let fresh = last_gps.is_some_and(|(t0, _)| t.t_us - t0 <= 300_000);
+        comp_diff_ned = if fresh { gps_diff } else { [0.0; 3] };
     }
     let airborne_n = xs.iter().filter(|x| x.airborne).count();
     assert!(airborne_n > 1000, "the flight must be airborne for a while");
     Flight {
-        name,
+        seed: cap.seed,
         nav,
         xs,
         init,
@@ -310,25 +347,47 @@ fn ours_step(est: &mut AttitudeEstimator, x: &In) -> Euler {
     est.update_compensated(x.gyro, x.accel_lpf, x.comp_ned, x.mag_new, x.dt_s)
 }
 
-/// Ours over the flight; asserts it reproduces the simulator core's estimate on every tick.
-fn run_ours(f: &Flight) -> Rms {
-    let mut est = ours_new(f);
+/// One flight shape flown with [`SEEDS`] seeds.
+struct Shape {
+    name: &'static str,
+    flights: Vec<Flight>,
+}
+
+impl Shape {
+    fn airborne_n(&self) -> usize {
+        self.flights.iter().map(|f| f.airborne_n).sum()
+    }
+    fn sim_s(&self) -> f64 {
+        self.flights.iter().map(|f| f.sim_s).sum()
+    }
+}
+
+/// Ours over every flight of the shape (RMS over all their airborne ticks); asserts it
+/// reproduces the simulator core's estimate on every tick.
+fn run_ours(sh: &Shape) -> Rms {
     let mut s = Scorer::new();
+    for f in &sh.flights {
+        run_ours_on(f, sh.name, &mut s);
+    }
+    s.rms()
+}
+
+fn run_ours_on(f: &Flight, name: &str, s: &mut Scorer) {
+    let mut est = ours_new(f);
     for (k, x) in f.xs.iter().enumerate() {
         let e = ours_step(&mut est, x);
         let got = [e.roll_rad, e.pitch_rad, e.yaw_rad];
         assert_eq!(
             got.map(f32::to_bits),
             x.core.map(f32::to_bits),
-            "{}: tick {k} after calibration: the bench's estimator ({got:?}) is not the core's ({:?})",
-            f.name,
+            "{name} seed {}: tick {k} after calibration: the bench's estimator ({got:?}) is not the core's ({:?})",
+            f.seed,
             x.core
         );
         if x.airborne {
             s.add(got.map(|v| v as f64), x.truth);
         }
     }
-    s.rms()
 }
 
 /// Madgwick/Mahony inputs: body FRD, NED earth frame. Their accelerometer reference is the
@@ -347,8 +406,10 @@ fn peer_step<F: Ahrs<f32>>(
         AccelIn::Raw => x.accel_raw,
         AccelIn::LowPass => x.accel_lpf,
     });
-    if s.comp == Comp::Gps {
-        sf -= q.inverse_transform_vector(&v3(x.comp_ned));
+    match s.comp {
+        Comp::Gps => sf -= q.inverse_transform_vector(&v3(x.comp_ned)),
+        Comp::GpsDiff => sf -= q.inverse_transform_vector(&v3(x.comp_diff_ned)),
+        Comp::Off => {}
     }
     let acc = -sf;
     let mag = match s.mag {
@@ -373,13 +434,18 @@ fn peer_q0(f: &Flight) -> UnitQuaternion<f32> {
     UnitQuaternion::from_euler_angles(e.roll_rad, e.pitch_rad, (e.yaw_rad as f64 - f.decl) as f32)
 }
 
-fn run_peer<F: Ahrs<f32>>(mut p: F, f: &Flight, s: Setting) -> Rms {
-    let mut q = peer_q0(f);
+/// A peer made by `new` (from a flight's start attitude) over every flight of the shape, in
+/// one setting: RMS over all their airborne ticks.
+fn run_peer<F: Ahrs<f32>>(new: impl Fn(UnitQuaternion<f32>) -> F, sh: &Shape, s: Setting) -> Rms {
     let mut sc = Scorer::new();
-    for x in &f.xs {
-        q = peer_step(&mut p, &q, x, s);
-        if x.airborne {
-            sc.add(peer_euler(&q, f.decl), x.truth);
+    for f in &sh.flights {
+        let mut q = peer_q0(f);
+        let mut p = new(q);
+        for x in &f.xs {
+            q = peer_step(&mut p, &q, x, s);
+            if x.airborne {
+                sc.add(peer_euler(&q, f.decl), x.truth);
+            }
         }
     }
     sc.rms()
@@ -390,12 +456,12 @@ const MADGWICK_BETAS: [f32; 9] = [0.0002, 0.0005, 0.001, 0.002, 0.005, 0.01, 0.0
 const MAHONY_KPS: [f32; 9] = [0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0];
 const MAHONY_KIS: [f32; 4] = [0.0, 0.001, 0.005, 0.02];
 
-/// Madgwick's best β and setting on `f`.
-fn tune_madgwick(f: &Flight) -> (f32, Setting, Rms) {
+/// Madgwick's best β and setting on the shape (one setting for all its seeds).
+fn tune_madgwick(f: &Shape) -> (f32, Setting, Rms) {
     let mut best: Option<(f32, Setting, Rms)> = None;
     for beta in MADGWICK_BETAS {
         for s in Setting::all() {
-            let r = run_peer(Madgwick::new_with_quat(DT_S, beta, peer_q0(f)), f, s);
+            let r = run_peer(|q| Madgwick::new_with_quat(DT_S, beta, q), f, s);
             if best.as_ref().is_none_or(|b| r.total() < b.2.total()) {
                 best = Some((beta, s, r));
             }
@@ -404,13 +470,13 @@ fn tune_madgwick(f: &Flight) -> (f32, Setting, Rms) {
     best.unwrap()
 }
 
-/// Mahony's best (kp, ki) and setting on `f`.
-fn tune_mahony(f: &Flight) -> ((f32, f32), Setting, Rms) {
+/// Mahony's best (kp, ki) and setting on the shape (one setting for all its seeds).
+fn tune_mahony(f: &Shape) -> ((f32, f32), Setting, Rms) {
     let mut best: Option<((f32, f32), Setting, Rms)> = None;
     for kp in MAHONY_KPS {
         for ki in MAHONY_KIS {
             for s in Setting::all() {
-                let r = run_peer(Mahony::new_with_quat(DT_S, kp, ki, peer_q0(f)), f, s);
+                let r = run_peer(|q| Mahony::new_with_quat(DT_S, kp, ki, q), f, s);
                 if best.as_ref().is_none_or(|b| r.total() < b.2.total()) {
                     best = Some(((kp, ki), s, r));
                 }
@@ -426,7 +492,7 @@ fn ns_per_update(f: &Flight, mut run: impl FnMut(&[In]) -> f32) -> f64 {
 }
 
 struct Result1 {
-    flight: Flight,
+    shape: Shape,
     ours: Rms,
     core: Rms,
     mad: (f32, Setting, Rms),
@@ -446,7 +512,7 @@ fn worst_ratio(rs: &[Result1], peer: impl Fn(&Result1) -> Rms) -> f64 {
 
 fn per_flight(rs: &[Result1], text: impl Fn(&Result1) -> String) -> String {
     rs.iter()
-        .map(|r| format!("{}: {}", r.flight.name, text(r)))
+        .map(|r| format!("{}: {}", r.shape.name, text(r)))
         .collect::<Vec<_>>()
         .join("; ")
 }
@@ -455,20 +521,25 @@ fn main() {
     let rs: Vec<Result1> = FLIGHTS
         .iter()
         .map(|&name| {
-            let flight = prepare(name);
-            let ours = run_ours(&flight);
+            let shape = Shape {
+                name,
+                flights: (0..SEEDS).map(|k| prepare(name, k)).collect(),
+            };
+            let ours = run_ours(&shape);
             let mut core = Scorer::new();
-            for x in flight.xs.iter().filter(|x| x.airborne) {
-                core.add(x.core.map(|v| v as f64), x.truth);
+            for f in &shape.flights {
+                for x in f.xs.iter().filter(|x| x.airborne) {
+                    core.add(x.core.map(|v| v as f64), x.truth);
+                }
             }
-            let mad = tune_madgwick(&flight);
-            let mah = tune_mahony(&flight);
+            let mad = tune_madgwick(&shape);
+            let mah = tune_mahony(&shape);
             Result1 {
                 ours,
                 core: core.rms(),
                 mad,
                 mah,
-                flight,
+                shape,
             }
         })
         .collect();
@@ -477,29 +548,29 @@ fn main() {
         assert_eq!(r.ours.axes(), r.core.axes());
     }
 
-    // Speed on the square, each peer in its best square setting.
-    let sq = &rs[0];
-    let ours_ns = ns_per_update(&sq.flight, |xs| {
-        let mut est = ours_new(&sq.flight);
+    // Speed on the square (its first seed), each peer in its best square setting.
+    let sq = &rs[0].shape.flights[0];
+    let ours_ns = ns_per_update(sq, |xs| {
+        let mut est = ours_new(sq);
         let mut acc = 0.0f32;
         for x in xs {
             acc += ours_step(&mut est, std::hint::black_box(x)).yaw_rad;
         }
         acc
     });
-    let (beta, mad_s, _) = sq.mad;
-    let mad_ns = ns_per_update(&sq.flight, |xs| {
-        let mut p = Madgwick::new_with_quat(DT_S, beta, peer_q0(&sq.flight));
-        let mut q = peer_q0(&sq.flight);
+    let (beta, mad_s, _) = rs[0].mad;
+    let mad_ns = ns_per_update(sq, |xs| {
+        let mut p = Madgwick::new_with_quat(DT_S, beta, peer_q0(sq));
+        let mut q = peer_q0(sq);
         for x in xs {
             q = peer_step(&mut p, &q, std::hint::black_box(x), mad_s);
         }
         q.w
     });
-    let ((kp, ki), mah_s, _) = sq.mah;
-    let mah_ns = ns_per_update(&sq.flight, |xs| {
-        let mut p = Mahony::new_with_quat(DT_S, kp, ki, peer_q0(&sq.flight));
-        let mut q = peer_q0(&sq.flight);
+    let ((kp, ki), mah_s, _) = rs[0].mah;
+    let mah_ns = ns_per_update(sq, |xs| {
+        let mut p = Mahony::new_with_quat(DT_S, kp, ki, peer_q0(sq));
+        let mut q = peer_q0(sq);
         for x in xs {
             q = peer_step(&mut p, &q, std::hint::black_box(x), mah_s);
         }
@@ -558,9 +629,11 @@ fn main() {
     );
     let flights = per_flight(&rs, |r| {
         format!(
-            "{} airborne ticks, {:.0} s simulated; Madgwick best with {}, Mahony with {}",
-            thousands(r.flight.airborne_n as f64),
-            r.flight.sim_s,
+            "seeds {}–{}, {} airborne ticks, {:.0} s simulated; Madgwick best with {}, Mahony with {}",
+            r.shape.flights[0].seed,
+            r.shape.flights[r.shape.flights.len() - 1].seed,
+            thousands(r.shape.airborne_n() as f64),
+            r.shape.sim_s(),
             r.mad.1.text(),
             r.mah.1.text()
         )
@@ -568,8 +641,8 @@ fn main() {
     note(
         "2",
         &format!(
-            "Flights: `square.yaml` (seed 7) and `manoeuvre.yaml` (seed 11: zig-zag at 6 m/s, 3 m/s² command limit, 90–150° turns without a stop, 5 m/s wind) — {flights}. Ours = the flight core's in-loop estimate (the bench re-runs `AttitudeEstimator` with the core's exact inputs and asserts on every tick that it equals the core's output bit for bit): production gains, the same on both flights. Peers get the same samples, calibration and start attitude, and the same GPS-derived manoeuvre acceleration the core removes from the accelerometer (rotated into the body with their own attitude); each is tuned per flight over a grid (Madgwick β ∈ {{0.0002 … 0.1}}, Mahony kp ∈ {{0.005 … 2}} × ki ∈ {{0 … 0.02}}, each × accelerometer raw or through the firmware's {} Hz low-pass × with or without the compensation × magnetometer held every tick or only on new samples), best RMS over the three axes. Ratio column of 2a/2c: the worst of ours ÷ peer over the three axes and both flights. Speed: square flight, best of 5, the compensation's rotation inside the loop for every filter. Source: tests/benches/attitude_filter.rs",
-            rs[0].flight.nav.tilt_accel_lpf_hz
+            "Flights: `square.yaml` and `manoeuvre.yaml` (zig-zag at 6 m/s, 3 m/s² command limit, 90–150° turns without a stop, 5 m/s wind), each with {SEEDS} seeds (the scenario's and the next; every random process of a run follows its seed: noise, biases, calibration residuals, wind) — {flights}. RMS over all the airborne ticks of a flight's seeds: on one seed the magnetometer calibration's residual sets a heading error of 0.2–1.5° every filter starts from, and a peer that hardly corrects its yaw wins or loses on whether its gyro drift happens to cancel it there. Ours = the flight core's in-loop estimate (the bench re-runs `AttitudeEstimator` with the core's exact inputs and asserts on every tick that it equals the core's output bit for bit): production gains, the same on both flights. Peers get the same samples, calibration and start attitude, and the same GPS-derived manoeuvre acceleration the core removes from the accelerometer (rotated into the body with their own attitude), or the unsmoothed one the core does not use; each is tuned per flight over a grid (Madgwick β ∈ {{0.0002 … 0.1}}, Mahony kp ∈ {{0.005 … 2}} × ki ∈ {{0 … 0.02}}, each × accelerometer raw or through the firmware's {} Hz low-pass × the core's compensation, the unsmoothed one or none × magnetometer held every tick or only on new samples), one setting for all the flight's seeds, best RMS over the three axes. Ratio column of 2a/2c: the worst of ours ÷ peer over the three axes and both flights. Speed: square flight (first seed), best of 5, the compensation's rotation inside the loop for every filter. Source: tests/benches/attitude_filter.rs",
+            rs[0].shape.flights[0].nav.tilt_accel_lpf_hz
         ),
     );
 }

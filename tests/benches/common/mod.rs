@@ -62,6 +62,8 @@ pub struct Tick {
 
 pub struct Capture {
     pub scenario: String,
+    /// The seed the scenario was flown with.
+    pub seed: u64,
     /// The calibrated parameters the simulator's core runs with.
     pub params: Params,
     pub ticks: Vec<Tick>,
@@ -102,7 +104,13 @@ fn timer_overhead_ns() -> f64 {
 
 /// Fly scenario `name` (flown, not carried; no faults) in lockstep and capture every tick.
 pub fn capture(name: &str, with_link: bool) -> Capture {
-    let s = load_scenario(name);
+    capture_seeded(name, 0, with_link)
+}
+
+/// [`capture`] with `seed_add` added to the scenario's seed (0: the scenario as written).
+pub fn capture_seeded(name: &str, seed_add: u64, with_link: bool) -> Capture {
+    let mut s = load_scenario(name);
+    s.seed += seed_add;
     assert!(
         s.faults.is_empty(),
         "capture replays the sensor models without fault injection: pick a scenario without faults"
@@ -190,6 +198,7 @@ pub fn capture(name: &str, with_link: bool) -> Capture {
     }
     Capture {
         scenario: name.to_string(),
+        seed: s.seed,
         params,
         ticks,
         step_ns,
