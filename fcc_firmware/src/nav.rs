@@ -31,7 +31,7 @@ const TILT_CHECK_EVERY: u8 = 10;
 const GPS_ACCEL_MAX_AGE_S: f32 = 0.3;
 /// [`GPS_ACCEL_MAX_AGE_S`] in µs: the per-step age checks compare integers (a u64 → f32
 /// conversion is a library call on the Cortex-M4F).
-const GPS_ACCEL_MAX_AGE_US: u64 = (GPS_ACCEL_MAX_AGE_S * 1e6) as u64;
+pub const GPS_ACCEL_MAX_AGE_US: u64 = (GPS_ACCEL_MAX_AGE_S * 1e6) as u64;
 /// Once the GPS-differenced acceleration is stale ([`GPS_ACCEL_MAX_AGE_S`] after the last GPS
 /// velocity) in flight, the tilt is held on the gyro alone until the last GPS fix is this old,
 /// s (a GPS-lost LAND from 8 m touches down within ≈ 8 s); then the accelerometer corrects it

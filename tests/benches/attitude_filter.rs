@@ -44,6 +44,7 @@ mod common;
 
 use ahrs::{Ahrs, Madgwick, Mahony};
 use common::{best_of, capture_seeded, note, row, thousands, verdict};
+use fcc_firmware::nav::GPS_ACCEL_MAX_AGE_US;
 use fcc_firmware::params::NavParams;
 use fcc_nav::attitude::{accel_tilt_rad, mag_heading_rad, AttitudeEstimator, Euler};
 use fcc_nav::lowpass::LowPass2;
@@ -69,9 +70,8 @@ struct In {
     /// The manoeuvre acceleration (NED) the core removed from the specific force this tick.
     comp_ned: [f32; 3],
     /// The acceleration between the last two GPS velocities (NED, unsmoothed; zero when the
-    /// last is over 0.3 s old, as the core's).
+    /// last is older than the core's `GPS_ACCEL_MAX_AGE_US`).
     comp_diff_ned: [f32; 3],
-
     /// New magnetometer sample this tick.
     mag_new: Option<[f32; 3]>,
     /// Newest magnetometer sample so far (held).
@@ -267,7 +267,6 @@ fn prepare(name: &'static str, seed_add: u64) -> Flight {
     let mut comp_diff_ned = [0.0f32; 3];
     let mut gps_diff = [0.0f32; 3];
     let mut last_gps: Option<(u64, [f32; 3])> = None;
-
     let mut xs = Vec::new();
     for (k, t) in cap.ticks.iter().enumerate() {
         let imu = t.inputs.imu.unwrap();
@@ -310,7 +309,7 @@ fn prepare(name: &'static str, seed_add: u64) -> Flight {
             }
             last_gps = Some((t.t_us, g.vel_ned_mps));
         }
-        let fresh = last_gps.is_some_and(|(t0, _)| t.t_us - t0 <= 300_000);
+        let fresh = last_gps.is_some_and(|(t0, _)| t.t_us - t0 <= GPS_ACCEL_MAX_AGE_US);
         comp_diff_ned = if fresh { gps_diff } else { [0.0; 3] };
     }
     let airborne_n = xs.iter().filter(|x| x.airborne).count();
@@ -457,11 +456,11 @@ const MAHONY_KPS: [f32; 9] = [0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0];
 const MAHONY_KIS: [f32; 4] = [0.0, 0.001, 0.005, 0.02];
 
 /// Madgwick's best β and setting on the shape (one setting for all its seeds).
-fn tune_madgwick(f: &Shape) -> (f32, Setting, Rms) {
+fn tune_madgwick(sh: &Shape) -> (f32, Setting, Rms) {
     let mut best: Option<(f32, Setting, Rms)> = None;
     for beta in MADGWICK_BETAS {
         for s in Setting::all() {
-            let r = run_peer(|q| Madgwick::new_with_quat(DT_S, beta, q), f, s);
+            let r = run_peer(|q| Madgwick::new_with_quat(DT_S, beta, q), sh, s);
             if best.as_ref().is_none_or(|b| r.total() < b.2.total()) {
                 best = Some((beta, s, r));
             }
@@ -471,12 +470,12 @@ fn tune_madgwick(f: &Shape) -> (f32, Setting, Rms) {
 }
 
 /// Mahony's best (kp, ki) and setting on the shape (one setting for all its seeds).
-fn tune_mahony(f: &Shape) -> ((f32, f32), Setting, Rms) {
+fn tune_mahony(sh: &Shape) -> ((f32, f32), Setting, Rms) {
     let mut best: Option<((f32, f32), Setting, Rms)> = None;
     for kp in MAHONY_KPS {
         for ki in MAHONY_KIS {
             for s in Setting::all() {
-                let r = run_peer(|q| Mahony::new_with_quat(DT_S, kp, ki, q), f, s);
+                let r = run_peer(|q| Mahony::new_with_quat(DT_S, kp, ki, q), sh, s);
                 if best.as_ref().is_none_or(|b| r.total() < b.2.total()) {
                     best = Some(((kp, ki), s, r));
                 }
