@@ -178,8 +178,11 @@ def drain(peer, rec):
 def check_graph(c, peer, node, expect_nodes, what=""):
     """`ros2 node list`, `ros2 topic list -t`: the nodes, every expected topic with its type, and
     exactly one type on every topic."""
-    from ros_cli import node_list, topic_list
-    peer.wait(lambda: set(expect_nodes) <= set(node_list(node)), 20, f"nodes {expect_nodes}")
+    from ros_cli import Timeout, node_list, topic_list
+    try:
+        peer.wait(lambda: set(expect_nodes) <= set(node_list(node)), 20, f"nodes {expect_nodes}")
+    except Timeout:
+        graph_evidence(node, expect_nodes)
     nodes = node_list(node)
     print(f"ros2 node list{what}: {nodes}", flush=True)
     c.check(f"node list{what} shows {', '.join(expect_nodes)}", set(expect_nodes) <= set(nodes), nodes)
@@ -195,7 +198,6 @@ def check_graph(c, peer, node, expect_nodes, what=""):
         return sorted({(t, i.node_namespace + "/" + i.node_name, i.topic_type) for t in tl
                        for i in node.get_publishers_info_by_topic(t) + node.get_subscriptions_info_by_topic(t)
                        if not i.node_name or "UNKNOWN" in i.node_name.upper()})
-    from ros_cli import Timeout
     try:  # the nodes' endpoint lists (ros_discovery_info) may arrive after the endpoints
         peer.wait(lambda: not anonymous(), 10, "every endpoint attributed to a node")
     except Timeout:
@@ -203,6 +205,20 @@ def check_graph(c, peer, node, expect_nodes, what=""):
     anon = anonymous()
     c.check(f"topic info -v{what}: every publisher/subscription belongs to a named node", not anon, anon)
     return nodes, tl
+
+
+def graph_evidence(node, expect_nodes):
+    """What this peer's graph holds when an expected node is missing from `ros2 node list` (a
+    rare Fast DDS discovery loss: fcc_bridge/ros/vendor/rustdds/VENDOR.md): the ros_discovery_info
+    writers it matched, and who publishes the nodes' topics, to tell a lost ros_discovery_info
+    sample from lost endpoints."""
+    from ros_cli import node_list
+    missing = sorted(set(expect_nodes) - set(node_list(node)))
+    print(f"EVIDENCE after 20 s: missing {missing}; node list {node_list(node)}", flush=True)
+    for t in ("/ros_discovery_info", f"{NS}/status", f"{NS}/mission/status", "/rosout"):
+        pubs = sorted((i.node_namespace + "/" + i.node_name, str(i.endpoint_gid)[:40])
+                      for i in node.get_publishers_info_by_topic(t))
+        print(f"EVIDENCE publishers of {t}: {pubs}", flush=True)
 
 
 def check_expected_types(c, tl, topics):
