@@ -21,11 +21,18 @@
 //! first by no more than the factor [`RELAX_MAX`] (the widest calm demand stays below the level
 //! limit: a lull the level limit would clip is no lull). After [`PATIENCE_S`] every threshold,
 //! the abort's too, widens again at the same rate: in a gale the strict lull may not come, and
-//! a slightly worse lull is better than the timeout's. After [`MAX_WAIT_S`] the first instant
-//! with a demand within the level limit and a speed within `k_last·ABORT_SPEED` commits without
-//! the calm time, and after [`LAST_CHANCE_S`] it commits whatever the wind (a vehicle hovering
-//! over its landing spot until the battery ends is worse); both are **forced** (never held
-//! again), and [`TouchdownGate::forced`] reports it. A last-chance commit in a wind whose
+//! a slightly worse lull is better than the timeout's. The speeds never widen beyond
+//! [`CALM_SPEED_CAP_MPS`] and [`ABORT_SPEED_CAP_MPS`]: the estimated ground speed lags and
+//! misses the true one by ≈ 0.1 m/s in a gale, and a commit at 0.26 m/s estimated touched down
+//! at 0.34 m/s true (`hover_gale` seed 1019, waited 24 s). After [`MAX_WAIT_S`] the first
+//! instant with a demand within the level limit and a speed within `k_last·ABORT_SPEED` (capped
+//! the same) commits without the calm time, still sent back by a gust on the way down; after
+//! [`LAST_CHANCE_S`] it commits whatever the wind (a vehicle hovering over its landing spot
+//! until the battery ends is worse), **forced** (never held again), and
+//! [`TouchdownGate::forced`] reports it. (With the forced 30-s commit and the last chance at
+//! 40 s, 10 seed sets of `fcc-campaign --per-family 72 --long` failed 56 flights, the gale's
+//! touchdowns at up to 18.7° and 0.61 m/s; see BENCHMARKS.md for the figures now.) A
+//! last-chance commit in a wind whose
 //! demand the level limit would clip is **unlevel** ([`TouchdownGate::unlevel`]): the vehicle
 //! cannot touch down level there without sliding with the wind, so it touches down holding its
 //! position, its tilt capped near the ground (flight.rs).
@@ -35,14 +42,15 @@
 //!   late = max(0, wait_s − PATIENCE_S) / RELAX_S
 //!   k = min(1 + wait_s/RELAX_S, RELAX_MAX) + late;   k_abort = 1 + late
 //!   k_last = 1 + (wait_s − MAX_WAIT_S) / LAST_RELAX_S
-//!   committed, not forced, c > ABORT_ABOVE, d > k_abort·LEVEL_TILT or v > k_abort·ABORT_SPEED
-//!       → waiting
+//!   committed, not forced, c > ABORT_ABOVE, d > k_abort·LEVEL_TILT or
+//!       v > min(k_abort·ABORT_SPEED, ABORT_SPEED_CAP) → waiting
 //!   committed:  descend (final speed)
 //!   never within ARRIVED of the gate yet:  hold (the approach)
 //!   waiting:  hold c = GATE;  wait_s += dt;  calm_s += dt while d ≤ k·CALM_TILT and
-//!             v ≤ k·CALM_SPEED, else 0
+//!             v ≤ min(k·CALM_SPEED, CALM_SPEED_CAP), else 0
 //!   calm_s ≥ CALM_S → committed
-//!   wait_s ≥ MAX_WAIT_S, d ≤ LEVEL_TILT, v ≤ k_last·ABORT_SPEED → committed, forced
+//!   wait_s ≥ MAX_WAIT_S, d ≤ LEVEL_TILT, v ≤ min(k_last·ABORT_SPEED, ABORT_SPEED_CAP)
+//!       → committed
 //!   wait_s ≥ LAST_CHANCE_S → committed, forced
 //! ```
 //!
@@ -82,13 +90,21 @@ pub const RELAX_MAX: f32 = 1.25;
 /// per [`RELAX_S`] beyond the cap: a worse lull is better than the timeout's, s.
 pub const PATIENCE_S: f32 = 10.0;
 /// Longest wait for a lull, s: then the first instant with a tilt demand within the level
-/// limit and a ground speed within `k_last·ABORT_SPEED_MPS` commits (forced: never held
-/// again) …
+/// limit and a ground speed within `k_last·ABORT_SPEED_MPS` (at most [`ABORT_SPEED_CAP_MPS`])
+/// commits, without the calm time …
 pub const MAX_WAIT_S: f32 = 30.0;
 /// … `k_last` growing by 1 per this much waiting past [`MAX_WAIT_S`], s …
 pub const LAST_RELAX_S: f32 = 5.0;
-/// … and after this whatever the wind, s.
-pub const LAST_CHANCE_S: f32 = 40.0;
+/// … and after this whatever the wind (forced: never held again), s. At 40 s, 4–7 of 360
+/// gale flights (`--family hover_gale`, 5 seed sets) committed there at 10–23° of tilt; at
+/// 90 s none waited that long; 60 s fits the campaign's flights (their durations leave room for
+/// it) and held every gale flight of 10 seed sets.
+pub const LAST_CHANCE_S: f32 = 60.0;
+/// The widened calm speed never exceeds this, m/s (0.3 m/s is the touchdown limit; the
+/// estimate misses the truth by ≈ 0.1 m/s in a gale).
+pub const CALM_SPEED_CAP_MPS: f32 = 0.18;
+/// The widened abort speed never exceeds this, m/s.
+pub const ABORT_SPEED_CAP_MPS: f32 = 0.25;
 
 /// What the final descent does this step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,7 +157,8 @@ impl TouchdownGate {
         if self.committed && !self.forced && clearance_m > ABORT_ABOVE_M {
             let k = 1.0 + late;
             let gust =
-                demand_rad > k * LEVEL_TILT_DEG.to_radians() || speed_mps > k * ABORT_SPEED_MPS;
+                demand_rad > k * LEVEL_TILT_DEG.to_radians()
+                    || speed_mps > (k * ABORT_SPEED_MPS).min(ABORT_SPEED_CAP_MPS);
             if gust {
                 self.committed = false;
                 self.calm_s = 0.0;
@@ -157,22 +174,23 @@ impl TouchdownGate {
         // The longer the wait, the wider the thresholds: the best lull the wind offers.
         let relax = (1.0 + self.wait_s / RELAX_S).min(RELAX_MAX) + late;
         let calm =
-            demand_rad <= relax * CALM_TILT_DEG.to_radians() && speed_mps <= relax * CALM_SPEED_MPS;
+            demand_rad <= relax * CALM_TILT_DEG.to_radians()
+            && speed_mps <= (relax * CALM_SPEED_MPS).min(CALM_SPEED_CAP_MPS);
         self.calm_s = if calm { self.calm_s + dt_s } else { 0.0 };
         self.wait_s += dt_s;
         // Past the longest wait: the first instant the level limit would not clip and the
-        // vehicle is not sliding fast commits (no calm time, no abort); past the last chance,
-        // any.
+        // vehicle is not sliding fast commits (no calm time; a gust still sends it back); past
+        // the last chance, any (forced).
         let k_last = 1.0 + (self.wait_s - MAX_WAIT_S) / LAST_RELAX_S;
         let last_chance = self.wait_s >= MAX_WAIT_S
             && demand_rad <= LEVEL_TILT_DEG.to_radians()
-            && speed_mps <= k_last * ABORT_SPEED_MPS;
-        if self.calm_s >= CALM_S {
+            && speed_mps <= (k_last * ABORT_SPEED_MPS).min(ABORT_SPEED_CAP_MPS);
+        if self.calm_s >= CALM_S || last_chance {
             self.committed = true;
-        } else if last_chance || self.wait_s >= LAST_CHANCE_S {
+        } else if self.wait_s >= LAST_CHANCE_S {
             self.committed = true;
             self.forced = true;
-            self.unlevel = !last_chance && demand_rad > LEVEL_TILT_DEG.to_radians();
+            self.unlevel = demand_rad > LEVEL_TILT_DEG.to_radians();
         }
         if self.committed {
             GateAction::Descend
@@ -268,10 +286,10 @@ mod tests {
         run(&mut g, 0.05, GATE, 20.0, 1.0);
         assert!(g.committed() && g.forced() && g.unlevel());
         assert_eq!(run(&mut g, 0.5, 0.1, 20.0, 1.0), GateAction::Descend);
-        // The 30-s path commits only within the level limit: level.
+        // The 30-s path commits only within the level limit: level, not forced.
         let mut g = waited(MAX_WAIT_S - 0.01);
         run(&mut g, 0.05, GATE, LEVEL_TILT_DEG - 0.5, 0.0);
-        assert!(g.committed() && g.forced() && !g.unlevel());
+        assert!(g.committed() && !g.forced() && !g.unlevel());
         // A lull: level.
         let mut g = TouchdownGate::new();
         run(&mut g, 1.0, GATE, 0.0, 0.0);
@@ -345,22 +363,37 @@ mod tests {
         assert_eq!(run(&mut g, 0.01, 0.08, 7.0, 0.05), GateAction::Descend);
         // … 10° does.
         assert_eq!(run(&mut g, 0.01, 0.08, 10.0, 0.05), GateAction::Hold);
+        // The abort speed stops widening at its cap: 0.3 m/s (< k_abort·0.2 = 0.4) sends it back.
+        assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
+        assert_eq!(run(&mut g, 0.01, 0.08, 2.0, ABORT_SPEED_CAP_MPS + 0.05), GateAction::Hold);
     }
 
     #[test]
-    fn after_the_longest_wait_the_first_fitting_instant_commits_forced() {
+    fn the_calm_speed_stops_widening_at_its_cap() {
+        // After 25 s the widened calm speed would be 2.25·0.12 = 0.27 m/s; capped at 0.18.
+        let mut g = waited(25.0);
+        assert_eq!(run(&mut g, 0.5, GATE, 2.0, CALM_SPEED_CAP_MPS + 0.02), GateAction::Hold);
+        assert_eq!(run(&mut g, 0.5, GATE, 2.0, CALM_SPEED_CAP_MPS - 0.02), GateAction::Descend);
+        assert!(!g.forced());
+    }
+
+    #[test]
+    fn after_the_longest_wait_the_first_fitting_instant_commits() {
         let mut g = waited(MAX_WAIT_S + 0.1);
         // One instant (no calm time) within the level limit and at 0.2 m/s commits …
         assert_eq!(run(&mut g, DT, GATE, 4.0, 0.2), GateAction::Descend);
-        assert!(g.forced());
-        // … and no gust sends it back.
-        assert_eq!(run(&mut g, 0.2, 0.1, 20.0, 1.5), GateAction::Descend);
-        // The speed allowed grows: 0.35 m/s is too fast at 30 s, fits at 35 s (k_last = 2).
+        assert!(!g.forced());
+        // … and a gust on the way down still sends it back.
+        assert_eq!(run(&mut g, 0.2, 0.1, 20.0, 1.5), GateAction::Hold);
+        // The speed allowed grows up to its cap: 0.24 m/s is too fast at 30 s, fits at 35 s;
+        // 0.3 m/s never does.
         let mut g = waited(MAX_WAIT_S + 0.1);
-        assert_eq!(run(&mut g, DT, GATE, 4.0, 0.35), GateAction::Hold);
+        assert_eq!(run(&mut g, DT, GATE, 4.0, 0.24), GateAction::Hold);
         assert_eq!(run(&mut g, 4.0, GATE, 20.0, 1.0), GateAction::Hold);
-        assert_eq!(run(&mut g, 1.0, GATE, 4.0, 0.35), GateAction::Descend);
-        assert!(g.forced());
+        assert_eq!(run(&mut g, 1.0, GATE, 4.0, 0.24), GateAction::Descend);
+        let mut g = waited(MAX_WAIT_S + 0.1);
+        assert_eq!(run(&mut g, 20.0, GATE, 4.0, 0.3), GateAction::Hold);
+        assert!(!g.committed());
     }
 
     #[test]

@@ -17,7 +17,7 @@
 //! flyaway, touchdown ≤ 0.5 m/s down, ≤ 0.3 m/s horizontal, ≤ 5° tilt, and no time truly
 //! airborne with the attitude loops off; and measures how long LAND's touchdown gate waited
 //! for a lull (`touchdown_gate_wait_s`) and whether its timeout committed the touchdown
-//! (`touchdown_gate_forced`).
+//! (`touchdown_gate_forced`: its last chance, or GPS lost).
 
 use super::log::FlightLog;
 use super::metrics;
@@ -27,6 +27,10 @@ use super::truth::{self, TruthReport};
 use rand::{Rng, SeedableRng};
 use std::collections::BTreeMap;
 use std::fmt::Write;
+
+/// The touchdown gate's longest wait for a lull, s: a flight's duration leaves room for it
+/// after the landing starts (a flight still waiting at the end would count as never landed).
+const GATE_LAST_S: f64 = fcc_firmware::touchdown_gate::LAST_CHANCE_S as f64;
 
 /// The scenario families, in table order.
 pub const FAMILIES: [&str; 8] = [
@@ -127,13 +131,14 @@ pub fn generate(family: &'static str, seed: u64, long: bool) -> Flight {
     let (what, yaml) = match family {
         "hover" => (
             format!("3 m/s from {dir:.0}°"),
-            format!("name: hover\nduration_s: 160\n{}flight: {{kind: hover, alt_m: 5.0, hold_s: 100.0}}\n", wind_yaml(3.0, dir, 15.0)),
+            format!("name: hover\nduration_s: {:.0}\n{}flight: {{kind: hover, alt_m: 5.0, hold_s: 100.0}}\n", 120.0 + GATE_LAST_S, wind_yaml(3.0, dir, 15.0)),
         ),
         "hover_gale" => {
             let v = rng.gen_range(6.0..8.0);
+            let hold_s = if long { 100.0 } else { 60.0 };
             (
                 format!("{v:.1} m/s + W20 30 kt from {dir:.0}°"),
-                format!("name: hover_gale\nduration_s: 170\n{}flight: {{kind: hover, alt_m: 5.0, hold_s: {}}}\n", wind_yaml(v, dir, 30.0), if long { 100.0 } else { 60.0 }),
+                format!("name: hover_gale\nduration_s: {:.0}\n{}flight: {{kind: hover, alt_m: 5.0, hold_s: {}}}\n", hold_s + 30.0 + GATE_LAST_S, wind_yaml(v, dir, 30.0), hold_s),
             )
         }
         "gps_loss" => {
@@ -152,7 +157,7 @@ pub fn generate(family: &'static str, seed: u64, long: bool) -> Flight {
             let cruise = if long { 300.0 } else { 60.0 };
             (
                 format!("{v:.1} m/s circle for {cruise} s, 3 m/s wind"),
-                format!("name: velocity\nduration_s: {}\n{}flight: {{kind: velocity, alt_m: 5.0, speed_mps: {v:.2}, radius_m: {:.1}, cruise_s: {cruise}}}\n", cruise + 60.0, wind_yaml(3.0, dir, 15.0), (v * 8.0).max(15.0)),
+                format!("name: velocity\nduration_s: {}\n{}flight: {{kind: velocity, alt_m: 5.0, speed_mps: {v:.2}, radius_m: {:.1}, cruise_s: {cruise}}}\n", cruise + 30.0 + GATE_LAST_S, wind_yaml(3.0, dir, 15.0), (v * 8.0).max(15.0)),
             )
         }
         "landing" => {
