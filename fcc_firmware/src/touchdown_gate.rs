@@ -156,9 +156,8 @@ impl TouchdownGate {
         let late = (self.wait_s - PATIENCE_S).max(0.0) / RELAX_S;
         if self.committed && !self.forced && clearance_m > ABORT_ABOVE_M {
             let k = 1.0 + late;
-            let gust =
-                demand_rad > k * LEVEL_TILT_DEG.to_radians()
-                    || speed_mps > (k * ABORT_SPEED_MPS).min(ABORT_SPEED_CAP_MPS);
+            let gust = demand_rad > k * LEVEL_TILT_DEG.to_radians()
+                || speed_mps > (k * ABORT_SPEED_MPS).min(ABORT_SPEED_CAP_MPS);
             if gust {
                 self.committed = false;
                 self.calm_s = 0.0;
@@ -173,8 +172,7 @@ impl TouchdownGate {
         }
         // The longer the wait, the wider the thresholds: the best lull the wind offers.
         let relax = (1.0 + self.wait_s / RELAX_S).min(RELAX_MAX) + late;
-        let calm =
-            demand_rad <= relax * CALM_TILT_DEG.to_radians()
+        let calm = demand_rad <= relax * CALM_TILT_DEG.to_radians()
             && speed_mps <= (relax * CALM_SPEED_MPS).min(CALM_SPEED_CAP_MPS);
         self.calm_s = if calm { self.calm_s + dt_s } else { 0.0 };
         self.wait_s += dt_s;
@@ -365,15 +363,24 @@ mod tests {
         assert_eq!(run(&mut g, 0.01, 0.08, 10.0, 0.05), GateAction::Hold);
         // The abort speed stops widening at its cap: 0.3 m/s (< k_abort·0.2 = 0.4) sends it back.
         assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
-        assert_eq!(run(&mut g, 0.01, 0.08, 2.0, ABORT_SPEED_CAP_MPS + 0.05), GateAction::Hold);
+        assert_eq!(
+            run(&mut g, 0.01, 0.08, 2.0, ABORT_SPEED_CAP_MPS + 0.05),
+            GateAction::Hold
+        );
     }
 
     #[test]
     fn the_calm_speed_stops_widening_at_its_cap() {
         // After 25 s the widened calm speed would be 2.25·0.12 = 0.27 m/s; capped at 0.18.
         let mut g = waited(25.0);
-        assert_eq!(run(&mut g, 0.5, GATE, 2.0, CALM_SPEED_CAP_MPS + 0.02), GateAction::Hold);
-        assert_eq!(run(&mut g, 0.5, GATE, 2.0, CALM_SPEED_CAP_MPS - 0.02), GateAction::Descend);
+        assert_eq!(
+            run(&mut g, 0.5, GATE, 2.0, CALM_SPEED_CAP_MPS + 0.02),
+            GateAction::Hold
+        );
+        assert_eq!(
+            run(&mut g, 0.5, GATE, 2.0, CALM_SPEED_CAP_MPS - 0.02),
+            GateAction::Descend
+        );
         assert!(!g.forced());
     }
 
