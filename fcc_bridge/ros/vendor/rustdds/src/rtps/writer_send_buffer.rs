@@ -216,6 +216,9 @@ impl WriterSendBuffer {
         return Admission::Admitted(seq);
       }
       // Window full: wait for an acknowledgement to free up space.
+      // fcc (vendored): the samples held in the window may not have been sent yet when the
+      // caller is inside `polling::defer_wakes`: wake the event loop before waiting.
+      crate::polling::flush_deferred_wakes();
       match deadline {
         None => {
           inner = shared.progress.wait(inner).unwrap();
@@ -418,6 +421,8 @@ impl WriterSendBuffer {
       if now >= deadline {
         return false;
       }
+      // fcc (vendored): wake the event loop for samples written inside `defer_wakes`.
+      crate::polling::flush_deferred_wakes();
       let (guard, _to) = shared.progress.wait_timeout(inner, deadline - now).unwrap();
       inner = guard;
     }
