@@ -354,6 +354,24 @@ impl WriterSendBuffer {
     }
   }
 
+  /// fcc (vendored): whether a HEARTBEAT piggybacked on DATA should ask the readers for an
+  /// ACKNACK (final flag clear): always for a built-in writer or one without a reliable reader,
+  /// else once the matched reliable readers have left a third of the send window (this sample
+  /// included) unacknowledged. Asking on every sample made the reader answer every sample: one
+  /// datagram and one wake of the event loop each, the bridge's largest per-sample cost. The
+  /// readers still answer a final HEARTBEAT when they miss a sample (RTPS 8.4.15.6 / 8.3.7.5),
+  /// and from a third of the window on every sample asks again until the ACKNACK comes, so the
+  /// margin before a full window is what it was.
+  pub fn ack_wanted(&self) -> bool {
+    let shared = &*self.shared;
+    let inner = shared.inner.lock().unwrap();
+    if shared.is_builtin || !shared.reliable_writer || !inner.reliable_readers_present {
+      return true;
+    }
+    let unacked = i64::from(inner.last_seq) - i64::from(inner.acked_before) + 1;
+    unacked >= (inner.window_limit / 3).max(1) as i64
+  }
+
   /// The sequence number of the latest allocated sample (0 if none yet).
   pub fn last_change_sequence_number(&self) -> SequenceNumber {
     self.shared.inner.lock().unwrap().last_seq
