@@ -1207,11 +1207,15 @@ async fn session(
                 let outs = st.on_bytes(&buf[..n], now)?;
                 let t = rec_time(st);
                 tap.raw_in(&buf[..n], t);
-                for o in outs {
-                    if !pubs.publish(o, tap, t) {
-                        st.counters.publish_errors += 1;
+                // Everything decoded from one read goes out with one wake of the DDS event
+                // loop, after the last write (rustdds::defer_wakes, vendored), not one per sample.
+                rustdds::defer_wakes(|| {
+                    for o in outs {
+                        if !pubs.publish(o, tap, t) {
+                            st.counters.publish_errors += 1;
+                        }
                     }
-                }
+                });
                 ros.acks(st);
                 if !params_synced && st.handshake != Handshake::Waiting {
                     params_synced = true;

@@ -263,7 +263,13 @@ fn main() -> ExitCode {
         },
     }
     .with_remaps(&opts.remaps);
-    let rt = tokio::runtime::Runtime::new().expect("tokio runtime");
+    // One thread: the serial port's readiness (epoll) and the session that reads it are on the
+    // same thread. With the multi-thread runtime a worker woke on the read and woke this thread
+    // (block_on) to run the session: two context switches per serial read instead of one.
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("tokio runtime");
     let mut run = Box::pin(bridge::run(opts, tap.clone()));
     let r = rt.block_on(async {
         tokio::select! {

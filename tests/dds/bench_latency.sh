@@ -8,6 +8,9 @@
 # IMU 500 Hz (latency), then 1000, 2000, 4000 Hz (loss) — about 75 s.
 # Prints human lines and `ROW|4|…`, `ROW|4b|…`, `ROW|4c|…`, `NOTE|4|…` for scripts/bench.sh.
 #   usage: tests/dds/bench_latency.sh [PYTHON]   (PYTHON must import cyclonedds)
+#   FCC_BENCH_ONLY_CPU=1: only the default and 500 Hz runs (rows 4 and 4b; 4c not measured).
+#   FCC_BENCH_THREADS=1: also print the bridge's context switches and CPU per thread (from
+#     /proc/PID/task/*, over 6 s starting warm-up + 2 s after the bridge starts) for each run.
 # Needs: cargo build --release -p fcc_bridge (fcc-bridge, fcc-fake-mcu).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -31,8 +34,14 @@ run() {
   local pty; pty="$(awk '/^PTY/{print $2}' "$tmp/$label.pty")"
   "$bin/fcc-bridge" --device "$pty" --ros-args -r __ns:=/fcc -p clock_source:=sync > "$tmp/$label.bridge" 2>&1 &
   local bridge=$!
+  local sampler=
+  if [ -n "${FCC_BENCH_THREADS:-}" ]; then
+    (sleep "$(awk -v w="$warm" 'BEGIN{print w + 2}')"; thread_stats "$bridge" 6 > "$tmp/$label.threads") &
+    sampler=$!
+  fi
   "$py" "$here/latency_peer.py" --rate "$hz" --warmup "$warm" --seconds "$secs" --bridge-pid "$bridge" \
     > "$tmp/$label.peer" 2>&1 || true
+  if [ -n "$sampler" ]; then wait "$sampler" || true; fi
   kill -TERM "$bridge" 2>/dev/null || true; wait "$bridge" 2>/dev/null || true
   kill -TERM "$fake" 2>/dev/null || true; wait "$fake" 2>/dev/null || true
   sed -n 's/^RESULT //p' "$tmp/$label.peer" > "$tmp/$label.json"
@@ -41,13 +50,36 @@ run() {
     echo "--- $label: peer output"; tail -5 "$tmp/$label.peer"; echo "--- bridge log"; tail -5 "$tmp/$label.bridge"
   fi
   echo "$label (IMU $hz Hz, ${secs} s): $(cat "$tmp/$label.json")"
+  if [ -s "$tmp/$label.threads" ]; then cat "$tmp/$label.threads"; fi
+}
+
+# thread_stats PID SECONDS: per thread of PID, context switches per second (voluntary +
+# involuntary) and CPU % of one core over SECONDS.
+thread_stats() {
+  local pid=$1 secs=$2
+  snap() {
+    local t
+    for t in /proc/"$pid"/task/*; do
+      awk -v tid="${t##*/}" '/^Name:/{n=$2} /^voluntary_ctxt_switches:/{v=$2}
+        /^nonvoluntary_ctxt_switches:/{w=$2} END{printf "%s %s %s %s", tid, n, v, w}' "$t/status" 2>/dev/null
+      awk '{s=$0; sub(/^.*\) /, "", s); split(s, f, " "); printf " %d\n", f[12] + f[13]}' "$t/stat" 2>/dev/null
+    done
+  }
+  snap > "$tmp/snap0.$pid"; sleep "$secs"; snap > "$tmp/snap1.$pid"
+  awk -v secs="$secs" -v tck="$(getconf CLK_TCK)" 'NR==FNR{v[$1]=$3; w[$1]=$4; c[$1]=$5; next}
+    ($1 in v){dv=($3-v[$1])/secs; dw=($4-w[$1])/secs; dc=100*($5-c[$1])/tck/secs; tv+=dv; tw+=dw; tc+=dc
+      if (dv+dw >= 1 || dc > 0) printf "  thread %-16s %7.0f vol/s %6.0f invol/s %5.1f %%\n", $2, dv, dw, dc}
+    END{printf "  threads total      %7.0f vol/s %6.0f invol/s %5.1f %%\n", tv, tw, tc}' \
+    "$tmp/snap0.$pid" "$tmp/snap1.$pid"
 }
 
 load0=$(cut -d' ' -f1 /proc/loadavg)
 echo "== bridge latency bench: fake MCU (firmware default rates) → fcc-bridge → Cyclone DDS peer"
 run default 200 10
 run r500 500 10
-for hz in 1000 2000 4000; do run "r$hz" "$hz" 6; done
+if [ -z "${FCC_BENCH_ONLY_CPU:-}" ]; then
+  for hz in 1000 2000 4000; do run "r$hz" "$hz" 6; done
+fi
 
 load1=$(cut -d' ' -f1 /proc/loadavg)
 "$py" - "$tmp" "$load0" "$load1" "$(nproc)" <<'EOF'
@@ -79,6 +111,8 @@ if ok(rd) and rd.get("cpu_pct") is not None:
           f"battery 5 Hz), utime+stime / wall|{rd['cpu_pct']:.1f} % of one core{c5}|—|—|≤ 5 %|{verdict}")
 else:
     print(f"ROW|4b|Bridge: CPU at the default link rates|failed ({rd.get('error')})|—|—|≤ 5 %|not measured")
+if os.environ.get("FCC_BENCH_ONLY_CPU"):
+    sys.exit(0)
 tried = [(int(k[1:]), R[k]) for k in ("r500", "r1000", "r2000", "r4000")]
 best = None
 for hz, r in tried:

@@ -173,6 +173,8 @@
 )]
 
 mod polling;
+// fcc (vendored): one event-loop wake for a burst of writes.
+pub use polling::defer_wakes;
 #[macro_use]
 mod serialization_test;
 #[macro_use]

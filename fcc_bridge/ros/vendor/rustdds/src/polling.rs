@@ -44,11 +44,77 @@ impl LoopWaker {
   }
 
   pub(crate) fn wake(&self) {
+    // fcc (vendored): inside `defer_wakes` on this thread the wake is only noted, and done
+    // once for each poll when the outermost `defer_wakes` returns.
+    let deferred = DEFERRED.with(|d| match d.borrow_mut().as_mut() {
+      Some(list) => {
+        if !list.iter().any(|w| Arc::ptr_eq(&w.slot, &self.slot)) {
+          list.push(self.clone());
+        }
+        true
+      }
+      None => false,
+    });
+    if !deferred {
+      self.wake_now();
+    }
+  }
+
+  fn wake_now(&self) {
     if let Some(waker) = self.slot.get() {
       if let Err(e) = waker.wake() {
         log::debug!("LoopWaker::wake: {e}");
       }
     }
+  }
+}
+
+// fcc (vendored): deferred wakes. A `DataWriter::write` enqueues its sample and wakes the
+// participant's event loop thread, one wake (an eventfd write, and a context switch when the
+// loop sleeps) per sample. A caller that writes a burst of samples together (the bridge: every
+// message decoded from one serial read) runs the burst inside `defer_wakes`: the samples are
+// enqueued as before, and each poll is woken once, when the burst ends. Anything that would
+// wait for the event loop inside the burst (a full reliable send window, a full command queue)
+// wakes it first (`flush_deferred_wakes`), so nothing waits on a wake still held back.
+thread_local! {
+  static DEFERRED: std::cell::RefCell<Option<Vec<LoopWaker>>> =
+    const { std::cell::RefCell::new(None) };
+}
+
+/// fcc (vendored): run `f` with the event-loop wakes of this thread's DDS calls held back and
+/// done once per event loop when `f` returns (or unwinds). Nested calls join the outermost one.
+/// Samples written inside are sent when `f` returns, not before: keep `f` short.
+pub fn defer_wakes<R>(f: impl FnOnce() -> R) -> R {
+  struct Flush(bool);
+  impl Drop for Flush {
+    fn drop(&mut self) {
+      if self.0 {
+        let list = DEFERRED.with(|d| d.borrow_mut().take());
+        for w in list.into_iter().flatten() {
+          w.wake_now();
+        }
+      }
+    }
+  }
+  let outer = DEFERRED.with(|d| {
+    let mut d = d.borrow_mut();
+    if d.is_none() {
+      *d = Some(Vec::new());
+      true
+    } else {
+      false
+    }
+  });
+  let _flush = Flush(outer);
+  f()
+}
+
+/// fcc (vendored): do the wakes held back by `defer_wakes` on this thread now (before waiting
+/// for the event loop); the deferral goes on for later wakes.
+pub(crate) fn flush_deferred_wakes() {
+  let list = DEFERRED.with(|d| d.borrow_mut().as_mut().map(std::mem::take));
+  for w in list.into_iter().flatten() {
+    w.wake_now();
   }
 }
 
@@ -79,6 +145,18 @@ impl<T> WakeSender<T> {
   }
 
   pub(crate) fn send(&self, value: T) -> Result<(), mpsc::SendError<T>> {
+    // fcc (vendored): a full queue waits for the event loop: do the deferred wakes first.
+    let value = match self.tx.try_send(value) {
+      Ok(()) => {
+        self.waker.wake();
+        return Ok(());
+      }
+      Err(mpsc::TrySendError::Disconnected(v)) => return Err(mpsc::SendError(v)),
+      Err(mpsc::TrySendError::Full(v)) => {
+        flush_deferred_wakes();
+        v
+      }
+    };
     match self.tx.send(value) {
       Ok(()) => {
         self.waker.wake();
@@ -100,6 +178,8 @@ impl<T> WakeSender<T> {
       Err(mpsc::TrySendError::Disconnected(v)) => Err(mpsc::TrySendError::Disconnected(v)),
       Err(mpsc::TrySendError::Full(v)) => {
         value = v;
+        // fcc (vendored): the retries wait for the event loop: do the deferred wakes first.
+        flush_deferred_wakes();
         let start = Instant::now();
         let mut delay = Duration::from_micros(1);
         while start.elapsed() < timeout {

@@ -760,6 +760,8 @@ impl Writer {
 
     // One trailing HEARTBEAT for the whole datagram (reliable writers only).
     if hb_reserve > 0 {
+      // fcc (vendored): request an ACKNACK only when the window is a third full.
+      let final_flag = !self.send_buffer.ack_wanted();
       builder = builder.heartbeat_msg(
         self.entity_id(),
         self.send_buffer.first_change_sequence_number(),
@@ -767,8 +769,8 @@ impl Writer {
         self.next_heartbeat_count(),
         self.endianness,
         EntityId::UNKNOWN, // to all readers
-        false,             // final_flag: request ACKNACK
-        false,             // liveliness_flag
+        final_flag,
+        false, // liveliness_flag
       );
     }
 
@@ -2601,7 +2603,9 @@ impl<'a> Iterator for FragmentationIter<'a> {
 
         // Add HEARTBEAT if needed
         if send_heartbeat && !writer.like_stateless {
-          let final_flag = false; // false = request that readers acknowledge with ACKNACK.
+          // fcc (vendored): request an ACKNACK (final flag clear) only when the window is a
+          // third full (`WriterSendBuffer::ack_wanted`), not on every sample.
+          let final_flag = !writer.send_buffer.ack_wanted();
           let liveliness_flag = false; // This is not a manual liveliness assertion (DDS API call), but side-effect of
                                        // writing new data.
           message_builder = message_builder.heartbeat_msg(
