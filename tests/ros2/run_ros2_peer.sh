@@ -98,7 +98,7 @@ part_a() {
   result "(a) rclpy observer: every check" "$([ $prc = 0 ] && echo 0 || echo 1)" "exit $prc"
   no_error_lines "(a) fcc-launch (sitl, bridge, mission), ROS_DISTRO unset" "$d/launch.log"
   [ "$lrc" = 0 ] || tail -30 "$d/launch.log"
-  [ "$prc" = 0 ] || { echo "--- (a) the bridge's lines of the launch log (head)"; grep -a '^\[bridge\]' "$d/launch.log" | head -20; }
+  [ "$prc" = 0 ] || { echo "--- (a) the bridge's lines of the launch log (head)"; grep -a -m 20 '^\[bridge\]' "$d/launch.log" || true; }
   echo "(a) $(( $(date +%s) - t0 )) s wall"
 }
 
