@@ -106,9 +106,12 @@ print(f"ROW|4|Bridge: latency link frame → independent DDS peer p50/p99 at 500
       f"(fake MCU on a pty → fcc-bridge → Cyclone DDS reliable reader)|{ours}|—|—|p99 ≤ 2 ms|{verdict}")
 if ok(rd) and rd.get("cpu_pct") is not None:
     c5 = f"; {r5['cpu_pct']:.1f} % with the IMU at 500 Hz" if ok(r5) and r5.get("cpu_pct") is not None else ""
-    verdict = "met" if rd["cpu_pct"] <= 5.0 else "**missed**"
+    # Issue 20's goal is at 500 Hz IMU (the busier case): both figures must be within it.
+    worst = max(rd["cpu_pct"], r5["cpu_pct"] if c5 else float("inf"))
+    verdict = "met" if worst <= 5.0 else "**missed**"
     print(f"ROW|4b|Bridge: CPU at the default link rates (IMU 200, nav 100, mag/baro/altitude 50, GPS/ranges/status 10, "
-          f"battery 5 Hz), utime+stime / wall|{rd['cpu_pct']:.1f} % of one core{c5}|—|—|≤ 5 %|{verdict}")
+          f"battery 5 Hz) and with the IMU at 500 Hz, utime+stime / wall|{rd['cpu_pct']:.1f} % of one core{c5}|—|—|"
+          f"≤ 5 % (both)|{verdict}")
 else:
     print(f"ROW|4b|Bridge: CPU at the default link rates|failed ({rd.get('error')})|—|—|≤ 5 %|not measured")
 if os.environ.get("FCC_BENCH_ONLY_CPU"):
