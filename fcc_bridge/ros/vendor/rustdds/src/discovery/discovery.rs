@@ -1,6 +1,8 @@
 use std::{
+  cell::RefCell,
+  collections::HashMap,
   sync::{Arc, RwLock},
-  time::Duration as StdDuration,
+  time::{Duration as StdDuration, Instant},
 };
 
 #[allow(unused_imports)]
@@ -40,9 +42,11 @@ use crate::{
     duration::Duration,
     entity::RTPSEntity,
     guid::{EntityId, GuidPrefix, GUID},
+    sequence_number::SequenceNumber,
     time::Timestamp,
   },
-  with_key::{DataReader, DataWriter, Sample},
+  messages::vendor_id::VendorId,
+  with_key::{DataReader, DataWriter, Sample, WriteOptions},
   DomainParticipant,
 };
 // This module implements the control logic of the Discovery process.
@@ -195,6 +199,9 @@ enum DiscoveryTimerEvent {
   ParticipantCleanup,
   TopicCleanup,
   PublishParticipantMessage,
+  // fcc (vendored): publish the SEDP data of every local user endpoint again
+  // (Discovery::reannounce_local_endpoints).
+  ReannounceLocalEndpoints,
   #[cfg(feature = "security")]
   CachedSecureMessageResend,
 }
@@ -296,9 +303,25 @@ pub(crate) struct Discovery {
   // discovery phase. See `spdp_receive`.
   #[cfg(feature = "security")]
   spdp_quick_response_sent: std::collections::HashSet<GuidPrefix>,
+
+  // fcc (vendored): the SequenceNumber of the latest SEDP sample (DCPSPublication
+  // or DCPSSubscription, non-secure) of each local user endpoint, so that a
+  // re-announcement drops the sample it supersedes from the SEDP writer's
+  // KeepAll history (which would otherwise grow at each one).
+  sedp_local_samples: RefCell<HashMap<GUID, SequenceNumber>>,
+  // fcc (vendored): when the local endpoints were last re-announced.
+  last_reannounce: Option<Instant>,
 }
 
 impl Discovery {
+  // fcc (vendored): after discovering a new Fast DDS participant, the SEDP data
+  // of every local user endpoint is published again, with new SequenceNumbers,
+  // this long after. See `reannounce_local_endpoints`.
+  const SEDP_REANNOUNCE_DELAYS: [StdDuration; 2] =
+    [StdDuration::from_secs(2), StdDuration::from_secs(8)];
+  // fcc (vendored): re-announcements closer together than this are one.
+  const SEDP_REANNOUNCE_MIN_INTERVAL: StdDuration = StdDuration::from_secs(1);
+
   const PARTICIPANT_CLEANUP_PERIOD: StdDuration = StdDuration::from_secs(2);
   const TOPIC_CLEANUP_PERIOD: StdDuration = StdDuration::from_secs(60); // timer for cleaning up inactive topics
   const SPDP_PUBLISH_PERIOD: StdDuration = StdDuration::from_secs(10);
@@ -693,6 +716,9 @@ impl Discovery {
       dcps_participant_volatile_message_secure,
       #[cfg(feature = "security")]
       spdp_quick_response_sent: std::collections::HashSet::new(),
+
+      sedp_local_samples: RefCell::new(HashMap::new()),
+      last_reannounce: None,
     })
   }
 
@@ -778,6 +804,8 @@ impl Discovery {
                     continue;
                   }
                   self.send_endpoint_dispose_message(guid);
+                  // fcc (vendored): not re-announced any more.
+                  self.sedp_local_samples.borrow_mut().remove(&guid);
                   discovery_db_write(&self.discovery_db).remove_local_topic_writer(guid);
                 }
                 DiscoveryCommand::RemoveLocalReader { guid } => {
@@ -785,6 +813,8 @@ impl Discovery {
                     continue;
                   }
                   self.send_endpoint_dispose_message(guid);
+                  // fcc (vendored): not re-announced any more.
+                  self.sedp_local_samples.borrow_mut().remove(&guid);
                   discovery_db_write(&self.discovery_db).remove_local_topic_reader(guid);
                 }
                 DiscoveryCommand::ManualAssertLiveliness => {
@@ -887,6 +917,9 @@ impl Discovery {
                     Self::CHECK_PARTICIPANT_MESSAGES,
                     DiscoveryTimerEvent::PublishParticipantMessage,
                   );
+                }
+                DiscoveryTimerEvent::ReannounceLocalEndpoints => {
+                  self.reannounce_local_endpoints();
                 }
                 #[cfg(feature = "security")]
                 DiscoveryTimerEvent::CachedSecureMessageResend => {
@@ -1083,6 +1116,15 @@ impl Discovery {
           StdDuration::from_millis(10),
           DiscoveryTimerEvent::SendParticipantInfo { reschedule: false },
         );
+        // fcc (vendored): a Fast DDS participant may lose some of our SEDP
+        // samples after acknowledging them; announce our endpoints again.
+        if participant_data.vendor_id == VendorId::EPROSIMA_FAST_DDS && self.security_opt.is_none()
+        {
+          let mut timer = self.discovery_timer.borrow_mut();
+          for delay in Self::SEDP_REANNOUNCE_DELAYS {
+            timer.set_timeout(delay, DiscoveryTimerEvent::ReannounceLocalEndpoints);
+          }
+        }
       }
 
       // This may be a rediscovery of a previously seen participant that
@@ -1862,9 +1904,18 @@ impl Discovery {
       match self
         .dcps_subscription
         .writer
-        .write(reader_data.clone(), None)
+        .write_with_options(reader_data.clone(), WriteOptions::default())
       {
-        Ok(()) => {
+        Ok(sample_id) => {
+          // fcc (vendored): remember it; forget the sample it supersedes.
+          let guid = reader_data.reader_proxy.remote_reader_guid;
+          if let Some(previous) = self
+            .sedp_local_samples
+            .borrow_mut()
+            .insert(guid, sample_id.sequence_number)
+          {
+            self.dcps_subscription.writer.forget_superseded_sample(previous);
+          }
           debug!(
             "Published DCPSSubscription data on topic {}, reader guid {:?}, data {:?}",
             reader_data.subscription_topic_data.topic_name(),
@@ -1963,9 +2014,18 @@ impl Discovery {
       match self
         .dcps_publication
         .writer
-        .write(writer_data.clone(), None)
+        .write_with_options(writer_data.clone(), WriteOptions::default())
       {
-        Ok(()) => {
+        Ok(sample_id) => {
+          // fcc (vendored): remember it; forget the sample it supersedes.
+          let guid = writer_data.writer_proxy.remote_writer_guid;
+          if let Some(previous) = self
+            .sedp_local_samples
+            .borrow_mut()
+            .insert(guid, sample_id.sequence_number)
+          {
+            self.dcps_publication.writer.forget_superseded_sample(previous);
+          }
           debug!(
             "Published DCPSPublication data on topic {}, writer guid {:?}",
             writer_data.publication_topic_data.topic_name(),
@@ -1982,6 +2042,42 @@ impl Discovery {
         }
       }
     }
+  }
+
+  /// fcc (vendored): publish the SEDP data (DCPSPublication, DCPSSubscription)
+  /// of every local user endpoint again, as new samples that supersede the
+  /// earlier ones (dropped from the SEDP writers' history, a GAP for a reader
+  /// that still misses them). Scheduled `SEDP_REANNOUNCE_DELAYS` after a new
+  /// Fast DDS participant is discovered, at most one per
+  /// `SEDP_REANNOUNCE_MIN_INTERVAL`.
+  ///
+  /// Why: Fast DDS (2.14, ROS 2 Jazzy) acknowledges an SEDP sample and may then
+  /// drop it in its EDP listener (`PREVENT_PDP_DEADLOCK` in
+  /// `EDPSimpleListeners.cpp`) without processing it, so our endpoint stays
+  /// unknown to it for good: the same sample is never sent again. A new sample
+  /// of the same instance is a new change for it; a peer that has the endpoint
+  /// already takes it as an update with the same data. Not done with DDS
+  /// Security (the secure SEDP writers are not tracked).
+  fn reannounce_local_endpoints(&mut self) {
+    let now = Instant::now();
+    if self
+      .last_reannounce
+      .is_some_and(|last| now.duration_since(last) < Self::SEDP_REANNOUNCE_MIN_INTERVAL)
+    {
+      return;
+    }
+    self.last_reannounce = Some(now);
+    let db = discovery_db_read(&self.discovery_db);
+    let (mut readers, mut writers) = (0, 0);
+    for reader in db.get_all_local_topic_readers() {
+      readers += 1;
+      self.sedp_publish_single_user_reader(reader);
+    }
+    for writer in db.get_all_local_topic_writers() {
+      writers += 1;
+      self.sedp_publish_single_user_writer(writer);
+    }
+    debug!("Re-announced {readers} local readers and {writers} local writers over SEDP");
   }
 
   pub fn sedp_publish_topic(&self, topic_name: &str) {

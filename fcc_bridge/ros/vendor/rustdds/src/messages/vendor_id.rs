@@ -19,6 +19,11 @@ impl VendorId {
 
   pub const THIS_IMPLEMENTATION: Self = Self::ATOSTEK;
 
+  /// fcc (vendored): eProsima Fast DDS (FastRTPS), to recognise its participants.
+  pub const EPROSIMA_FAST_DDS: Self = Self {
+    vendor_id: [0x01, 0x0F],
+  };
+
   pub fn as_bytes(&self) -> [u8; 2] {
     self.vendor_id
   }

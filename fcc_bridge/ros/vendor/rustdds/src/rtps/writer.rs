@@ -1473,11 +1473,21 @@ impl Writer {
         match self.send_buffer.get_by_sn(unsent_sn) {
           Some(cc) => cache_change = Some(cc),
           None => {
-            // we are running out of excuses
-            error!(
-              "handle_repair_data_send_worker {:?} seq.number {:?} missing. first_change={:?}",
-              self.my_guid, unsent_sn, first_available
-            );
+            // fcc (vendored): a built-in (SEDP) writer leaves holes on purpose,
+            // the samples superseded by a re-announcement of the same endpoint
+            // (Discovery::reannounce_local_endpoints): a GAP is the answer.
+            if self.my_guid.entity_id.kind().is_user_defined() {
+              // we are running out of excuses
+              error!(
+                "handle_repair_data_send_worker {:?} seq.number {:?} missing. first_change={:?}",
+                self.my_guid, unsent_sn, first_available
+              );
+            } else {
+              debug!(
+                "handle_repair_data_send_worker {:?} seq.number {:?} superseded: GAP",
+                self.my_guid, unsent_sn
+              );
+            }
             gap = gap.gap_msg(
               &BTreeSet::from([unsent_sn]),
               self.entity_id(),

@@ -418,6 +418,19 @@ impl WriterSendBuffer {
     }
   }
 
+  /// fcc (vendored): drop one sample that a later sample of the same instance
+  /// supersedes (Discovery's SEDP re-announcement of a local endpoint). Its
+  /// SequenceNumber becomes a hole: a reader that still asks for it gets a GAP
+  /// (the repair path), and it is not sent fresh. When it was the oldest
+  /// retained sample, the oldest retained one moves up, as after eviction.
+  pub fn remove_superseded(&self, sn: SequenceNumber) {
+    let mut inner = self.shared.inner.lock().unwrap();
+    if inner.changes.remove(&sn).is_some() && sn == inner.first_seq {
+      let next = inner.last_seq.plus_1();
+      inner.first_seq = inner.changes.keys().next().copied().unwrap_or(next);
+    }
+  }
+
   // --- wait_for_acknowledgments support ---
 
   /// Has every matched reliable reader acknowledged everything up to and

@@ -404,6 +404,13 @@ where
     }
   }
 
+  /// fcc (vendored): forget a sample of this writer that a later one of the
+  /// same instance supersedes (Discovery's SEDP re-announcements). Readers that
+  /// still miss it get a GAP.
+  pub(crate) fn forget_superseded_sample(&self, sequence_number: SequenceNumber) {
+    self.send_buffer.remove_superseded(sequence_number);
+  }
+
   /// This operation blocks the calling thread until either all data written by
   /// the reliable DataWriter entities is acknowledged by all
   /// matched reliable DataReader entities, or else the duration specified by
