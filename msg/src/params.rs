@@ -21,7 +21,7 @@ macro_rules! for_each_mcu_param {
     ($m:ident) => {
         $m! {
             // id CONST                section.field                unit    default min   max   doc
-            1, MAX_HORIZ_SPEED_MPS, limits.max_horiz_speed_mps, "m/s", 8.0, 0.1, 30.0, "Horizontal speed limit of velocity setpoints and the pilot's sticks";
+            1, MAX_HORIZ_SPEED_MPS, limits.max_horiz_speed_mps, "m/s", 8.0, 0.1, 30.0, "Horizontal speed limit of velocity setpoints and the pilot's sticks (velocity mode tracks at most 97 % of it)";
             // 45° (PX4's MPC_TILTMAX_AIR default): at 35° the gale hold (8 m/s + W20 30 kt)
             // ran out of authority in gusts (excursions to 3–5 m); with T/W 2.2 (8 × 12 N for
             // 4.5 kg) 45° keeps 1/cos 45° = 1.41× hover thrust, 65 % of the maximum.
