@@ -13,7 +13,7 @@ use fcc_bridge::report::figures::Series;
 use fcc_bridge::report::sysid;
 
 /// The calm-air fit of the simulated octorotor (tests/tests/sysid.rs) — the truth here.
-const K1: f64 = 9.17;
+const K1: f64 = 10.14;
 const K2: f64 = 0.28;
 
 /// xorshift64* with Box–Muller normals (deterministic, no crates).

@@ -173,8 +173,10 @@ pub struct ControlParams {
     pub accel_i_rad_per_mps: f32,
     pub accel_forgetting: f32,
     /// Luenberger observer and feed-forward model a = k1·θ − k2·v (eqs. 11, 14, 15). k1, k2 from
-    /// the least-squares fit (`fcc_nav::sysid`) on SITL flight data: reproduce with
-    /// `cargo test -p fcc_tests --release --test sysid -- --nocapture`.
+    /// the instrumental-variables fit (`fcc_nav::sysid`) on calm-air SITL flights: reproduce with
+    /// `cargo test -p fcc_tests --release --test sysid -- --nocapture` (k1 9.17 → 10.14 with the
+    /// GPS-velocity tilt aid: the fit is on the estimated tilt; that test now reads
+    /// 10.16 ± 0.75, k2 0.282 ± 0.053).
     pub model_k1_mps2_per_rad: f32,
     pub model_k2_per_s: f32,
     /// First-order model of the closed attitude loop θ̇ = −a·θ + b·θ_cmd.
@@ -212,7 +214,7 @@ impl Default for ControlParams {
             accel_p_rad_per_mps2: 0.16,
             accel_i_rad_per_mps: 0.06,
             accel_forgetting: 0.9995,
-            model_k1_mps2_per_rad: 9.17,
+            model_k1_mps2_per_rad: 10.14,
             model_k2_per_s: 0.28,
             att_model_a_per_s: 4.0,
             att_model_b_per_s: 4.0,

@@ -175,6 +175,11 @@ pub struct AttitudeEstimator {
     /// the tilt measurement (norm, asin, atan2, the compensation's rotation) is most of a
     /// step's cost.
     pub tilt_every: u8,
+    /// Roll and pitch are corrected from the accelerometer's gravity direction (default true).
+    /// False while another tilt measurement corrects them ([`Self::correct_tilt_error`]): the
+    /// compensated specific force is still formed ([`Self::tilt_specific_force_frd_mps2`]),
+    /// the tilt read from it (asin, atan2) is not.
+    pub accel_tilt: bool,
     tilt_tick: u8,
     tilt_dt_s: f32,
     /// Magnetometer innovation gate \[rad]: a heading that disagrees with the gyro-propagated
@@ -237,6 +242,7 @@ impl AttitudeEstimator {
             mag_rejects: 0,
             tilt_f_frd_mps2: [0.0; 3],
             trig: None,
+            accel_tilt: true,
         }
     }
 
@@ -357,7 +363,8 @@ impl AttitudeEstimator {
         let mut pitch = self.pitch.predict(rates[1], dt_s);
         self.tilt_dt_s += dt_s;
         if self.tilt_due() {
-            let tilt = accel_frd_mps2.and_then(|f| {
+            let f = accel_frd_mps2.filter(|_| self.accel_tilt);
+            let tilt = f.and_then(|f| {
                 let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
                 if (n - GRAVITY_MPS2).abs() <= self.accel_gate_mps2 {
                     Some(accel_tilt_norm_rad(f, n))
@@ -422,6 +429,16 @@ impl AttitudeEstimator {
         };
         self.yaw.update(rates[2], heading, dt_s);
         self.euler()
+    }
+
+    /// Correct roll and pitch by a measured error `e` (estimate minus truth, e.g. from
+    /// [`crate::gps_tilt::GpsTiltAid`]) with the filters' gains for its interval: the same
+    /// crossover as the accelerometer's correction, sampled at the measurement's rate.
+    pub fn correct_tilt_error(&mut self, e: &crate::gps_tilt::TiltError) {
+        let (r, p) = (self.roll.angle_rad(), self.pitch.angle_rad());
+        self.roll.correct(r - e.roll_rad, e.interval_s);
+        self.pitch.correct(p - e.pitch_rad, e.interval_s);
+        self.trig = None;
     }
 
     /// Current estimate.

@@ -7,6 +7,7 @@
 //! |---|---|---|---|
 //! | [`complementary`] | 2nd-order complementary filters (eq. 1): [`AngleCf`], [`PosVelCf`] | rate / accel, angle / position measurement | angle + rate bias, position + velocity |
 //! | [`attitude`] | roll/pitch/yaw estimation (eqs. 2–4), frame rotations | gyro \[rad/s] FRD, accel \[m/s²] FRD, mag \[µT] FRD | [`Euler`] \[rad], NED linear acceleration \[m/s²] |
+//! | [`gps_tilt`] | roll/pitch errors from the GPS velocity's change over a fix interval vs the inertial velocity's over the same (latency-aligned) interval | NED accel NE \[m/s²] per step, GPS velocity NE \[m/s] + delay steps, yaw \[rad] | roll/pitch error \[rad] |
 //! | [`horizontal`] | NE position/velocity from GPS + NED accel | accel NE \[m/s²], GPS NE \[m] + delay steps | pos NE \[m], vel NE \[m/s] |
 //! | [`vertical`] | altitude/vertical speed from baro + accel (eqs. 5–6) | accel down \[m/s²], baro altitude \[m] or pressure \[Pa] | altitude up \[m], vel down \[m/s] |
 //! | [`range_aid`] | range-aided height: the rangefinder altitude replaces the baro in the vertical filter while valid, baro offset learnt, terrain steps re-anchored | altitude estimate, baro altitude \[m], height above ground \[m] | altitude measurement \[m] |
@@ -38,6 +39,7 @@ extern crate std;
 
 pub mod attitude;
 pub mod complementary;
+pub mod gps_tilt;
 pub mod ground_altitude;
 pub mod horizontal;
 pub mod lowpass;

@@ -25,7 +25,12 @@
 //! Ours is `AttitudeEstimator` with the production gains fed exactly what `Navigator::imu_update`
 //! feeds it (same low-pass, same compensation, same magnetometer reference and gates); the
 //! bench asserts on every tick that its output equals, bit for bit, the attitude the simulator's
-//! flight core reported, so the figures are those of the estimate that flies.
+//! flight core reported, so the figures are those of the estimate that flies. Above 1 m with GPS
+//! velocities arriving, the core corrects the tilt from the GPS velocity's change against the
+//! inertial one (`fcc_nav::gps_tilt`) instead of the accelerometer's gravity direction; the
+//! bench replays the core's flag and correction on each tick. The peers get the same GPS
+//! information in their own form: the GPS-derived acceleration removed from their
+//! accelerometer (smoothed as the core's, or unsmoothed).
 //!
 //! ## The peers are tuned, per flight
 //! Each peer runs over a grid: gain(s) × accelerometer raw or through the firmware's low-pass ×
@@ -47,6 +52,7 @@ use common::{best_of, capture_seeded, note, row, thousands, verdict};
 use fcc_firmware::nav::GPS_ACCEL_MAX_AGE_US;
 use fcc_firmware::params::NavParams;
 use fcc_nav::attitude::{accel_tilt_rad, mag_heading_rad, AttitudeEstimator, Euler};
+use fcc_nav::gps_tilt::TiltError;
 use fcc_nav::lowpass::LowPass2;
 use nalgebra_034::{UnitQuaternion, Vector3};
 use std::f64::consts::PI;
@@ -72,6 +78,10 @@ struct In {
     /// The acceleration between the last two GPS velocities (NED, unsmoothed; zero when the
     /// last is older than the core's `GPS_ACCEL_MAX_AGE_US`).
     comp_diff_ned: [f32; 3],
+    /// The core corrected the tilt from the GPS velocity this tick (not the accelerometer).
+    gps_tilt_aided: bool,
+    /// The GPS velocity's tilt correction, after this tick's step.
+    gps_tilt: Option<TiltError>,
     /// New magnetometer sample this tick.
     mag_new: Option<[f32; 3]>,
     /// Newest magnetometer sample so far (held).
@@ -267,6 +277,7 @@ fn prepare(name: &'static str, seed_add: u64) -> Flight {
     let mut comp_diff_ned = [0.0f32; 3];
     let mut gps_diff = [0.0f32; 3];
     let mut last_gps: Option<(u64, [f32; 3])> = None;
+    let mut gps_tilt_aided = false;
     let mut xs = Vec::new();
     for (k, t) in cap.ticks.iter().enumerate() {
         let imu = t.inputs.imu.unwrap();
@@ -291,6 +302,8 @@ fn prepare(name: &'static str, seed_add: u64) -> Flight {
                 accel_lpf: acc_lp,
                 comp_ned,
                 comp_diff_ned,
+                gps_tilt_aided,
+                gps_tilt: t.gps_tilt,
                 mag_new,
                 mag_held: held,
                 dt_s,
@@ -300,6 +313,7 @@ fn prepare(name: &'static str, seed_add: u64) -> Flight {
             });
         }
         comp_ned = t.tilt_comp_next_ned_mps2;
+        gps_tilt_aided = t.gps_tilt_aided_next;
         if let Some(g) = t.inputs.gps.filter(|g| g.fix_ok) {
             if let Some((t0, v0)) = last_gps {
                 let dt = (t.t_us - t0) as f32 * 1e-6;
@@ -343,7 +357,12 @@ fn ours_new(f: &Flight) -> AttitudeEstimator {
 /// into the body with the current estimate and removed from the low-passed specific force.
 #[inline]
 fn ours_step(est: &mut AttitudeEstimator, x: &In) -> Euler {
-    est.update_compensated(x.gyro, x.accel_lpf, x.comp_ned, x.mag_new, x.dt_s)
+    est.accel_tilt = !x.gps_tilt_aided;
+    let e = est.update_compensated(x.gyro, x.accel_lpf, x.comp_ned, x.mag_new, x.dt_s);
+    if let Some(c) = &x.gps_tilt {
+        est.correct_tilt_error(c);
+    }
+    e
 }
 
 /// One flight shape flown with [`SEEDS`] seeds.

@@ -26,7 +26,7 @@
 //! window: `k2·(w(t) − w_m)` stays in the residual, and the flight controller tilts against
 //! exactly that disturbance, so tilt and residual are correlated and least squares reads
 //! "tilt without acceleration" once more (on the main job's windy bag: k1 = 7.8 with 5 s
-//! windows, 6.6 with 20 s, against the calm-air 9.17). The estimator is therefore
+//! windows, 6.6 with 20 s, against the calm-air 9.17 of that firmware). The estimator is therefore
 //! **instrumental variables** ([`fcc_nav::sysid::WindIvFit`]): the instruments are the mission's
 //! velocity setpoints along each axis, now and [`IV_LAG_S`] earlier — they move tilt and
 //! velocity but do not depend on the gusts — and
@@ -358,7 +358,8 @@ pub fn ci95(r: &fcc_nav::sysid::WindFitResult, inflation: f32) -> [f64; 8] {
 /// instruments (the bag has velocity setpoints) and they vary within the windows, else by
 /// least squares ([`fcc_nav::sysid::WindPlaneFit`]), which is shown but never suggested: in
 /// closed loop the tilt answers the gusts left in the residual, and least squares comes out
-/// low (on the main job's windy bag k1 = 7.8 against the calm-air 9.17, where IV gives 9.2).
+/// low (on the main job's windy bag k1 = 7.8 against the calm-air 9.17 of that firmware, where
+/// IV gave 9.2).
 pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysId, String> {
     let mut wf = WindPlaneFit::new();
     let mut ivf = WindIvFit::new();

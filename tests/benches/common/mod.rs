@@ -24,6 +24,7 @@ use fcc_firmware::params::Params;
 use fcc_firmware::scheduler::TICK_US;
 use fcc_firmware::sensors::SensorInputs;
 use fcc_msgs::StreamRates;
+use fcc_nav::gps_tilt::TiltError;
 use fcc_sim::linux::LinuxSide;
 use fcc_sim::scenario::Scenario;
 use fcc_sim::sim::Sim;
@@ -58,6 +59,12 @@ pub struct Tick {
     /// The manoeuvre acceleration (NED, m/s²) the core's *next* attitude step removes from the
     /// specific force (`Navigator::tilt_accel_comp_ned_mps2` after this tick).
     pub tilt_comp_next_ned_mps2: [f32; 3],
+    /// The core's *next* attitude step corrects the tilt from the GPS velocity, not the
+    /// accelerometer (`Navigator::gps_tilt_aided` after this tick).
+    pub gps_tilt_aided_next: bool,
+    /// The tilt correction the GPS velocity made in this tick, after the attitude step
+    /// (`Navigator::gps_tilt_applied`).
+    pub gps_tilt: Option<TiltError>,
 }
 
 pub struct Capture {
@@ -194,6 +201,8 @@ pub fn capture_seeded(name: &str, seed_add: u64, with_link: bool) -> Capture {
             calibrated: sim.fc.core.nav().calibrated,
             core_euler_rad: [e.roll_rad, e.pitch_rad, e.yaw_rad],
             tilt_comp_next_ned_mps2: sim.fc.core.navigator().tilt_accel_comp_ned_mps2(),
+            gps_tilt_aided_next: sim.fc.core.navigator().gps_tilt_aided(),
+            gps_tilt: sim.fc.core.navigator().gps_tilt_applied(),
         });
     }
     Capture {
