@@ -689,13 +689,18 @@ impl FlightCore {
 
     /// Velocity mode: the horizontal command moves towards the setpoint at no more than
     /// [`VEL_SLEW_MPS2`] (a step from hover to the speed limit would otherwise saturate the
-    /// tilt and overshoot the speed); it starts from the estimated velocity.
+    /// tilt and overshoot the speed); it starts from the estimated velocity, never faster than
+    /// the setpoint (the slew limits how fast the command rises; a vehicle resuming faster than
+    /// it is asked to fly — a gust, or the overshoot of the hold it comes from — is not
+    /// commanded to keep that speed: `robust_stack.py`'s noisy link resumed after a stale
+    /// setpoint at 3.14 m/s estimated and commanded 3.11 m/s against the mission's 3).
     fn slew_velocity(&mut self, dt_s: f32, target_ne: [f32; 2], nav: &NavState) -> [f32; 2] {
         let cruise_max_mps = self.params.limits.max_horiz_speed_mps * (1.0 - SPEED_LIMIT_MARGIN);
         let target_ne = clamp_norm(target_ne, cruise_max_mps);
-        let v = self
-            .vel_slew_ne
-            .get_or_insert([nav.vel_ned_mps[0], nav.vel_ned_mps[1]]);
+        let v = self.vel_slew_ne.get_or_insert_with(|| {
+            let target_mps = fcc_nav::math::hypotf(target_ne[0], target_ne[1]);
+            clamp_norm([nav.vel_ned_mps[0], nav.vel_ned_mps[1]], target_mps)
+        });
         let d = [target_ne[0] - v[0], target_ne[1] - v[1]];
         let step = clamp_norm(d, VEL_SLEW_MPS2 * dt_s);
         *v = [v[0] + step[0], v[1] + step[1]];
