@@ -1190,6 +1190,8 @@ async fn session(
     let mut timers = SessionTimers::new();
     let mut tick = tokio::time::interval(Duration::from_millis(50));
     let mut buf = vec![0u8; 4096];
+    // The ROS messages decoded from one read (kept across reads: no allocation per read).
+    let mut outs = Vec::new();
     loop {
         let mut to_send: Vec<u8> = Vec::new();
         // The held setpoint's turn on the uplink (see `state::Uplink`).
@@ -1204,13 +1206,13 @@ async fn session(
                     Err(e) => return Ok(format!("read: {e}")),
                 };
                 let now = now_ns();
-                let outs = st.on_bytes(&buf[..n], now)?;
+                st.on_bytes_into(&buf[..n], now, &mut outs)?;
                 let t = rec_time(st);
                 tap.raw_in(&buf[..n], t);
                 // Everything decoded from one read goes out with one wake of the DDS event
                 // loop, after the last write (rustdds::defer_wakes, vendored), not one per sample.
                 rustdds::defer_wakes(|| {
-                    for o in outs {
+                    for o in outs.drain(..) {
                         if !pubs.publish(o, tap, t) {
                             st.counters.publish_errors += 1;
                         }

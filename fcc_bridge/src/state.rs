@@ -156,6 +156,8 @@ pub struct LinkState {
     pub sensors: crate::health::SensorWatch,
     /// The current decoder's (seq_gaps, frames_lost, seq_resets) before the frame being decoded.
     seq_before: [u32; 3],
+    /// The frames of one read, before their conversion (kept: no allocation per read).
+    frames: Vec<link::Frame>,
     /// Gaps and lost frames the current decoder counted on `Hello` frames (the MCU's new
     /// session: a rebooted MCU counts from 0 again), taken out of [`LinkState::link_totals`],
     /// and the resets counted for them instead.
@@ -196,6 +198,7 @@ impl LinkState {
             ground_height_m: None,
             sensors: Default::default(),
             seq_before: [0; 3],
+            frames: Vec::new(),
             seq_forgiven: [0; 3],
             warn: bounded::WarnLimiter::default(),
             uplink: Uplink::new(SETPOINT_MIN_INTERVAL_NS),
@@ -255,7 +258,20 @@ impl LinkState {
     /// Feed received bytes; returns the ROS messages to publish, or a fatal error.
     pub fn on_bytes(&mut self, bytes: &[u8], now_ns: i64) -> Result<Vec<Out>, Fatal> {
         let mut out = Vec::new();
-        let mut frames = Vec::new();
+        self.on_bytes_into(bytes, now_ns, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Self::on_bytes`] appending to `out` (the caller keeps the vector: the session's hot
+    /// path allocates nothing per read for it).
+    pub fn on_bytes_into(
+        &mut self,
+        bytes: &[u8],
+        now_ns: i64,
+        out: &mut Vec<Out>,
+    ) -> Result<(), Fatal> {
+        let mut frames = std::mem::take(&mut self.frames);
+        frames.clear();
         let mut rest = bytes;
         while let Some(r) = self.decoder.next_from(&mut rest) {
             let after = seq_counters(self.decoder.counters());
@@ -275,10 +291,11 @@ impl LinkState {
             }
             self.seq_before = after;
         }
-        for f in frames {
-            self.on_frame(&f, now_ns, &mut out)?;
-        }
-        Ok(out)
+        let r = frames
+            .drain(..)
+            .try_for_each(|f| self.on_frame(&f, now_ns, out));
+        self.frames = frames;
+        r
     }
 
     pub fn on_frame(

@@ -36,6 +36,7 @@ pub use options::{record_options, RecordOptions, RECORD_PARAMS};
 use fcc_msgs::ros::{full_definition, Header, LinkFrame, RosMsg, Time};
 use fcc_ros::topics::{self, Topic};
 use std::collections::{BTreeMap, HashMap};
+use std::hash::{BuildHasherDefault, Hasher};
 use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
@@ -174,13 +175,37 @@ struct NameEntry {
 struct TapInner {
     counts: Counts,
     /// Relative or absolute name → its counts and channel (one lookup per message).
-    names: HashMap<String, NameEntry>,
+    names: HashMap<String, NameEntry, BuildHasherDefault<Fnv1a>>,
     channels: HashMap<String, u16>,
     raw_in: Vec<u8>,
     raw_decoder: fcc_msgs::FrameDecoder,
     armed: Option<bool>,
     /// Message buffers back from the writer thread ([`RECYCLED_BUFFERS`]).
     recycled: Option<mpsc::Receiver<Vec<u8>>>,
+}
+
+/// FNV-1a for the tap's table of topic names (one look-up per message published or received;
+/// the names are ours, short, and not chosen by a peer). SipHash cost about 180 instructions a
+/// look-up.
+#[derive(Default)]
+struct Fnv1a(u64);
+
+impl Hasher for Fnv1a {
+    fn write(&mut self, bytes: &[u8]) {
+        let mut h = if self.0 == 0 {
+            0xcbf2_9ce4_8422_2325
+        } else {
+            self.0
+        };
+        for &b in bytes {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        self.0 = h;
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
 }
 
 impl Tap {
@@ -191,7 +216,7 @@ impl Tap {
             remaps: Vec::new(),
             inner: Mutex::new(TapInner {
                 counts: Counts::default(),
-                names: HashMap::new(),
+                names: HashMap::default(),
                 channels: HashMap::new(),
                 raw_in: Vec::new(),
                 raw_decoder: fcc_msgs::FrameDecoder::new(),
@@ -382,13 +407,25 @@ impl Tap {
     pub fn raw_in(&self, bytes: &[u8], t_ns: i64) {
         let mut g = self.inner.lock().unwrap();
         let g = &mut *g;
-        for &b in bytes {
-            g.raw_in.push(b);
-            if b == 0 {
-                let data = std::mem::take(&mut g.raw_in);
-                if data.len() > 1 {
-                    self.raw_frame(g, LinkFrame::DIRECTION_MCU_TO_LINUX, data, t_ns);
-                }
+        // Each piece ends at a 0x00 (a frame's end), but the last one may not (a half frame,
+        // kept for the next read).
+        for piece in bytes.split_inclusive(|b| *b == 0) {
+            if piece.last() != Some(&0) {
+                g.raw_in.extend_from_slice(piece);
+                break;
+            }
+            let len = g.raw_in.len() + piece.len();
+            // Not recording: only counted, so no copy (and no allocation) per frame.
+            let data = if self.tx.is_none() {
+                g.raw_in.clear();
+                Vec::new()
+            } else {
+                let mut data = std::mem::take(&mut g.raw_in);
+                data.extend_from_slice(piece);
+                data
+            };
+            if len > 1 {
+                self.raw_frame(g, LinkFrame::DIRECTION_MCU_TO_LINUX, data, t_ns);
             }
         }
     }
@@ -415,7 +452,12 @@ impl Tap {
         } else {
             "linux_to_mcu"
         };
-        *g.counts.raw_frames.entry(key.into()).or_default() += 1;
+        match g.counts.raw_frames.get_mut(key) {
+            Some(n) => *n += 1,
+            None => {
+                g.counts.raw_frames.insert(key.into(), 1);
+            }
+        }
         if self.tx.is_none() {
             return;
         }
