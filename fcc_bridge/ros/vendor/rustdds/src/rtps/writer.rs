@@ -802,6 +802,20 @@ impl Writer {
       }
       let sequence_number = self.last_sent.plus_1();
 
+      // fcc (vendored): a user writer without a matched reader sends nothing, so do not build
+      // the DATA/HEARTBEAT datagram only to send it to nobody: mark the pending samples sent
+      // (as the send paths below do after a send to no reader). Built-in writers (their
+      // static/multicast destinations) and like-stateless writers take the normal path.
+      if self.readers.is_empty()
+        && !self.like_stateless
+        && !self.my_guid.entity_id.kind().is_built_in()
+      {
+        self.last_sent = last_available;
+        self.sample_cursor = SampleCursor::Fresh;
+        self.send_buffer.set_sent_frontier(last_available);
+        break;
+      }
+
       // Item 1 (DATA aggregation): coalesce several consecutive small samples
       // into one datagram to amortize the per-sample RTPS header + syscall.
       // Only engaged when starting a sample fresh (no mid-fragment resume),
