@@ -290,6 +290,17 @@ impl<T: Eq> ReadyReceiver<T> {
     }
     out
   }
+
+  /// fcc (vendored): [`Self::drain_unique`] into `out` (cleared first), so the event loop can
+  /// keep one vector instead of allocating one per wake.
+  pub(crate) fn drain_unique_into(&self, out: &mut Vec<T>) {
+    out.clear();
+    while let Ok(value) = self.rx.try_recv() {
+      if !out.contains(&value) {
+        out.push(value);
+      }
+    }
+  }
 }
 
 pub(crate) fn ready_channel<T>(waker: &LoopWaker) -> (ReadySender<T>, ReadyReceiver<T>) {

@@ -704,8 +704,10 @@ impl Writer {
     let mut ts_active = false;
 
     let mut seq = first_seq;
+    // fcc (vendored): the first sample was fetched above (one buffer look-up and clone less).
+    let mut first_cc = Some(first_cc);
     while seq <= last_available {
-      let Some(cc) = self.send_buffer.get_by_sn(seq) else {
+      let Some(cc) = first_cc.take().or_else(|| self.send_buffer.get_by_sn(seq)) else {
         // A gap in the buffer (evicted). Stop the batch here and let the
         // per-sample path handle the missing sequence number next.
         break;

@@ -1,6 +1,6 @@
 use std::{
   cmp::max,
-  collections::BTreeMap,
+  collections::{BTreeMap, VecDeque},
   sync::{Arc, Condvar, Mutex},
   time::{Duration as StdDuration, Instant},
 };
@@ -33,7 +33,9 @@ struct Inner {
   // Keyed by SequenceNumber, which is allocated here under the lock and is thus
   // strictly monotonic and unique. This is the single source of truth for the
   // Writer's outgoing samples (send, repair, fragmentation, eviction).
-  changes: BTreeMap<SequenceNumber, CacheChange>,
+  // fcc (vendored): for a user writer a ring of consecutive sequence numbers, not a BTreeMap
+  // (see `Changes`).
+  changes: Changes,
   first_seq: SequenceNumber, // oldest still retained (default 1)
   last_seq: SequenceNumber,  // latest allocated (default 0 == nothing yet)
 
@@ -73,6 +75,11 @@ struct Inner {
   // Wakers of async producers / ack-waiters parked because the window was full
   // or acknowledgements were still pending. Drained (woken) on any advance.
   wakers: Vec<Waker>,
+
+  // fcc (vendored): threads waiting on `Shared::progress` (counted under the lock). std's
+  // futex Condvar makes a FUTEX_WAKE system call on every notify, waiter or not, and
+  // `set_sent_frontier` notified after every sample sent.
+  waiters: usize,
 }
 
 struct Shared {
@@ -121,7 +128,7 @@ impl WriterSendBuffer {
     Self {
       shared: Arc::new(Shared {
         inner: Mutex::new(Inner {
-          changes: BTreeMap::new(),
+          changes: Changes::new(is_builtin),
           first_seq: SequenceNumber::new(1),
           last_seq: SequenceNumber::new(0),
           window_limit: window_limit.max(1),
@@ -131,6 +138,7 @@ impl WriterSendBuffer {
           sent_frontier: SequenceNumber::new(0),
           max_retain: max_retain.max(1),
           wakers: Vec::new(),
+          waiters: 0,
         }),
         progress: Condvar::new(),
         writer_guid,
@@ -187,7 +195,10 @@ impl WriterSendBuffer {
     for w in inner.wakers.drain(..) {
       w.wake();
     }
-    progress.notify_all();
+    // fcc (vendored): no system call when nobody waits (see `Inner::waiters`).
+    if inner.waiters > 0 {
+      progress.notify_all();
+    }
   }
 
   // --- producer side ---
@@ -221,16 +232,20 @@ impl WriterSendBuffer {
       crate::polling::flush_deferred_wakes();
       match deadline {
         None => {
+          inner.waiters += 1; // fcc (vendored)
           inner = shared.progress.wait(inner).unwrap();
+          inner.waiters -= 1;
         }
         Some(deadline) => {
           let now = Instant::now();
           if now >= deadline {
             return Admission::WouldBlock;
           }
+          inner.waiters += 1; // fcc (vendored)
           let (guard, _timeout_result) =
             shared.progress.wait_timeout(inner, deadline - now).unwrap();
           inner = guard;
+          inner.waiters -= 1;
         }
       }
     }
@@ -272,7 +287,7 @@ impl WriterSendBuffer {
   ) -> SequenceNumber {
     let seq = inner.last_seq.plus_1();
     let cc = CacheChange::new(shared.writer_guid, seq, write_options, data);
-    inner.changes.insert(seq, cc);
+    inner.changes.push(seq, cc);
     inner.last_seq = seq;
 
     // KeepLast "newest wins" bound. Applied on insert for:
@@ -296,12 +311,12 @@ impl WriterSendBuffer {
         || (shared.reliable_writer && shared.volatile && !inner.reliable_readers_present));
     if trim_keep_last {
       while inner.changes.len() > inner.max_retain {
-        // BTreeMap keeps keys sorted, so the first entry is the oldest SN.
-        let oldest = match inner.changes.keys().next().copied() {
+        // The first entry is the oldest SN.
+        let oldest = match inner.changes.first_key() {
           Some(sn) => sn,
           None => break,
         };
-        inner.changes.remove(&oldest);
+        inner.changes.remove(oldest);
         inner.first_seq = oldest.plus_1();
       }
     }
@@ -395,7 +410,7 @@ impl WriterSendBuffer {
   /// Returns an owned `CacheChange` (a cheap `Bytes`-backed clone) so the
   /// caller can serialize and transmit without holding the lock.
   pub fn get_by_sn(&self, sn: SequenceNumber) -> Option<CacheChange> {
-    self.shared.inner.lock().unwrap().changes.get(&sn).cloned()
+    self.shared.inner.lock().unwrap().changes.get(sn).cloned()
   }
 
   /// Evict all samples with sequence number strictly less than `remove_before`.
@@ -403,7 +418,7 @@ impl WriterSendBuffer {
     let shared = &*self.shared;
     let mut inner = shared.inner.lock().unwrap();
     let count_before = inner.changes.len();
-    inner.changes = inner.changes.split_off(&remove_before);
+    inner.changes.remove_before(remove_before);
     if remove_before > inner.first_seq {
       inner.first_seq = remove_before;
     }
@@ -425,9 +440,9 @@ impl WriterSendBuffer {
   /// retained sample, the oldest retained one moves up, as after eviction.
   pub fn remove_superseded(&self, sn: SequenceNumber) {
     let mut inner = self.shared.inner.lock().unwrap();
-    if inner.changes.remove(&sn).is_some() && sn == inner.first_seq {
+    if inner.changes.remove(sn).is_some() && sn == inner.first_seq {
       let next = inner.last_seq.plus_1();
-      inner.first_seq = inner.changes.keys().next().copied().unwrap_or(next);
+      inner.first_seq = inner.changes.first_key().unwrap_or(next);
     }
   }
 
@@ -456,8 +471,10 @@ impl WriterSendBuffer {
       }
       // fcc (vendored): wake the event loop for samples written inside `defer_wakes`.
       crate::polling::flush_deferred_wakes();
+      inner.waiters += 1; // fcc (vendored): see `Inner::waiters`
       let (guard, _to) = shared.progress.wait_timeout(inner, deadline - now).unwrap();
       inner = guard;
+      inner.waiters -= 1;
     }
   }
 
@@ -466,6 +483,151 @@ impl WriterSendBuffer {
   pub fn register_ack_waker(&self, waker: &Waker) {
     let mut inner = self.shared.inner.lock().unwrap();
     register_waker(&mut inner.wakers, waker);
+  }
+}
+
+/// fcc (vendored): the retained samples by SequenceNumber. A user writer's buffer allocates
+/// the numbers itself, consecutively, and drops samples only from the oldest end (eviction,
+/// acknowledgement), so a ring indexed by `sn - base` (`Ring`) does what the BTreeMap did
+/// (insert, look-up, remove, drop all below) without a tree search, node allocation or
+/// rebalancing per sample. Built-in writers keep the BTreeMap: the SEDP writer removes
+/// superseded samples from the middle of a long-lived KeepAll history, which in a ring would
+/// leave holes that are only freed when the oldest sample goes.
+enum Changes {
+  Ring(Ring),
+  Tree(BTreeMap<SequenceNumber, CacheChange>),
+}
+
+impl Changes {
+  fn new(is_builtin: bool) -> Self {
+    if is_builtin {
+      Changes::Tree(BTreeMap::new())
+    } else {
+      Changes::Ring(Ring::default())
+    }
+  }
+
+  fn push(&mut self, sn: SequenceNumber, cc: CacheChange) {
+    match self {
+      Changes::Ring(r) => r.push(sn, cc),
+      Changes::Tree(t) => {
+        t.insert(sn, cc);
+      }
+    }
+  }
+
+  fn get(&self, sn: SequenceNumber) -> Option<&CacheChange> {
+    match self {
+      Changes::Ring(r) => r.get(sn),
+      Changes::Tree(t) => t.get(&sn),
+    }
+  }
+
+  fn remove(&mut self, sn: SequenceNumber) -> Option<CacheChange> {
+    match self {
+      Changes::Ring(r) => r.remove(sn),
+      Changes::Tree(t) => t.remove(&sn),
+    }
+  }
+
+  /// Drop every sample below `before`.
+  fn remove_before(&mut self, before: SequenceNumber) {
+    match self {
+      Changes::Ring(r) => r.remove_before(before),
+      Changes::Tree(t) => *t = t.split_off(&before),
+    }
+  }
+
+  fn first_key(&self) -> Option<SequenceNumber> {
+    match self {
+      Changes::Ring(r) => r.first_key(),
+      Changes::Tree(t) => t.keys().next().copied(),
+    }
+  }
+
+  fn len(&self) -> usize {
+    match self {
+      Changes::Ring(r) => r.len,
+      Changes::Tree(t) => t.len(),
+    }
+  }
+}
+
+/// fcc (vendored): see [`Changes`]. Numbers skipped (none today) or removed in the middle are
+/// holes (`None`).
+#[derive(Default)]
+struct Ring {
+  // SequenceNumber of `slots[0]`; when `len > 0`, `slots[0]` is `Some` (the oldest retained).
+  base: i64,
+  slots: VecDeque<Option<CacheChange>>,
+  len: usize,
+}
+
+impl Ring {
+  fn index(&self, sn: SequenceNumber) -> Option<usize> {
+    let d = i64::from(sn) - self.base;
+    (d >= 0 && (d as u64) < self.slots.len() as u64).then_some(d as usize)
+  }
+
+  /// Store `cc` as `sn`, newer than every retained sample (numbers in between, if any, holes).
+  fn push(&mut self, sn: SequenceNumber, cc: CacheChange) {
+    let sn = i64::from(sn);
+    if self.len == 0 {
+      self.slots.clear();
+      self.base = sn;
+    }
+    let next = self.base + self.slots.len() as i64;
+    debug_assert!(sn >= next, "WriterSendBuffer: sequence number out of order");
+    for _ in next..sn {
+      self.slots.push_back(None);
+    }
+    self.slots.push_back(Some(cc));
+    self.len += 1;
+  }
+
+  fn get(&self, sn: SequenceNumber) -> Option<&CacheChange> {
+    self.index(sn).and_then(|i| self.slots[i].as_ref())
+  }
+
+  fn remove(&mut self, sn: SequenceNumber) -> Option<CacheChange> {
+    let i = self.index(sn)?;
+    let cc = self.slots[i].take()?;
+    self.len -= 1;
+    self.trim_front();
+    Some(cc)
+  }
+
+  /// Drop every sample below `before`.
+  fn remove_before(&mut self, before: SequenceNumber) {
+    let before = i64::from(before);
+    while self.base < before {
+      match self.slots.pop_front() {
+        Some(slot) => {
+          if slot.is_some() {
+            self.len -= 1;
+          }
+          self.base += 1;
+        }
+        None => break,
+      }
+    }
+    self.trim_front();
+  }
+
+  fn first_key(&self) -> Option<SequenceNumber> {
+    (self.len > 0).then(|| SequenceNumber::new(self.base))
+  }
+
+  // Keep `slots[0]` a sample (holes at the front dropped).
+  fn trim_front(&mut self) {
+    if self.len == 0 {
+      self.slots.clear();
+      return;
+    }
+    while let Some(None) = self.slots.front() {
+      self.slots.pop_front();
+      self.base += 1;
+    }
   }
 }
 
@@ -493,6 +655,66 @@ mod tests {
       RepresentationIdentifier::CDR_LE,
       vec![0u8; 8],
     ))
+  }
+
+  // fcc (vendored): the ring (user writers) and the BTreeMap (built-in writers) keep the same
+  // samples through pushes, look-ups, removal in the middle and at the oldest end, and
+  // dropping everything below a number.
+  #[test]
+  fn ring_and_tree_agree() {
+    let guid = GUID::dummy_test_guid(crate::structure::guid::EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let cc = |n: i64| {
+      CacheChange::new(
+        guid,
+        SequenceNumber::new(n),
+        WriteOptions::default(),
+        sample(),
+      )
+    };
+    let mut ring = Changes::new(false);
+    let mut tree = Changes::new(true);
+    assert!(matches!(ring, Changes::Ring(_)) && matches!(tree, Changes::Tree(_)));
+    let check = |ring: &Changes, tree: &Changes| {
+      assert_eq!(ring.len(), tree.len());
+      assert_eq!(ring.first_key(), tree.first_key());
+      for n in 0..40 {
+        let sn = SequenceNumber::new(n);
+        assert_eq!(
+          ring.get(sn).map(|c| c.sequence_number),
+          tree.get(sn).map(|c| c.sequence_number),
+          "sn {n}"
+        );
+      }
+    };
+    for n in 1..=10 {
+      ring.push(SequenceNumber::new(n), cc(n));
+      tree.push(SequenceNumber::new(n), cc(n));
+    }
+    check(&ring, &tree);
+    for n in [5, 1, 2, 10, 42, 0] {
+      let sn = SequenceNumber::new(n);
+      assert_eq!(
+        ring.remove(sn).map(|c| c.sequence_number),
+        tree.remove(sn).map(|c| c.sequence_number)
+      );
+      check(&ring, &tree);
+    }
+    // After the newest was removed, the next number leaves a hole (10).
+    for n in 11..=14 {
+      ring.push(SequenceNumber::new(n), cc(n));
+      tree.push(SequenceNumber::new(n), cc(n));
+    }
+    check(&ring, &tree);
+    for before in [4, 6, 6, 12, 30] {
+      ring.remove_before(SequenceNumber::new(before));
+      tree.remove_before(SequenceNumber::new(before));
+      check(&ring, &tree);
+    }
+    assert_eq!(ring.len(), 0);
+    // Empty: the next push starts the ring anew at its number.
+    ring.push(SequenceNumber::new(31), cc(31));
+    tree.push(SequenceNumber::new(31), cc(31));
+    check(&ring, &tree);
   }
 
   fn admit_now(buf: &WriterSendBuffer, opts: WriteOptions) -> bool {

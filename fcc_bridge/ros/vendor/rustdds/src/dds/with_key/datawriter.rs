@@ -305,7 +305,8 @@ where
   /// data_writer.refresh_manual_liveliness();
   /// ```
   pub fn refresh_manual_liveliness(&self) {
-    if let Some(lv) = self.qos().liveliness {
+    // fcc (vendored): read through a reference, not a clone of the whole QoS (every write).
+    if let Some(lv) = self.qos_policy.liveliness {
       match lv {
         Liveliness::Automatic { .. } | Liveliness::ManualByTopic { .. } => (),
         Liveliness::ManualByParticipant { .. } => {
@@ -380,7 +381,11 @@ where
     // Admission allocates the sequence number and stores the sample only if the
     // reliable send window has room; otherwise it blocks up to
     // `reliable_max_blocking_time` and then returns WouldBlock (back-pressure).
-    let timeout = self.qos().reliable_max_blocking_time().map(|d| d.to_std());
+    // fcc (vendored): `qos_policy` by reference (`qos()` clones it), on every write.
+    let timeout = self
+      .qos_policy
+      .reliable_max_blocking_time()
+      .map(|d| d.to_std());
     match self
       .send_buffer
       .admit_blocking(write_options, ddsdata, timeout)
@@ -834,7 +839,11 @@ where
       ChangeKind::NotAliveDisposed,
       SerializedPayload::new_from_bytes(SA::output_encoding(), send_buffer),
     );
-    let timeout = self.qos().reliable_max_blocking_time().map(|d| d.to_std());
+    // fcc (vendored): `qos_policy` by reference (`qos()` clones it), on every write.
+    let timeout = self
+      .qos_policy
+      .reliable_max_blocking_time()
+      .map(|d| d.to_std());
     match self
       .send_buffer
       .admit_blocking(WriteOptions::from(source_timestamp), ddsdata, timeout)
