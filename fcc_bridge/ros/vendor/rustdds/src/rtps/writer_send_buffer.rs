@@ -717,6 +717,81 @@ mod tests {
     check(&ring, &tree);
   }
 
+  // fcc (vendored): `Inner::waiters` gates `notify_all`. Threads parked on `progress` (a
+  // producer on a full backlog, without and with a deadline, and an ack-waiter) are counted
+  // while they wait and woken by the event loop's frontier updates; the count returns to 0,
+  // so a later notify is skipped only when nobody waits.
+  #[test]
+  fn parked_threads_counted_and_woken() {
+    use std::{sync::mpsc, thread};
+    let buf = WriterSendBuffer::new(
+      GUID::GUID_UNKNOWN,
+      "t".to_string(),
+      /* reliable_writer */ true,
+      /* is_builtin */ false,
+      /* volatile */ true,
+      /* window_limit */ 1000,
+      /* backlog_limit */ 1,
+      /* max_retain */ 1000,
+    );
+    let waiters = |b: &WriterSendBuffer| b.shared.inner.lock().unwrap().waiters;
+    let wait_for_waiters = |b: &WriterSendBuffer, n: usize| {
+      let t0 = Instant::now();
+      while waiters(b) != n {
+        assert!(t0.elapsed() < StdDuration::from_secs(10), "waiters {} != {n}", waiters(b));
+        thread::sleep(StdDuration::from_millis(1));
+      }
+    };
+    for round in 0..50 {
+      // One unsent sample fills the backlog (limit 1).
+      assert!(admit_now(&buf, WriteOptions::default()), "round {round}");
+      let (tx, rx) = mpsc::channel();
+      let (b1, t1) = (buf.clone(), tx.clone());
+      let p1 = thread::spawn(move || {
+        let r = b1.admit_blocking(WriteOptions::default(), sample(), None);
+        t1.send(matches!(r, Admission::Admitted(_))).unwrap();
+      });
+      let (b2, t2) = (buf.clone(), tx.clone());
+      let p2 = thread::spawn(move || {
+        let r = b2.admit_blocking(
+          WriteOptions::default(),
+          sample(),
+          Some(StdDuration::from_secs(60)),
+        );
+        t2.send(matches!(r, Admission::Admitted(_))).unwrap();
+      });
+      wait_for_waiters(&buf, 2);
+      // The event loop sends the sample: both producers may go on (one after the other: the
+      // first one admitted fills the backlog again, so the sample is sent once more).
+      let last = buf.last_change_sequence_number();
+      buf.set_sent_frontier(last);
+      let first = rx.recv_timeout(StdDuration::from_secs(10)).expect("a parked producer was not woken");
+      assert!(first);
+      buf.set_sent_frontier(buf.last_change_sequence_number());
+      let second = rx.recv_timeout(StdDuration::from_secs(10)).expect("a parked producer was not woken");
+      assert!(second);
+      p1.join().unwrap();
+      p2.join().unwrap();
+      assert_eq!(waiters(&buf), 0);
+      buf.set_sent_frontier(buf.last_change_sequence_number());
+    }
+    // An ack-waiter, woken by the acknowledgement frontier.
+    buf.set_acked_frontier(Some(SequenceNumber::new(1)));
+    let target = buf.last_change_sequence_number();
+    let b3 = buf.clone();
+    let (tx, rx) = mpsc::channel();
+    let w = thread::spawn(move || {
+      tx.send(b3.wait_for_acked_through(target, StdDuration::from_secs(60))).unwrap();
+    });
+    wait_for_waiters(&buf, 1);
+    buf.set_acked_frontier(Some(target.plus_1()));
+    assert!(rx.recv_timeout(StdDuration::from_secs(10)).expect("the ack-waiter was not woken"));
+    w.join().unwrap();
+    // A wait that times out leaves the count at 0 too.
+    assert!(!buf.wait_for_acked_through(target.plus_1(), StdDuration::from_millis(5)));
+    assert_eq!(waiters(&buf), 0);
+  }
+
   fn admit_now(buf: &WriterSendBuffer, opts: WriteOptions) -> bool {
     matches!(
       buf.admit_blocking(opts, sample(), Some(StdDuration::ZERO)),
