@@ -196,6 +196,8 @@ pub struct Sim {
     receiver: super::pilot::SimReceiver,
     carried: Option<Carried>,
     ticks: u64,
+    /// The tick of the last 50 Hz sample ([`Self::finish`] records the last tick's own).
+    last_record_tick: Option<u64>,
     pub log: FlightLog,
     /// Wall time spent inside the flight computer's tick (sensors polled + step, plus the link
     /// when served), for the benchmark.
@@ -256,6 +258,7 @@ impl Sim {
             carried,
             t_us: 0,
             ticks: 0,
+            last_record_tick: None,
             log: FlightLog {
                 truth: super::truth::TruthCounters {
                     start_down_m: start_down,
@@ -572,6 +575,7 @@ impl Sim {
     }
 
     fn record(&mut self) {
+        self.last_record_tick = Some(self.ticks);
         let st = &self.body.state;
         let (roll, pitch, yaw) = st.q_body_to_ned.euler_angles();
         let nav = *self.fc.core.nav();
@@ -616,6 +620,12 @@ impl Sim {
 
     /// Close the log (events of the in-process mission computer) after a run driven by hand.
     pub fn finish(&mut self) -> &FlightLog {
+        // The run ends on the tick that finished it (the mission computer saw the disarm, a
+        // crash): its state closes the log even between two 50 Hz samples, so the log ends
+        // the way the flight did (a square ended 10 ms after its last sample, still armed).
+        if self.ticks > 0 && self.last_record_tick != Some(self.ticks) {
+            self.record();
+        }
         if let Some(sp) = self.spill.take() {
             // The file holds everything before any failure; memory the rest.
             let samples = std::mem::take(&mut self.log.samples);
