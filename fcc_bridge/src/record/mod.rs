@@ -36,7 +36,6 @@ pub use options::{record_options, RecordOptions, RECORD_PARAMS};
 use fcc_msgs::ros::{full_definition, Header, LinkFrame, RosMsg, Time};
 use fcc_ros::topics::{self, Topic};
 use std::collections::{BTreeMap, HashMap};
-use std::hash::{BuildHasherDefault, Hasher};
 use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
@@ -174,38 +173,15 @@ struct NameEntry {
 
 struct TapInner {
     counts: Counts,
-    /// Relative or absolute name → its counts and channel (one lookup per message).
-    names: HashMap<String, NameEntry, BuildHasherDefault<Fnv1a>>,
+    /// Relative or absolute name → its counts and channel (one lookup per message). FNV: the
+    /// names are ours, short, and not chosen by a peer (SipHash cost ~180 instructions a look-up).
+    names: HashMap<String, NameEntry, fnv::FnvBuildHasher>,
     channels: HashMap<String, u16>,
     raw_in: Vec<u8>,
     raw_decoder: fcc_msgs::FrameDecoder,
     armed: Option<bool>,
     /// Message buffers back from the writer thread ([`RECYCLED_BUFFERS`]).
     recycled: Option<mpsc::Receiver<Vec<u8>>>,
-}
-
-/// FNV-1a for the tap's table of topic names (one look-up per message published or received;
-/// the names are ours, short, and not chosen by a peer). SipHash cost about 180 instructions a
-/// look-up.
-#[derive(Default)]
-struct Fnv1a(u64);
-
-impl Hasher for Fnv1a {
-    fn write(&mut self, bytes: &[u8]) {
-        let mut h = if self.0 == 0 {
-            0xcbf2_9ce4_8422_2325
-        } else {
-            self.0
-        };
-        for &b in bytes {
-            h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-        self.0 = h;
-    }
-
-    fn finish(&self) -> u64 {
-        self.0
-    }
 }
 
 impl Tap {
