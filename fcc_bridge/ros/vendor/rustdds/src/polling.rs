@@ -14,29 +14,53 @@ use std::{
   time::{Duration, Instant},
 };
 
-use mio1::{Poll, Token, Waker};
+use mio1::{Registry, Token, Waker};
 
 use crate::structure::guid::EntityId;
 
 /// One waker for one `Poll`. Share clones freely. `wake` before [`install`](Self::install)
 /// is a no-op; the event loop drains its queues once after installing so anything
 /// enqueued earlier is still observed.
+/// fcc (vendored): a pass of the event loop run by the waking thread itself, at the end of
+/// `defer_wakes`. Returns false when it could not run (the loop is busy, or gone) or the loop
+/// must still be woken (a sooner deadline, a stop): then the wake is done as usual.
+pub(crate) type InlinePass = Box<dyn Fn() -> bool + Send + Sync>;
+
 #[derive(Clone)]
 pub(crate) struct LoopWaker {
   slot: Arc<OnceLock<Waker>>,
+  // fcc (vendored): set by an event loop that can run a pass on the waking thread.
+  inline: Arc<OnceLock<InlinePass>>,
 }
 
 impl LoopWaker {
   pub(crate) fn new() -> Self {
     Self {
       slot: Arc::new(OnceLock::new()),
+      inline: Arc::new(OnceLock::new()),
     }
+  }
+
+  /// fcc (vendored): the pass `defer_wakes` runs instead of a wake (see `InlinePass`).
+  pub(crate) fn set_inline(&self, pass: InlinePass) {
+    let _ = self.inline.set(pass);
+  }
+
+  /// fcc (vendored): a held wake at the end of `defer_wakes`: the loop's pass is run on this
+  /// thread when it can be (the loop's thread then needs no wake-up), else the loop is woken.
+  fn wake_flushed(&self) {
+    if let Some(pass) = self.inline.get() {
+      if pass() {
+        return;
+      }
+    }
+    self.wake_now();
   }
 
   /// Register the single waker of `poll` under `token`. Debug builds assert this
   /// happens once: mio 1.2 allows only one `Waker` per `Poll`.
-  pub(crate) fn install(&self, poll: &Poll, token: Token) -> std::io::Result<()> {
-    let waker = Waker::new(poll.registry(), token)?;
+  pub(crate) fn install(&self, registry: &Registry, token: Token) -> std::io::Result<()> {
+    let waker = Waker::new(registry, token)?;
     if self.slot.set(waker).is_err() {
       debug_assert!(false, "LoopWaker::install called twice for one poll");
     }
@@ -91,7 +115,7 @@ pub fn defer_wakes<R>(f: impl FnOnce() -> R) -> R {
       if self.0 {
         let list = DEFERRED.with(|d| d.borrow_mut().take());
         for w in list.into_iter().flatten() {
-          w.wake_now();
+          w.wake_flushed();
         }
       }
     }

@@ -723,7 +723,7 @@ impl Discovery {
   }
 
   pub fn discovery_event_loop(&mut self) {
-    if let Err(e) = self.waker.install(&self.poll, LOOP_WAKE_TOKEN) {
+    if let Err(e) = self.waker.install(self.poll.registry(), LOOP_WAKE_TOKEN) {
       error!("Discovery failed to install waker: {e}");
       return;
     }

@@ -3,13 +3,13 @@ use std::{
   collections::{BTreeMap, BTreeSet, HashMap, VecDeque},
   net::IpAddr,
   rc::Rc,
-  sync::{Arc, RwLock},
+  sync::{Arc, Mutex, RwLock},
   time::{Duration, Instant},
 };
 
 use chrono::Utc;
 use log::{debug, error, info, trace, warn};
-use mio1::{Events, Interest, Poll, Token};
+use mio1::{Events, Interest, Poll, Registry, Token};
 
 use crate::{
   dds::{
@@ -75,9 +75,25 @@ pub(crate) enum EventLoopCommand {
   PrepareStop,
 }
 
+// fcc (vendored): the event loop's state, shared by its thread and the inline pass (see
+// `DPEventLoop::event_loop`). It holds `Rc`s (the UDP sender, the timer, the interface tables),
+// all of them cloned only among the loop's own endpoints inside it; the mutex makes one thread
+// at a time touch any of them, with the happens-before the non-atomic counts need.
+struct LoopCell(DPEventLoop);
+// SAFETY: see above: nothing inside is reachable except through the mutex holding the cell.
+unsafe impl Send for LoopCell {}
+
 pub struct DPEventLoop {
   domain_info: DomainInfo,
-  poll: Poll,
+  // fcc (vendored): taken by `event_loop`, which polls it without holding the loop's lock;
+  // `registry` (a clone) serves the registrations made inside a pass.
+  poll: Option<Poll>,
+  registry: Registry,
+  // fcc (vendored): the loop's state between passes, shared with the inline pass (see
+  // `event_loop`): a stop seen by an inline pass, and the deadline the current poll waits for.
+  preparing_to_stop: bool,
+  stop_requested: bool,
+  armed_deadline: Option<Instant>,
   dds_cache: Arc<RwLock<DDSCache>>,
   discovery_db: Arc<RwLock<DiscoveryDB>>,
   udp_listeners: HashMap<Token, UDPListener>,
@@ -226,9 +242,14 @@ impl DPEventLoop {
     let interface_observations = Rc::new(RefCell::new(InterfaceObservations::new()));
     let local_interfaces: Rc<[IfAddr]> = Rc::from(local_interface_table());
 
+    let registry = try_init!(poll.registry().try_clone(), "Unable to clone the poll registry");
     Ok(Self {
       domain_info,
-      poll,
+      poll: Some(poll),
+      registry,
+      preparing_to_stop: false,
+      stop_requested: false,
+      armed_deadline: None,
       dds_cache,
       discovery_db,
       udp_listeners,
@@ -265,14 +286,23 @@ impl DPEventLoop {
     })
   }
 
-  pub fn event_loop(self) {
+  // fcc (vendored): the loop's state lives behind a mutex, and the loop thread holds it except
+  // while it polls. A thread that ends `rustdds::defer_wakes` with a held wake of this loop runs
+  // the pass itself when the lock is free (`inline_pass`: the queues, the writers' pending
+  // samples, the outbound queues) instead of waking this thread: the bridge's serial thread
+  // sends its samples itself, one context switch less per serial read. Sockets are still read
+  // here only. The pass falls back to the wake when the loop is busy, when it set a deadline
+  // sooner than the one this poll waits for, or when it met a stop command.
+  pub fn event_loop(mut self) {
     let mut events = Events::with_capacity(16); // too small capacity just delays events to next poll
 
     let mut poll_alive = Instant::now();
-    let mut ev_wrapper = self;
-    let mut preparing_to_stop = false;
+    let Some(mut poll) = self.poll.take() else {
+      error!("dp_event_loop started twice");
+      return;
+    };
 
-    if let Err(e) = ev_wrapper.waker.install(&ev_wrapper.poll, LOOP_WAKE_TOKEN) {
+    if let Err(e) = self.waker.install(&self.registry, LOOP_WAKE_TOKEN) {
       error!("dp_event_loop failed to install waker: {e}");
       return;
     }
@@ -283,39 +313,84 @@ impl DPEventLoop {
     let mut writers_to_remove: Vec<GUID> = Vec::new();
 
     // Anything enqueued before the waker existed would not have woken us.
-    if ev_wrapper.drain_queues(
-      &mut readers_to_remove,
-      &mut writers_to_remove,
-      &mut preparing_to_stop,
-    ) {
-      return;
+    {
+      let ev_wrapper = &mut self;
+      let mut preparing_to_stop = ev_wrapper.preparing_to_stop;
+      if ev_wrapper.drain_queues(
+        &mut readers_to_remove,
+        &mut writers_to_remove,
+        &mut preparing_to_stop,
+      ) {
+        return;
+      }
+      ev_wrapper.preparing_to_stop = preparing_to_stop;
+      for reader_guid in readers_to_remove.drain(..) {
+        ev_wrapper.remove_local_reader(reader_guid);
+      }
+      for writer_guid in writers_to_remove.drain(..) {
+        ev_wrapper.remove_local_writer(&writer_guid);
+      }
     }
-    for reader_guid in readers_to_remove.drain(..) {
-      ev_wrapper.remove_local_reader(reader_guid);
-    }
-    for writer_guid in writers_to_remove.drain(..) {
-      ev_wrapper.remove_local_writer(&writer_guid);
-    }
+
+    let waker = self.waker.clone();
+    let shared = Arc::new(Mutex::new(LoopCell(self)));
+    let weak = Arc::downgrade(&shared);
+    waker.set_inline(Box::new(move || {
+      let Some(cell) = weak.upgrade() else {
+        return false;
+      };
+      let Ok(mut guard) = cell.try_lock() else {
+        return false;
+      };
+      guard.0.inline_pass()
+    }));
+    let lock = || shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
 
     // loop starts here
     loop {
       // The poll wakes for a socket, the shared waker, or the sooner of the next
       // deadline and the outbound fallback. Non-unix has no write-readiness
       // registration, so a short cap flushes queued sends.
-      let idle_cap = if cfg!(unix) || !ev_wrapper.has_pending_outbound() {
-        Duration::from_millis(2000)
-      } else {
-        Duration::from_millis(2)
+      let poll_timeout = {
+        let mut guard = lock();
+        let ev_wrapper = &mut guard.0;
+        if ev_wrapper.stop_requested {
+          ev_wrapper.stop_requested = false;
+          ev_wrapper.poll = Some(poll);
+          return;
+        }
+        let idle_cap = if cfg!(unix) || !ev_wrapper.has_pending_outbound() {
+          Duration::from_millis(2000)
+        } else {
+          Duration::from_millis(2)
+        };
+        let next = ev_wrapper.shared_timer.borrow().next_deadline();
+        let t = timeout_until(next, idle_cap);
+        // The deadline itself when it is the one waited for (poll rounds its timeout up, so
+        // it does not return before it): a later `now + t` would make the inline pass see
+        // the same deadline as a sooner one.
+        let cap_end = Instant::now() + idle_cap;
+        ev_wrapper.armed_deadline = Some(next.map_or(cap_end, |w| w.min(cap_end)));
+        t
       };
-      let poll_timeout = timeout_until(ev_wrapper.shared_timer.borrow().next_deadline(), idle_cap);
-      match ev_wrapper.poll.poll(&mut events, Some(poll_timeout)) {
+      match poll.poll(&mut events, Some(poll_timeout)) {
         Ok(_) => {}
         Err(e) => {
           error!("dp_event_loop poll failed: {e:?}");
           break;
         }
       }
-
+      let mut guard = lock();
+      let ev_wrapper = &mut guard.0;
+      // Nothing waits for a deadline while this pass runs (the inline pass must not skip
+      // its wake for one).
+      ev_wrapper.armed_deadline = None;
+      if ev_wrapper.stop_requested {
+        ev_wrapper.stop_requested = false;
+        ev_wrapper.poll = Some(poll);
+        return;
+      }
+      let mut preparing_to_stop = ev_wrapper.preparing_to_stop;
       // liveness watchdog
       let now = Instant::now();
       if now > poll_alive + Duration::from_secs(2) {
@@ -381,8 +456,10 @@ impl DPEventLoop {
         &mut writers_to_remove,
         &mut preparing_to_stop,
       ) {
+        ev_wrapper.poll = Some(poll);
         return;
       }
+      ev_wrapper.preparing_to_stop = preparing_to_stop;
       // Removals wait until commands queued in this same wake have run.
       for reader_guid in readers_to_remove.drain(..) {
         ev_wrapper.remove_local_reader(reader_guid);
@@ -396,6 +473,46 @@ impl DPEventLoop {
       ev_wrapper.service_outbound();
     } // loop
   } // fn
+
+  // fcc (vendored): what the loop does after a wake by its waker alone, run by the thread that
+  // would have woken it (see `event_loop`). True: done, no wake needed.
+  fn inline_pass(&mut self) -> bool {
+    if self.poll.is_some() || self.stop_requested {
+      // Not running yet (the waker is set before the loop starts), or stopping.
+      return false;
+    }
+    let mut preparing_to_stop = self.preparing_to_stop;
+    self.drain_timers(preparing_to_stop);
+    let mut readers_to_remove: Vec<GUID> = Vec::new();
+    let mut writers_to_remove: Vec<GUID> = Vec::new();
+    if self.drain_queues(
+      &mut readers_to_remove,
+      &mut writers_to_remove,
+      &mut preparing_to_stop,
+    ) {
+      // The stop command has been taken from its queue: the loop thread stops on its wake.
+      self.stop_requested = true;
+      return false;
+    }
+    self.preparing_to_stop = preparing_to_stop;
+    for reader_guid in readers_to_remove.drain(..) {
+      self.remove_local_reader(reader_guid);
+    }
+    for writer_guid in writers_to_remove.drain(..) {
+      self.remove_local_writer(&writer_guid);
+    }
+    self.service_outbound();
+    // The loop's poll waits for `armed_deadline`: wake it if a sooner deadline was set (or
+    // outbound work needs the short cap where there is no write readiness).
+    if !cfg!(unix) && self.has_pending_outbound() {
+      return false;
+    }
+    match (self.shared_timer.borrow().next_deadline(), self.armed_deadline) {
+      (Some(next), Some(armed)) => next >= armed,
+      (Some(_), None) => false,
+      (None, _) => true,
+    }
+  }
 
   // Returns true when the loop should exit.
   fn drain_queues(
@@ -618,7 +735,7 @@ impl DPEventLoop {
         (true, false) => {
           if let Some(fd) = self.udp_sender.socket_raw_fd(sid) {
             let mut source = SourceFd(&fd);
-            match self.poll.registry().register(
+            match self.registry.register(
               &mut source,
               sender_writable_token(sid),
               Interest::WRITABLE,
@@ -634,7 +751,7 @@ impl DPEventLoop {
         (false, true) => {
           if let Some(fd) = self.udp_sender.socket_raw_fd(sid) {
             let mut source = SourceFd(&fd);
-            let _ = self.poll.registry().deregister(&mut source);
+            let _ = self.registry.deregister(&mut source);
           }
           self.writable_armed.remove(&sid);
         }
