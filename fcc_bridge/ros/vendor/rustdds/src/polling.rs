@@ -49,7 +49,8 @@ impl LoopWaker {
   /// fcc (vendored): a held wake at the end of `defer_wakes`: the loop's pass is run on this
   /// thread when it can be (the loop's thread then needs no wake-up), else the loop is woken.
   fn wake_flushed(&self) {
-    if let Some(pass) = self.inline.get() {
+    // Not while unwinding (`defer_wakes`' closure panicked): a panic in the pass would abort.
+    if let Some(pass) = self.inline.get().filter(|_| !std::thread::panicking()) {
       if pass() {
         return;
       }
