@@ -18,14 +18,14 @@ use mio1::{Registry, Token, Waker};
 
 use crate::structure::guid::EntityId;
 
-/// One waker for one `Poll`. Share clones freely. `wake` before [`install`](Self::install)
-/// is a no-op; the event loop drains its queues once after installing so anything
-/// enqueued earlier is still observed.
 /// fcc (vendored): a pass of the event loop run by the waking thread itself, at the end of
 /// `defer_wakes`. Returns false when it could not run (the loop is busy, or gone) or the loop
 /// must still be woken (a sooner deadline, a stop): then the wake is done as usual.
 pub(crate) type InlinePass = Box<dyn Fn() -> bool + Send + Sync>;
 
+/// One waker for one `Poll`. Share clones freely. `wake` before [`install`](Self::install)
+/// is a no-op; the event loop drains its queues once after installing so anything
+/// enqueued earlier is still observed.
 #[derive(Clone)]
 pub(crate) struct LoopWaker {
   slot: Arc<OnceLock<Waker>>,

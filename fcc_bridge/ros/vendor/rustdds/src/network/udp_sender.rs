@@ -316,12 +316,12 @@ impl UDPSender {
       });
   }
 
-  /// Sockets that currently have queued (undelivered) control datagrams.
   /// fcc (vendored): whether any socket has queued control traffic (no allocation).
   pub(crate) fn any_pending_control(&self) -> bool {
     self.control_queues.borrow().values().any(|q| !q.is_empty())
   }
 
+  /// Sockets that currently have queued (undelivered) control datagrams.
   pub(crate) fn pending_control_sockets(&self) -> Vec<SocketId> {
     self
       .control_queues

@@ -313,23 +313,8 @@ impl DPEventLoop {
     let mut writers_to_remove: Vec<GUID> = Vec::new();
 
     // Anything enqueued before the waker existed would not have woken us.
-    {
-      let ev_wrapper = &mut self;
-      let mut preparing_to_stop = ev_wrapper.preparing_to_stop;
-      if ev_wrapper.drain_queues(
-        &mut readers_to_remove,
-        &mut writers_to_remove,
-        &mut preparing_to_stop,
-      ) {
-        return;
-      }
-      ev_wrapper.preparing_to_stop = preparing_to_stop;
-      for reader_guid in readers_to_remove.drain(..) {
-        ev_wrapper.remove_local_reader(reader_guid);
-      }
-      for writer_guid in writers_to_remove.drain(..) {
-        ev_wrapper.remove_local_writer(&writer_guid);
-      }
+    if self.drain_and_remove(&mut readers_to_remove, &mut writers_to_remove) {
+      return;
     }
 
     let waker = self.waker.clone();
@@ -390,7 +375,6 @@ impl DPEventLoop {
         ev_wrapper.poll = Some(poll);
         return;
       }
-      let mut preparing_to_stop = ev_wrapper.preparing_to_stop;
       // liveness watchdog
       let now = Instant::now();
       if now > poll_alive + Duration::from_secs(2) {
@@ -450,27 +434,10 @@ impl DPEventLoop {
         }
       }
 
-      ev_wrapper.drain_timers(preparing_to_stop);
-      if ev_wrapper.drain_queues(
-        &mut readers_to_remove,
-        &mut writers_to_remove,
-        &mut preparing_to_stop,
-      ) {
+      if ev_wrapper.after_wake(&mut readers_to_remove, &mut writers_to_remove) {
         ev_wrapper.poll = Some(poll);
         return;
       }
-      ev_wrapper.preparing_to_stop = preparing_to_stop;
-      // Removals wait until commands queued in this same wake have run.
-      for reader_guid in readers_to_remove.drain(..) {
-        ev_wrapper.remove_local_reader(reader_guid);
-      }
-      for writer_guid in writers_to_remove.drain(..) {
-        ev_wrapper.remove_local_writer(&writer_guid);
-      }
-
-      // nonblocking-transmit: service the per-socket outbound queues and keep
-      // write-readiness interest in sync with what is pending.
-      ev_wrapper.service_outbound();
     } // loop
   } // fn
 
@@ -481,27 +448,11 @@ impl DPEventLoop {
       // Not running yet (the waker is set before the loop starts), or stopping.
       return false;
     }
-    let mut preparing_to_stop = self.preparing_to_stop;
-    self.drain_timers(preparing_to_stop);
-    let mut readers_to_remove: Vec<GUID> = Vec::new();
-    let mut writers_to_remove: Vec<GUID> = Vec::new();
-    if self.drain_queues(
-      &mut readers_to_remove,
-      &mut writers_to_remove,
-      &mut preparing_to_stop,
-    ) {
+    if self.after_wake(&mut Vec::new(), &mut Vec::new()) {
       // The stop command has been taken from its queue: the loop thread stops on its wake.
       self.stop_requested = true;
       return false;
     }
-    self.preparing_to_stop = preparing_to_stop;
-    for reader_guid in readers_to_remove.drain(..) {
-      self.remove_local_reader(reader_guid);
-    }
-    for writer_guid in writers_to_remove.drain(..) {
-      self.remove_local_writer(&writer_guid);
-    }
-    self.service_outbound();
     // The loop's poll waits for `armed_deadline`: wake it if a sooner deadline was set (or
     // outbound work needs the short cap where there is no write readiness).
     if !cfg!(unix) && self.has_pending_outbound() {
@@ -514,19 +465,55 @@ impl DPEventLoop {
     }
   }
 
+  // fcc (vendored): what follows every wake, on the loop's thread after its poll and as the
+  // whole of an inline pass: timers due, the queues, the removals, the outbound queues.
+  // Returns true when the loop should exit (a Stop command was taken).
+  fn after_wake(
+    &mut self,
+    readers_to_remove: &mut Vec<GUID>,
+    writers_to_remove: &mut Vec<GUID>,
+  ) -> bool {
+    self.drain_timers(self.preparing_to_stop);
+    if self.drain_and_remove(readers_to_remove, writers_to_remove) {
+      return true;
+    }
+    // nonblocking-transmit: service the per-socket outbound queues and keep
+    // write-readiness interest in sync with what is pending.
+    self.service_outbound();
+    false
+  }
+
+  // fcc (vendored): the queues, then the removals they asked for (they wait until commands
+  // queued in this same wake have run). Returns true when the loop should exit.
+  fn drain_and_remove(
+    &mut self,
+    readers_to_remove: &mut Vec<GUID>,
+    writers_to_remove: &mut Vec<GUID>,
+  ) -> bool {
+    if self.drain_queues(readers_to_remove, writers_to_remove) {
+      return true;
+    }
+    for reader_guid in readers_to_remove.drain(..) {
+      self.remove_local_reader(reader_guid);
+    }
+    for writer_guid in writers_to_remove.drain(..) {
+      self.remove_local_writer(&writer_guid);
+    }
+    false
+  }
+
   // Returns true when the loop should exit.
   fn drain_queues(
     &mut self,
     readers_to_remove: &mut Vec<GUID>,
     writers_to_remove: &mut Vec<GUID>,
-    preparing_to_stop: &mut bool,
   ) -> bool {
     use std::sync::mpsc::TryRecvError;
     loop {
       match self.stop_poll_receiver.try_recv() {
         Ok(EventLoopCommand::PrepareStop) => {
           info!("dp_event_loop preparing to stop.");
-          *preparing_to_stop = true;
+          self.preparing_to_stop = true;
         }
         Ok(EventLoopCommand::Stop) => {
           info!("Stopping dp_event_loop");
