@@ -16,10 +16,9 @@ use fcc_ros::topics::{self, Topic};
 use futures::StreamExt;
 use ros2_client::parameters::ParameterValue;
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{
-    Context, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, ServiceMapping,
-    ServiceTypeName,
-};
+use fcc_ros::rmw::{Pub, Rmw, RosContext, RosNode, Sub};
+use ros2_client::dds::Context;
+use ros2_client::{Name, NodeName, NodeOptions, QosProfile};
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -36,6 +35,8 @@ pub struct Options {
     pub namespace: String,
     pub node_name: String,
     pub domain_id: u16,
+    /// DDS or Zenoh (`RMW_IMPLEMENTATION`, [`fcc_ros::rmw`]).
+    pub rmw: Rmw,
     pub localhost_only: bool,
     /// The checked SROS2 enclave directory when security is on (`fcc_ros::security`).
     pub enclave_dir: Option<std::path::PathBuf>,
@@ -71,6 +72,7 @@ impl Default for Options {
             namespace: "/fcc".into(),
             node_name: "fcc_bridge".into(),
             domain_id: 0,
+            rmw: Rmw::Dds,
             localhost_only: true,
             enclave_dir: None,
             cfg: Config::default(),
@@ -113,41 +115,41 @@ fn ros_err(e: impl std::fmt::Debug) -> BridgeError {
 
 /// Publishers of every topic.
 pub struct Publishers {
-    imu_raw: Publisher<Imu>,
-    mag: Publisher<MagneticField>,
-    baro: Publisher<FluidPressure>,
-    gps_fix: Publisher<NavSatFix>,
-    laser: Publisher<Range>,
-    sonar: Publisher<Range>,
-    battery: Publisher<BatteryState>,
-    odom: Publisher<Odometry>,
-    state_imu: Publisher<Imu>,
-    tf: Publisher<TFMessage>,
-    tf_static: Publisher<TFMessage>,
-    altitude: Publisher<Altitude>,
-    ground: Publisher<Range>,
-    status: Publisher<Status>,
-    accel_observer: Publisher<AccelStamped>,
-    accel_measured: Publisher<AccelStamped>,
-    diagnostics: Publisher<DiagnosticArray>,
-    home: Publisher<NavSatFix>,
-    clock: Option<Publisher<Clock>>,
+    imu_raw: Pub<Imu>,
+    mag: Pub<MagneticField>,
+    baro: Pub<FluidPressure>,
+    gps_fix: Pub<NavSatFix>,
+    laser: Pub<Range>,
+    sonar: Pub<Range>,
+    battery: Pub<BatteryState>,
+    odom: Pub<Odometry>,
+    state_imu: Pub<Imu>,
+    tf: Pub<TFMessage>,
+    tf_static: Pub<TFMessage>,
+    altitude: Pub<Altitude>,
+    ground: Pub<Range>,
+    status: Pub<Status>,
+    accel_observer: Pub<AccelStamped>,
+    accel_measured: Pub<AccelStamped>,
+    diagnostics: Pub<DiagnosticArray>,
+    home: Pub<NavSatFix>,
+    clock: Option<Pub<Clock>>,
     /// DDS Security's refusals, for `/diagnostics` (with security on; [`setup_dds`]).
     security: Option<fcc_ros::security_events::SharedSecurityCounts>,
 }
 
 /// A publisher for a topic of the table, under the node's namespace and remaps.
 fn publisher<T: RosMsg>(
-    node: &mut Node,
+    node: &mut RosNode,
     o: &Options,
     topic: &Topic<T>,
-) -> Result<Publisher<T>, BridgeError> {
-    fcc_ros::ros_node::publisher(node, &o.name(topic.name), &topic.qos.publisher_profile())
+) -> Result<Pub<T>, BridgeError> {
+    node.publisher_info(&o.name(topic.name), topic.qos)
         .map_err(BridgeError::Ros)
 }
 
 impl Publishers {
-    fn new(node: &mut Node, o: &Options) -> Result<Self, BridgeError> {
+    fn new(node: &mut RosNode, o: &Options) -> Result<Self, BridgeError> {
         Ok(Publishers {
             imu_raw: publisher(node, o, &topics::IMU_RAW)?,
             mag: publisher(node, o, &topics::MAG)?,
@@ -264,20 +266,53 @@ const INBOUND_KEEP: i32 = 4;
 /// Subscribe to a read topic of the table (under the node's namespace and remaps); each message
 /// goes to `tx` wrapped by `wrap`.
 fn subscribe<T: RosMsg + Sync>(
-    ctx: &Context,
-    node: &mut Node,
+    ctx: &RosContext,
+    node: &mut RosNode,
     o: &Options,
     topic: &Topic<T>,
     tx: mpsc::Sender<InboundMsg>,
     wrap: fn(T) -> Inbound,
 ) -> Result<(), BridgeError> {
-    let name = &o.name(topic.name);
+    let name = o.name(topic.name);
+    let sub = match (ctx, &mut *node) {
+        (RosContext::Dds(c), RosNode::Dds(n)) => Sub::Dds(dds_reader::<T>(c, n, o, &name)?),
+        (_, n) => n
+            .subscription::<T>(&name, &inbound_qos())
+            .map_err(BridgeError::Ros)?,
+    };
+    tokio::spawn(async move {
+        let text = |e| format!("{e:?}");
+        match sub {
+            Sub::Dds(s) => {
+                let st = s.async_stream().map(|r| r.map(|(m, _)| m).map_err(text));
+                forward(st, &name, tx, wrap).await
+            }
+            Sub::Zenoh(s) => {
+                let st = s.async_stream().map(|r| r.map(|(m, _)| m).map_err(text));
+                forward(st, &name, tx, wrap).await
+            }
+        }
+    });
+    Ok(())
+}
+
+/// Best-effort keep-last [`INBOUND_KEEP`]: matches both reliable (`ros2 topic pub`) and
+/// best-effort writers.
+fn inbound_qos() -> QosProfile {
+    QosProfile::subscription_default().history(History::KeepLast {
+        depth: INBOUND_KEEP as usize,
+    })
+}
+
+/// The DDS reader of an inbound topic, its cache bounded to [`INBOUND_KEEP`] samples.
+fn dds_reader<T: RosMsg>(
+    ctx: &Context,
+    node: &mut ros2_client::dds::Node,
+    o: &Options,
+    name: &str,
+) -> Result<ros2_client::dds::Subscription<T>, BridgeError> {
     let node_name = &NodeName::new(&o.namespace, &o.node_name).map_err(ros_err)?;
     use rustdds::policy::ResourceLimits;
-    // Best-effort reader: matches both reliable (`ros2 topic pub`) and best-effort writers.
-    let qos = QosProfile::subscription_default().history(History::KeepLast {
-        depth: INBOUND_KEEP as usize,
-    });
     let limits = rustdds::QosPolicyBuilder::new()
         .resource_limits(ResourceLimits {
             max_samples: INBOUND_KEEP,
@@ -285,7 +320,7 @@ fn subscribe<T: RosMsg + Sync>(
             max_samples_per_instance: INBOUND_KEEP,
         })
         .build();
-    let dds_qos = rustdds::QosPolicies::from(&qos).modify_by(&limits);
+    let dds_qos = rustdds::QosPolicies::from(&inbound_qos()).modify_by(&limits);
     let dds_name = Name::parse(name)
         .map_err(ros_err)?
         .to_dds_name("rt", node_name, "");
@@ -298,47 +333,61 @@ fn subscribe<T: RosMsg + Sync>(
             rustdds::TopicKind::NoKey,
         )
         .map_err(ros_err)?;
-    let sub = node
-        .create_subscription::<T>(&topic, None)
-        .map_err(ros_err)?;
-    let name = name.to_string();
-    tokio::spawn(async move {
-        let stream = sub.async_stream();
-        tokio::pin!(stream);
-        let mut warn = bounded::WarnLimiter::default();
-        while let Some(r) = stream.next().await {
-            match r {
-                Ok((m, _info)) => {
-                    let mut m = wrap(m);
-                    let over = m.bound();
-                    if tx.send((m, over)).await.is_err() {
-                        break;
-                    }
-                }
-                Err(e) => {
-                    let e = bounded::log_value(&format!("{e:?}"), 4 * bounded::LOG_CHARS);
-                    crate::warn_limited!(warn, "read_error", now_ns(), "{name}: read error {e}");
+    node.create_subscription::<T>(&topic, None)
+        .map_err(ros_err)
+}
+
+/// Each message of `stream` (an inbound topic) to `tx`, cut to its bounds; read errors logged
+/// (rate-limited). Ends when the bridge stops listening.
+async fn forward<T: RosMsg>(
+    stream: impl futures::Stream<Item = Result<T, String>>,
+    name: &str,
+    tx: mpsc::Sender<InboundMsg>,
+    wrap: fn(T) -> Inbound,
+) {
+    tokio::pin!(stream);
+    let mut warn = bounded::WarnLimiter::default();
+    while let Some(r) = stream.next().await {
+        match r {
+            Ok(m) => {
+                let mut m = wrap(m);
+                let over = m.bound();
+                if tx.send((m, over)).await.is_err() {
+                    break;
                 }
             }
+            Err(e) => {
+                let e = bounded::log_value(&e, 4 * bounded::LOG_CHARS);
+                crate::warn_limited!(warn, "read_error", now_ns(), "{name}: read error {e}");
+            }
         }
-    });
-    Ok(())
+    }
 }
 
 /// The DDS participant (`fcc_ros::ros_node::context`): loopback only unless disabled.
-fn context(opts: &Options) -> Result<Context, BridgeError> {
-    fcc_ros::ros_node::context(fcc_ros::ros_node::DdsEnv {
-        domain_id: opts.domain_id,
-        localhost_only: opts.localhost_only,
-        enclave_dir: opts.enclave_dir.clone(),
-    })
+/// On Zenoh, the session of rmw_zenoh's environment ([`fcc_ros::rmw`]); SROS2 is DDS-only.
+fn context(opts: &Options) -> Result<RosContext, BridgeError> {
+    match opts.rmw {
+        Rmw::Dds => fcc_ros::ros_node::context(fcc_ros::ros_node::DdsEnv {
+            domain_id: opts.domain_id,
+            localhost_only: opts.localhost_only,
+            enclave_dir: opts.enclave_dir.clone(),
+        })
+        .map(RosContext::Dds),
+        Rmw::Zenoh if opts.enclave_dir.is_some() => Err(
+            "ROS 2 security (an SROS2 enclave) is DDS-only in this stack: unset \
+             ROS_SECURITY_ENABLE or run on DDS"
+                .into(),
+        ),
+        Rmw::Zenoh => fcc_ros::rmw::zenoh_context(opts.domain_id),
+    }
     .map_err(BridgeError::Ros)
 }
 
 /// The ROS-side requests waiting for the MCU (services, parameter sets) and what the link
 /// task needs to answer them.
 struct RosSide<'a> {
-    node: &'a Node,
+    node: &'a RosNode,
     rx: mpsc::Receiver<LinkRequest>,
     shared: Arc<ParamShared>,
     cmds: Vec<(
@@ -528,7 +577,7 @@ impl RosSide<'_> {
 
 /// A `std_srvs` service that sends a command to the MCU and answers with its acknowledgement.
 fn command_service<Req, Resp>(
-    node: &mut Node,
+    node: &mut RosNode,
     name: &str,
     srv_type: &str,
     tx: mpsc::Sender<LinkRequest>,
@@ -544,20 +593,12 @@ where
         .durability(Durability::Volatile)
         .history(History::KeepLast { depth: 10 });
     let server = node
-        .create_server::<Req, Resp>(
-            ServiceMapping::Enhanced,
-            &Name::parse(name).map_err(ros_err)?,
-            &ServiceTypeName::new("std_srvs", srv_type),
-            qos.clone(),
-            qos,
-        )
-        .map_err(ros_err)?;
+        .server::<Req, Resp>(name, "std_srvs", srv_type, &qos)
+        .map_err(BridgeError::Ros)?;
     let name = name.to_string();
     tokio::spawn(async move {
-        let stream = server.receive_request_stream();
-        tokio::pin!(stream);
-        while let Some(r) = stream.next().await {
-            match r {
+        loop {
+            match server.receive().await {
                 Ok((id, req)) => {
                     let kind = to_cmd(&req);
                     let (otx, orx) = tokio::sync::oneshot::channel();
@@ -566,11 +607,15 @@ where
                         Err(_) => (false, "bridge stopping".into()),
                     };
                     tracing::info!("service {name}: {kind:?} → {msg}");
-                    if let Err(e) = server.async_send_response(id, make(ok, msg)).await {
-                        tracing::warn!("service {name}: response failed: {e:?}");
+                    if let Err(e) = server.respond(id, make(ok, msg)) {
+                        tracing::warn!("service {name}: response failed: {e}");
                     }
                 }
-                Err(e) => tracing::warn!("service {name}: bad request {e:?}"),
+                Err(e) => {
+                    tracing::warn!("service {name}: bad request {e}");
+                    // A closed session fails every call: not a busy loop.
+                    tokio::time::sleep(Duration::from_millis(100)).await;
+                }
             }
         }
     });
@@ -592,7 +637,7 @@ pub const APP: startup::App = startup::App {
 struct Dds {
     /// Bound first in [`run`], so dropped last: see [`ContextLast`].
     ctx_last: ContextLast,
-    node: Node,
+    node: RosNode,
     pubs: Publishers,
     /// Setpoints and /clock.
     rx: mpsc::Receiver<InboundMsg>,
@@ -608,8 +653,10 @@ struct Dds {
 /// the participant. Dropped the other way round, rustdds logs "Cannot remove Writer/Reader …
 /// Disconnected" ERROR lines at every exit where the spinner is late (seen under load).
 struct ContextLast {
-    ctx: Option<Context>,
+    ctx: Option<RosContext>,
     spinner: Option<std::thread::JoinHandle<()>>,
+    /// Tells the Zenoh parameter thread to end ([`RosNode::spin_parameters`]).
+    stop_params: Arc<std::sync::atomic::AtomicBool>,
 }
 
 /// How long an exit waits for the spinner thread before dropping the participant anyway.
@@ -617,6 +664,7 @@ const SPINNER_EXIT_WAIT: Duration = Duration::from_secs(2);
 
 impl Drop for ContextLast {
     fn drop(&mut self) {
+        self.stop_params.store(true, Ordering::Relaxed);
         if let Some(h) = self.spinner.take() {
             let t0 = std::time::Instant::now();
             while !h.is_finished() && t0.elapsed() < SPINNER_EXIT_WAIT {
@@ -646,7 +694,10 @@ async fn start_dds(opts: &Options) -> Result<Dds, BridgeError> {
 /// The DDS participant, the node (its spinner and /rosout threads), publishers, subscriptions
 /// and services. Blocking: called on the `dds-setup` thread.
 fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
-    step.set("creating the DDS participant");
+    step.set(match opts.rmw {
+        Rmw::Dds => "creating the DDS participant",
+        Rmw::Zenoh => "opening the Zenoh session",
+    });
     let ctx = context(opts)?;
     let (ltx, lrx) = mpsc::channel::<LinkRequest>(64);
     let shared = Arc::new(ParamShared {
@@ -658,19 +709,24 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     let nopts = node_options(opts, &shared);
     step.set("creating the ROS node");
     let mut node = ctx
-        .new_node(
-            NodeName::new(&opts.namespace, &opts.node_name).map_err(ros_err)?,
-            nopts,
-        )
-        .map_err(ros_err)?;
-    let spinner = spawn_spinner(&mut node)?;
+        .new_node(&opts.namespace, &opts.node_name, nopts)
+        .map_err(BridgeError::Ros)?;
+    let stop_params = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let mut spinner = None;
+    let mut security = None;
+    match &mut node {
+        RosNode::Dds(n) => {
+            spinner = Some(spawn_spinner(n)?);
+            // With security on, every refusal is a WARN (hence /rosout) and counted for
+            // /diagnostics.
+            security = opts.enclave_dir.as_ref().and_then(|_| {
+                fcc_ros::security_events::watch(n, |line| tracing::warn!("{line}"))
+            });
+        }
+        RosNode::Zenoh(_) => node.spin_parameters(stop_params.clone()).map_err(BridgeError::Ros)?,
+    }
     shared.live.store(true, Ordering::SeqCst);
     spawn_rosout(&node, opts)?;
-    // With security on, every refusal is a WARN (hence /rosout) and counted for /diagnostics.
-    let security = opts
-        .enclave_dir
-        .as_ref()
-        .and_then(|_| fcc_ros::security_events::watch(&node, |line| tracing::warn!("{line}")));
     step.set("creating the publishers");
     let mut pubs = Publishers::new(&mut node, opts)?;
     pubs.security = security;
@@ -680,14 +736,15 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     create_services(&mut node, opts, &ltx)?;
     drop(ltx);
     tracing::info!(
-        "node {}/{} on DDS domain {} ({}), device {} at {} baud",
+        "node {}/{} on {} domain {} ({}), device {} at {} baud",
         opts.namespace.trim_end_matches('/'),
         opts.node_name,
+        opts.rmw.label(),
         opts.domain_id,
-        if opts.localhost_only {
-            "loopback only"
-        } else {
-            "all interfaces"
+        match (opts.rmw, opts.localhost_only) {
+            (Rmw::Zenoh, _) => "session from ZENOH_SESSION_CONFIG_URI / ZENOH_CONFIG_OVERRIDE",
+            (Rmw::Dds, true) => "loopback only",
+            (Rmw::Dds, false) => "all interfaces",
         },
         opts.device,
         opts.baud
@@ -695,7 +752,8 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
     Ok(Dds {
         ctx_last: ContextLast {
             ctx: Some(ctx),
-            spinner: Some(spinner),
+            spinner,
+            stop_params,
         },
         node,
         pubs,
@@ -785,7 +843,7 @@ fn node_options(opts: &Options, shared: &Arc<ParamShared>) -> NodeOptions {
 
 /// The spinner serves discovery, /clock and the parameter services. It runs on its own thread
 /// because the parameter validator blocks while the MCU acknowledges a set.
-fn spawn_spinner(node: &mut Node) -> Result<std::thread::JoinHandle<()>, BridgeError> {
+fn spawn_spinner(node: &mut ros2_client::dds::Node) -> Result<std::thread::JoinHandle<()>, BridgeError> {
     let spinner = node.spinner().map_err(ros_err)?;
     std::thread::Builder::new()
         .name("ros-spinner".into())
@@ -804,36 +862,28 @@ fn spawn_spinner(node: &mut Node) -> Result<std::thread::JoinHandle<()>, BridgeE
 }
 
 /// /rosout: the bridge's tracing events (INFO and above), with their level.
-fn spawn_rosout(node: &Node, opts: &Options) -> Result<(), BridgeError> {
-    if let Some(logs) = ros_api::rosout_channel() {
-        use ros2_client::RosoutRaw;
-        let h = node.logging_handle();
-        let logger = fcc_ros::logger_name(&opts.namespace, &opts.node_name);
-        std::thread::Builder::new()
-            .name("rosout".into())
-            .spawn(move || {
-                while let Ok((level, msg, file, line)) = logs.recv() {
-                    h.rosout_raw(
-                        ros2_client::builtin_interfaces::Time::from_nanos(now_ns()),
-                        level,
-                        &logger,
-                        &msg,
-                        &file,
-                        "",
-                        line,
-                    );
-                }
-            })
-            .map_err(ros_err)?;
-    }
+fn spawn_rosout(node: &RosNode, opts: &Options) -> Result<(), BridgeError> {
+    let Some(logs) = ros_api::rosout_channel() else {
+        return Ok(());
+    };
+    let logger = fcc_ros::logger_name(&opts.namespace, &opts.node_name);
+    let out = node.rosout();
+    std::thread::Builder::new()
+        .name("rosout".into())
+        .spawn(move || {
+            while let Ok((level, msg, file, line)) = logs.recv() {
+                out.log(now_ns(), level, &logger, &msg, &file, line);
+            }
+        })
+        .map_err(ros_err)?;
     Ok(())
 }
 
 /// The read topics. Setpoints (velocity, heading, and /clock) and commands on separate queues: a command never
 /// waits behind a queue of setpoints from a flooding peer. Returns (setpoints, commands).
 fn subscribe_all(
-    ctx: &Context,
-    node: &mut Node,
+    ctx: &RosContext,
+    node: &mut RosNode,
     opts: &Options,
 ) -> Result<(mpsc::Receiver<InboundMsg>, mpsc::Receiver<InboundMsg>), BridgeError> {
     let (tx, rx) = mpsc::channel::<InboundMsg>(64);
@@ -888,7 +938,7 @@ fn subscribe_all(
 
 /// The `arm` (SetBool), `land` and `hold` (Trigger) services, answered after the MCU's ack.
 fn create_services(
-    node: &mut Node,
+    node: &mut RosNode,
     opts: &Options,
     ltx: &mpsc::Sender<LinkRequest>,
 ) -> Result<(), BridgeError> {

@@ -74,6 +74,7 @@ fn options() -> Result<(Options, Option<RecordOptions>), String> {
         o.remaps = ros.remaps.clone();
         let env = |k: &str| std::env::var(k).ok();
         o.domain_id = params::domain_id(env("ROS_DOMAIN_ID").as_deref())?;
+        o.rmw = fcc_ros::rmw::Rmw::from_env()?;
         o.enclave_dir = fcc_ros::ros_node::security_from_env(&ros)?;
         let p = &ros.params;
         let rec = fcc_bridge::record::record_options(cli.record.as_deref(), p)?;
@@ -266,10 +267,8 @@ fn main() -> ExitCode {
     // One thread: the serial port's readiness (epoll) and the session that reads it are on the
     // same thread. With the multi-thread runtime a worker woke on the read and woke this thread
     // (block_on) to run the session: two context switches per serial read instead of one.
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .expect("tokio runtime");
+    // Zenoh's blocking calls refuse a current-thread runtime: one worker thread there.
+    let rt = fcc_ros::rmw::runtime(opts.rmw).expect("tokio runtime");
     let mut run = Box::pin(bridge::run(opts, tap.clone()));
     let r = rt.block_on(async {
         tokio::select! {

@@ -10,6 +10,8 @@
 //!   and the DDS environment variables.
 //! - [`ros_node`]: the DDS participant (built here only), nodes, publishers and subscriptions by
 //!   ROS name, the QoS profiles, the ROS clock, [`now_ns`] and [`logger_name`].
+//! - [`rmw`]: the middleware (`RMW_IMPLEMENTATION`: DDS or Zenoh) and the handles both nodes
+//!   use on either: context, node, publisher, subscription, service server.
 //! - [`topics`]: the topic table (name, message type, QoS, direction) that the bridge's
 //!   publishers, subscriptions and recorder read; [`topics::QosInfo`].
 //! - [`startup`]: start-up protection — the DDS set-up under a watchdog with a restart, and
@@ -26,6 +28,7 @@
 pub mod frames;
 pub mod heap;
 pub mod params;
+pub mod rmw;
 pub mod ros_node;
 pub mod security;
 pub mod security_events;

@@ -10,7 +10,7 @@
 //! events reach the node through ros2-client's status channel ([`ros2_client::NodeEvent`]),
 //! which needs the node's spinner running; [`watch`] drains it on a thread of its own.
 
-use ros2_client::{Node, NodeEvent, SecurityEvent};
+use ros2_client::dds::{Node, NodeEvent, SecurityEvent};
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
 

@@ -241,7 +241,7 @@ async fn play(
     let mut from_bag = 0usize;
     let mut defaulted: Vec<String> = Vec::new();
     // Raw CDR passthrough: publish the recorded bytes as they are.
-    let mut pubs: BTreeMap<String, ros2_client::Publisher<RawCdr>> = BTreeMap::new();
+    let mut pubs: BTreeMap<String, ros2_client::dds::Publisher<RawCdr>> = BTreeMap::new();
     for m in &msgs {
         if pubs.contains_key(&m.topic) {
             continue;

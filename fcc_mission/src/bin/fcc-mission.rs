@@ -47,7 +47,8 @@ use futures::StreamExt;
 use ros2_client::action::GoalId;
 use ros2_client::log::LogLevel;
 use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType, ParameterValue};
-use ros2_client::{NodeLoggingHandle, NodeOptions, RosoutRaw};
+use fcc_ros::rmw::{Pub, Rmw, RosContext, RosNode, Rosout, Sub};
+use ros2_client::NodeOptions;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -70,6 +71,8 @@ struct Options {
     namespace: String,
     node_name: String,
     dds: DdsEnv,
+    /// DDS or Zenoh (`RMW_IMPLEMENTATION`, `fcc_ros::rmw`).
+    rmw: Rmw,
     rate_hz: f64,
     use_sim_time: bool,
     timeout_s: f64,
@@ -146,6 +149,7 @@ fn options() -> Options {
             .clone()
             .unwrap_or_else(|| "fcc_mission".into()),
         dds: DdsEnv::from_env(&ros).unwrap_or_else(|e| fail(2, e)),
+        rmw: Rmw::from_env().unwrap_or_else(|e| fail(2, e)),
         rate_hz,
         use_sim_time,
         timeout_s: num("timeout_s"),
@@ -181,24 +185,16 @@ fn stamp(ns: i64) -> Time {
 /// stamped with ROS time (simulated time with use_sim_time; the system clock before the first
 /// /clock).
 struct Log {
-    handle: NodeLoggingHandle,
+    rosout: Rosout,
     name: String,
 }
 
 impl Log {
     fn log(&self, level: LogLevel, now_ns: Option<i64>, msg: &str) {
         println!("fcc-mission: {msg}");
-        self.handle.rosout_raw(
-            ros2_client::builtin_interfaces::Time::from_nanos(
-                now_ns.unwrap_or_else(fcc_ros::now_ns),
-            ),
-            level,
-            &self.name,
-            msg,
-            file!(),
-            "",
-            line!(),
-        );
+        let stamp_ns = now_ns.unwrap_or_else(fcc_ros::now_ns);
+        self.rosout
+            .log(stamp_ns, level, &self.name, msg, file!(), line!());
     }
     fn info(&self, now_ns: Option<i64>, msg: &str) {
         self.log(LogLevel::Info, now_ns, msg)
@@ -239,8 +235,15 @@ const APP: startup::App = startup::App {
     env_prefix: "FCC_MISSION",
 };
 
-#[tokio::main(flavor = "current_thread")]
-async fn main() {
+fn main() {
+    // Zenoh's blocking calls refuse a current-thread runtime (`fcc_ros::rmw::runtime`).
+    let rmw = Rmw::from_env().unwrap_or_else(|e| fail(2, e));
+    let rt = fcc_ros::rmw::runtime(rmw)
+        .unwrap_or_else(|e| fail(1, format!("cannot start the tokio runtime: {e}")));
+    rt.block_on(async_main())
+}
+
+async fn async_main() {
     // The DDS libraries' warnings and errors (a failed key exchange, a refused handshake) on
     // stderr; the node's own lines are its Log's.
     tracing_subscriber::fmt()
@@ -293,39 +296,60 @@ impl From<(i32, String)> for Failure {
 
 /// The DDS side, created by [`setup_dds`] on the `dds-setup` thread.
 struct Dds {
-    _ctx: ros2_client::Context,
-    node: ros2_client::Node,
-    odom_sub: ros2_client::Subscription<Odometry>,
-    status_sub: ros2_client::Subscription<Status>,
-    clock_sub: Option<ros2_client::Subscription<Clock>>,
-    sp_pub: ros2_client::Publisher<TwistStamped>,
-    heading_pub: ros2_client::Publisher<QuaternionStamped>,
-    arm_pub: ros2_client::Publisher<Bool>,
-    mode_pub: ros2_client::Publisher<StringMsg>,
-    status_pub: ros2_client::Publisher<StringMsg>,
-    home_sub: ros2_client::Subscription<NavSatFix>,
-    actions: Servers,
+    _ctx: RosContext,
+    node: RosNode,
+    odom_sub: Sub<Odometry>,
+    status_sub: Sub<Status>,
+    clock_sub: Option<Sub<Clock>>,
+    sp_pub: Pub<TwistStamped>,
+    heading_pub: Pub<QuaternionStamped>,
+    arm_pub: Pub<Bool>,
+    mode_pub: Pub<StringMsg>,
+    status_pub: Pub<StringMsg>,
+    home_sub: Sub<NavSatFix>,
+    /// The action servers: on DDS only for now (ros2-client's Zenoh `ActionServer` has another
+    /// API; on Zenoh the node flies its mission file and serves no action).
+    actions: Option<Servers>,
 }
 
 /// The participant, node, subscriptions and publishers. Blocking (rustdds can deadlock here
 /// when several participants start together): run under `startup::App::setup_dds`.
 fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
-    step.set("creating the DDS participant");
-    let ctx = ros_node::context(o.dds.clone())?;
+    let ctx = match o.rmw {
+        Rmw::Dds => {
+            step.set("creating the DDS participant");
+            RosContext::Dds(ros_node::context(o.dds.clone())?)
+        }
+        Rmw::Zenoh if o.dds.enclave_dir.is_some() => {
+            return Err("ROS 2 security (an SROS2 enclave) is DDS-only in this stack: unset \
+                        ROS_SECURITY_ENABLE or run on DDS"
+                .into())
+        }
+        Rmw::Zenoh => {
+            step.set("opening the Zenoh session");
+            fcc_ros::rmw::zenoh_context(o.dds.domain_id)?
+        }
+    };
     step.set("creating the ROS node");
     let live = Arc::new(AtomicBool::new(false));
     let opts = node_options(&o.params, live.clone());
-    let mut node = ros_node::node_with(&ctx, &o.namespace, &o.node_name, opts)?;
+    let mut node = match &ctx {
+        RosContext::Dds(c) => RosNode::Dds(ros_node::node_with(c, &o.namespace, &o.node_name, opts)?),
+        RosContext::Zenoh(_) => {
+            let n = ctx.new_node(&o.namespace, &o.node_name, opts)?;
+            // The parameter thread runs as long as the process: the node exits by process exit.
+            n.spin_parameters(Arc::new(AtomicBool::new(false)))?;
+            n
+        }
+    };
     live.store(true, Ordering::SeqCst); // from now on every parameter set is refused
     step.set("creating the subscriptions");
     let odom_sub =
-        ros_node::subscription::<Odometry>(&mut node, &o.topics[0], &ros_node::best_effort_qos(1))?;
+        node.subscription::<Odometry>(&o.topics[0], &ros_node::best_effort_qos(1))?;
     let status_sub =
-        ros_node::subscription::<Status>(&mut node, &o.topics[1], &ros_node::best_effort_qos(5))?;
+        node.subscription::<Status>(&o.topics[1], &ros_node::best_effort_qos(5))?;
     let clock_sub = if o.use_sim_time {
-        Some(ros_node::subscription::<Clock>(
-            &mut node,
-            &o.topics[2],
+        Some(node.subscription::<Clock>(&o.topics[2],
             &ros_node::best_effort_qos(1),
         )?)
     } else {
@@ -333,26 +357,27 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     };
     step.set("creating the publishers");
     let sp_pub =
-        ros_node::publisher::<TwistStamped>(&mut node, &o.topics[3], &ros_node::reliable_qos(10))?;
-    let heading_pub = ros_node::publisher::<QuaternionStamped>(
-        &mut node,
-        &o.topics[7],
+        node.publisher::<TwistStamped>(&o.topics[3], &ros_node::reliable_qos(10))?;
+    let heading_pub = node.publisher::<QuaternionStamped>(&o.topics[7],
         &ros_node::reliable_qos(10),
     )?;
     let arm_pub =
-        ros_node::publisher::<Bool>(&mut node, &o.topics[4], &ros_node::reliable_qos(10))?;
+        node.publisher::<Bool>(&o.topics[4], &ros_node::reliable_qos(10))?;
     let mode_pub =
-        ros_node::publisher::<StringMsg>(&mut node, &o.topics[5], &ros_node::reliable_qos(10))?;
+        node.publisher::<StringMsg>(&o.topics[5], &ros_node::reliable_qos(10))?;
     let status_pub =
-        ros_node::publisher::<StringMsg>(&mut node, &o.topics[6], &ros_node::reliable_qos(10))?;
+        node.publisher::<StringMsg>(&o.topics[6], &ros_node::reliable_qos(10))?;
     // Latched: the reader is reliable and transient local, as the bridge's writer.
-    let home_sub = ros_node::subscription::<NavSatFix>(
-        &mut node,
-        &o.topics[8],
+    let home_sub = node.subscription::<NavSatFix>(&o.topics[8],
         &topics::HOME.qos.publisher_profile(),
     )?;
-    step.set("creating the action server");
-    let actions = Servers::new(&mut node, &o.actions)?;
+    let actions = match &mut node {
+        RosNode::Dds(n) => {
+            step.set("creating the action server");
+            Some(Servers::new(n, &o.actions)?)
+        }
+        RosNode::Zenoh(_) => None,
+    };
     Ok(Dds {
         _ctx: ctx,
         node,
@@ -448,6 +473,7 @@ const MISSION_STATUS_TOPIC: &str = fcc_ros::topics::MISSION_STATUS;
 /// What [`setup_dds`] needs (owned: it runs on a thread of its own).
 struct DdsSetup {
     dds: DdsEnv,
+    rmw: Rmw,
     /// Every parameter of [`node_params::NODE_PARAMS`] with the value in use.
     params: Vec<(&'static str, ParameterValue)>,
     namespace: String,
@@ -463,6 +489,7 @@ struct DdsSetup {
 async fn run(o: Options) -> Result<(), Failure> {
     let setup = DdsSetup {
         dds: o.dds.clone(),
+        rmw: o.rmw,
         params: declared_parameters(&o),
         namespace: o.namespace.clone(),
         node_name: o.node_name.clone(),
@@ -501,7 +528,7 @@ struct Heard {
 
 async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
     let log = Log {
-        handle: dds.node.logging_handle(),
+        rosout: dds.node.rosout(),
         name: fcc_ros::logger_name(&o.namespace, &o.node_name),
     };
     log_start(&o, &log);
@@ -530,13 +557,10 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
         }
     }
     let mut dds = dds;
-    let odom_stream = dds.odom_sub.async_stream();
-    let status_stream = dds.status_sub.async_stream();
-    let home_stream = dds.home_sub.async_stream();
-    tokio::pin!(odom_stream);
-    tokio::pin!(status_stream);
-    tokio::pin!(home_stream);
-    let mut clock_stream = dds.clock_sub.as_ref().map(|s| Box::pin(s.async_stream()));
+    let mut odom_stream = dds.odom_sub.stream();
+    let mut status_stream = dds.status_sub.stream();
+    let mut home_stream = dds.home_sub.stream();
+    let mut clock_stream = dds.clock_sub.as_ref().map(|s| s.stream());
 
     let mut clock = RosClock::new(o.use_sim_time);
     let mut heard = Heard::default();
@@ -546,10 +570,10 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
 
     loop {
         tokio::select! {
-            Some(r) = odom_stream.next() => { if let Ok((m, _)) = r { heard.odom = Some(m); } continue; }
-            Some(r) = status_stream.next() => { if let Ok((m, _)) = r { heard.status = Some(m); } continue; }
+            Some(r) = odom_stream.next() => { if let Ok(m) = r { heard.odom = Some(m); } continue; }
+            Some(r) = status_stream.next() => { if let Ok(m) = r { heard.status = Some(m); } continue; }
             Some(r) = home_stream.next() => {
-                if let Ok((m, _)) = r { on_home(&mut heard, &m, &log); }
+                if let Ok(m) = r { on_home(&mut heard, &m, &log); }
                 continue;
             }
             Some(r) = async {
@@ -557,19 +581,19 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
                     Some(s) => s.next().await,
                     None => std::future::pending().await,
                 }
-            } => { if let Ok((m, _)) = r { clock.on_clock(&m); } continue; }
+            } => { if let Ok(m) = r { clock.on_clock(&m); } continue; }
             _ = tick.tick() => {}
         }
         let now_ns = clock.now_ns();
         let wall_s = started.elapsed().as_secs_f64();
-        dds.actions.take_goals(&mut GoalContext {
+        if let Some(a) = dds.actions.as_mut() { a.take_goals(&mut GoalContext {
             exec: &mut exec,
             heard: &heard,
             fence,
             wall_s,
             log: &log,
             now_ns,
-        });
+        }); }
         let input = match (heard.odom.as_ref(), heard.status.as_ref(), now_ns) {
             (Some(od), Some(st), Some(now_ns)) => {
                 let (pos_ned_m, vel_ned_mps) = odom_to_ned(od);
@@ -591,7 +615,7 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             exec.setpoint_published();
         }
         if let Some((id, p)) = out.feedback {
-            dds.actions.feedback(id, &p);
+            if let Some(a) = &dds.actions { a.feedback(id, &p); }
         }
         if let Some(f) = out.finished {
             if Some(f.id) == file_goal && f.end != GoalEnd::Preempted {
@@ -600,9 +624,9 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             if Some(f.id) == file_goal {
                 log.line(Level::Warn, now_ns, "the mission file's goal was preempted by an action goal: serving actions from now on (no exit)");
             }
-            dds.actions.finish(&f, &log, now_ns);
+            if let Some(a) = dds.actions.as_mut() { a.finish(&f, &log, now_ns); }
         }
-        dds.actions.poll_results();
+        if let Some(a) = dds.actions.as_mut() { a.poll_results(); }
     }
 }
 
@@ -664,20 +688,24 @@ fn log_start(o: &Options, log: &Log) {
     log.info(
         None,
         &format!(
-            "node {}/{} (DDS domain {}, {}, {}), {mission}, actions {}, setpoints at {} Hz, {} time, {}",
+            "node {}/{} ({} domain {}, {}, {}), {mission}, actions {}, setpoints at {} Hz, {} time, {}",
             o.namespace.trim_end_matches('/'),
             o.node_name,
+            o.rmw.label(),
             o.dds.domain_id,
-            if o.dds.localhost_only {
-                "loopback only"
-            } else {
-                "all interfaces"
+            match (o.rmw, o.dds.localhost_only) {
+                (Rmw::Zenoh, _) => "session from ZENOH_SESSION_CONFIG_URI / ZENOH_CONFIG_OVERRIDE",
+                (Rmw::Dds, true) => "loopback only",
+                (Rmw::Dds, false) => "all interfaces",
             },
             match &o.dds.enclave_dir {
                 Some(d) => format!("DDS Security in enclave {}", d.display()),
                 None => "no DDS Security".into(),
             },
-            ACTIONS.map(|(name, _)| o.name(name)).join(", "),
+            match o.rmw {
+                Rmw::Dds => ACTIONS.map(|(name, _)| o.name(name)).join(", "),
+                Rmw::Zenoh => "none (DDS only for now)".into(),
+            },
             o.rate_hz,
             if o.use_sim_time {
                 "sim (/clock)"

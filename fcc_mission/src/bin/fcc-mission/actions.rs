@@ -23,7 +23,8 @@ use ros2_client::action_msgs::{
 };
 use ros2_client::builtin_interfaces::Time as RosTime;
 use ros2_client::qos::{Durability, History};
-use ros2_client::{ActionTypeName, Name, Node, QosProfile, RmwRequestId, ServiceMapping};
+use ros2_client::dds::{Node, ServiceMapping};
+use ros2_client::{ActionTypeName, Name, QosProfile, RmwRequestId};
 
 /// Every action has FollowWaypoints' result and feedback (the mission executive's).
 type Server<G> = ActionServer<G, FollowWaypointsResult, FollowWaypointsFeedback>;
