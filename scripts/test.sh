@@ -40,6 +40,11 @@ fi
 if ! .venv-dds/bin/python -c 'import mcap, mcap_ros2.decoder, rosbags.highlevel' 2>/dev/null; then
   .venv-dds/bin/pip install -q --disable-pip-version-check mcap mcap-ros2-support rosbags
 fi
+# The independent Zenoh peer of the fleet test (issue 18): Zenoh's Python binding, the same
+# release as the zenoh crate the nodes link (1.10.2).
+if ! .venv-dds/bin/python -c 'import zenoh' 2>/dev/null; then
+  .venv-dds/bin/pip install -q --disable-pip-version-check eclipse-zenoh==1.10.2
+fi
 export FCC_DDS_PYTHON="$PWD/.venv-dds/bin/python" FCC_REQUIRE_DDS_PEER=1
 # Real ROS 2 (issue 16): Jazzy and Kilted rclpy on Fast DDS from PyPI wheels, each in its venv
 # under target/ros2/, and `colcon build` of our interface package msg/ (fcc_msgs) with them; the
@@ -197,6 +202,12 @@ tests/e2e/flood_uplink.sh "$FCC_DDS_PYTHON"
 # odometry at 93 of 100, the stack at 138 % of a core). ~70 s.
 mark "four_uav"
 FCC_E2E_SPEED=1 tests/e2e/four_uav.sh "$FCC_DDS_PYTHON"
+# A fleet on Zenoh (issue 18): four vehicles at two sites, each site's nodes clients of its own
+# fcc-zenoh-router, the routers linked; the independent eclipse-zenoh peer at site B checks every
+# vehicle's tokens and topics against its own truth and flies a vehicle of site A; then, sites
+# not linked, nothing of site A reaches site B. At speed 1 (four vehicles, as four_uav). ~85 s.
+mark "zenoh fleet"
+tests/zenoh/fleet.sh "$FCC_DDS_PYTHON"
 # The bridge with ROS 2 security (issue 19): Enforce refuses a missing enclave, a tampered
 # permissions file and an expired certificate with one line; in enclave /fcc/fcc_bridge it
 # authenticates with Debian's Cyclone DDS 0.10 (rustdds' DDS Security): the ground station gets

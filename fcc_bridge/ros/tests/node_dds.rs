@@ -4,7 +4,8 @@
 
 use fcc_ros::ros_node::{self, DdsEnv};
 use ros2_client::parameters::ParameterValue;
-use ros2_client::{Context, Gid};
+use ros2_client::dds::Context;
+use ros2_client::Gid;
 use rustdds::RTPSEntity;
 use std::time::{Duration, Instant};
 

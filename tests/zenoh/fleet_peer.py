@@ -1,0 +1,309 @@
+#!/usr/bin/env python3
+"""The ground station of the Zenoh fleet test (issue 18): an independent rmw_zenoh peer
+(PyPI eclipse-zenoh; CDR decoded by rosbags, tests/zenoh/zenoh_ros.py) at site B.
+
+  observe (default): while `fcc-launch launch_configs/zenoh_fleet.yaml` flies four vehicles
+    (uav1, uav2 at site A; uav3, uav4 at site B), the peer — a client of router B only — reads
+    every vehicle's liveliness tokens (what `ros2 node list` reads under rmw_zenoh) and every data
+    key under 0/uavN/**, and flies uav1 (site A, no mission node) itself: cmd/arm, cmd/mode
+    velocity, setpoint/velocity ENU (0, 0, 1) for 4 s stamped with /uav1/clock, then cmd/mode
+    land. After --until-file appears, with each simulator's CSV (--csv-dir/uavN.csv) and GPS
+    home (--scenarios-dir/uavN.yaml):
+      * each vehicle's bridge (and mission node, uav2 … uav4) is in the graph, under its namespace;
+      * every topic those nodes publish (their MP tokens, namespaced ones) was received and
+        decodes with rosbags' typestore;
+      * state/odom = its own vehicle's estimate in its CSV at the same simulated time (none more
+        than 1 m off) and does not fit any other vehicle's log; gps/fix nearest its own home;
+      * uav1 obeyed the far site: armed, and its TRUE altitude rose 2–6 m during the climb.
+  --expect-silence uav1,uav2: the sites are not linked (router B's link points nowhere): the peer
+    must receive nothing and see no token of those vehicles while a control peer at their own
+    site (--control-connect) does — routing, not multicast, carries the data.
+Run only inside a loopback-only network namespace (../shared/tools/netns-run).
+"""
+import argparse
+import math
+import os
+import re
+import sys
+import threading
+import time
+from collections import defaultdict
+
+here = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, here)
+sys.path.insert(0, os.path.join(here, "..", "lib"))
+
+import zenoh_ros as zr  # noqa: E402
+from truth import Checks, interp, load_csv, pct, t_of  # noqa: E402
+
+# Decoding every sample in Python would cost more CPU than the four vehicles: each topic's first
+# DECODE_FIRST samples are decoded (type check), and odom/gps/clock/status all the time.
+DECODE_FIRST = 5
+DECODE_ALWAYS = {"state/odom", "gps/fix", "clock", "status"}
+GLOBAL = {"/rosout", "/parameter_events"}
+# Published only on demand: fcc-mission sends a heading only for waypoints with yaw_deg (none in
+# these missions).
+ON_DEMAND = {"setpoint/heading"}
+
+
+class Fleet:
+    """What the peer heard, per vehicle and topic (thread-safe: zenoh calls back on its
+    threads)."""
+
+    def __init__(self, peer, vehicles):
+        self.peer, self.vehicles = peer, vehicles
+        self.lock = threading.Lock()
+        self.count = defaultdict(int)          # (v, topic) → samples
+        self.decoded = defaultdict(int)        # (v, topic) → decoded without error
+        self.keep = defaultdict(list)          # (v, topic) → decoded messages (DECODE_ALWAYS)
+        self.bad = []                          # (key, error)
+        self.tokens = {}                       # key → Entity (alive now)
+        self.seen = {}                         # key → Entity (alive at some time)
+        self.clock_s = {}                      # v → newest /uavN/clock
+        self.status = {}                       # v → newest status
+        peer.watch_graph(self._on_token)
+
+    def _vehicle_of(self, topic):
+        m = re.match(r"uav(\d+)/(.+)$", topic.strip("/"))
+        return (int(m.group(1)), m.group(2)) if m else (None, None)
+
+    def _on_token(self, entity, alive):
+        with self.lock:
+            key = (entity.session_id, entity.node_id, entity.entity_id, entity.kind)
+            if alive:
+                self.tokens[key] = entity
+                self.seen[key] = entity
+            else:
+                self.tokens.pop(key, None)
+
+
+def subscribe_all(peer, fleet):
+    """Every data key of the domain; decode per DECODE_FIRST / DECODE_ALWAYS."""
+    store = peer.store
+
+    def on_sample(sample):
+        key = str(sample.key_expr)
+        try:
+            _, topic, ros_type, _ = zr.split_data_key(key)
+        except ValueError as e:
+            fleet.bad.append((key, f"key: {e}"))
+            return
+        v, rel = fleet._vehicle_of(topic)
+        if v is None:
+            return
+        with fleet.lock:
+            fleet.count[(v, rel)] += 1
+            n = fleet.count[(v, rel)]
+        if n > DECODE_FIRST and rel not in DECODE_ALWAYS:
+            return
+        try:
+            msg = store.deserialize_cdr(sample.payload.to_bytes(), ros_type)
+        except Exception as e:  # noqa: BLE001 — any decoder error is a finding
+            fleet.bad.append((key, repr(e)[:200]))
+            return
+        with fleet.lock:
+            fleet.decoded[(v, rel)] += 1
+            if rel in DECODE_ALWAYS:
+                fleet.keep[(v, rel)].append(msg)
+            if rel == "clock":
+                fleet.clock_s[v] = t_of(msg.clock)
+            elif rel == "status":
+                fleet.status[v] = msg
+
+    sub = peer.session.declare_subscriber(f"{peer.domain}/**", on_sample)
+    peer._keep.append(sub)
+
+
+def wait(pred, secs, what):
+    end = time.monotonic() + secs
+    while time.monotonic() < end:
+        if pred():
+            return True
+        time.sleep(0.05)
+    raise TimeoutError(f"timeout ({secs} s) waiting for {what}")
+
+
+def fly_far_vehicle(peer, fleet, v, log):
+    """Arm uav`v`, velocity mode, climb ENU (0, 0, 1) m/s for 4 s (50 Hz, stamped with its own
+    /clock), then land. Returns (sim time at climb start, at climb end)."""
+    ns = f"/uav{v}"
+    ts = peer.store.types
+    Bool, String = ts["std_msgs/msg/Bool"], ts["std_msgs/msg/String"]
+    Twist, TwistStamped = ts["geometry_msgs/msg/Twist"], ts["geometry_msgs/msg/TwistStamped"]
+    Vector3, Header, Time = (ts["geometry_msgs/msg/Vector3"], ts["std_msgs/msg/Header"],
+                             ts["builtin_interfaces/msg/Time"])
+    arm = peer.publisher(f"{ns}/cmd/arm", "std_msgs/msg/Bool")
+    mode = peer.publisher(f"{ns}/cmd/mode", "std_msgs/msg/String")
+    sp = peer.publisher(f"{ns}/setpoint/velocity", "geometry_msgs/msg/TwistStamped")
+    wait(lambda: v in fleet.status and v in fleet.clock_s, 30, f"{ns}/status and {ns}/clock")
+    end = time.monotonic() + 60
+    while not fleet.status[v].armed and time.monotonic() < end:
+        arm.publish(Bool(data=True))
+        time.sleep(0.5)
+    log(f"uav{v} armed: {fleet.status[v].armed} ({fleet.status[v].last_reject})")
+    mode.publish(String(data="velocity"))
+
+    def setpoint(z):
+        t = fleet.clock_s[v]
+        sec = int(t)
+        stamp = Time(sec=sec, nanosec=int((t - sec) * 1e9))
+        return TwistStamped(header=Header(stamp=stamp, frame_id="map"),
+                            twist=Twist(linear=Vector3(x=0.0, y=0.0, z=z),
+                                        angular=Vector3(x=0.0, y=0.0, z=0.0)))
+
+    t_start = fleet.clock_s[v]
+    w0 = time.monotonic()
+    while time.monotonic() - w0 < 4.0:
+        sp.publish(setpoint(1.0))
+        time.sleep(0.02)
+    t_end = fleet.clock_s[v]
+    for _ in range(10):
+        sp.publish(setpoint(0.0))
+        time.sleep(0.02)
+    mode.publish(String(data="land"))
+    log(f"uav{v}: climbed from sim {t_start:.2f} s to {t_end:.2f} s, then land")
+    return t_start, t_end
+
+
+def home_of(path):
+    text = open(path).read()
+    lat = float(re.search(r"origin_lat_deg:\s*([-\d.]+)", text).group(1))
+    lon = float(re.search(r"origin_lon_deg:\s*([-\d.]+)", text).group(1))
+    return lat, lon
+
+
+def geo_dist_m(lat, lon, lat0, lon0):
+    return math.hypot((lat - lat0) * 110_990.0,
+                      (lon - lon0) * 111_320.0 * math.cos(math.radians(lat0)))
+
+
+def est_err(log, t, p):
+    en, ee, ed = (interp(log, k, t) for k in ("est_n_m", "est_e_m", "est_d_m"))
+    if en is None:
+        return None
+    return math.dist((p.x, p.y, p.z), (ee, en, -ed))
+
+
+def check_vehicle(c, a, fleet, v, logs, homes):
+    ns = f"/uav{v}"
+    nodes = {e.node_fqn for e in fleet.seen.values() if e.kind == "NN"}
+    want = {f"{ns}/fcc_bridge"} | ({f"{ns}/fcc_mission"} if v != a.fly else set())
+    c.check(f"{ns}: its nodes in the graph (liveliness tokens)", want <= nodes,
+            sorted(n for n in nodes if n.startswith(ns)))
+    pubs = {e.topic for e in fleet.seen.values()
+            if e.kind == "MP" and e.node_fqn in want and e.topic not in GLOBAL
+            and e.topic.split("/", 2)[2] not in ON_DEMAND}
+    got = {t for (w, t), n in fleet.count.items() if w == v and n > 0}
+    missing = sorted(t for t in pubs if t.strip("/").split("/", 1)[1] not in got)
+    c.check(f"{ns}: every topic its nodes publish received ({len(pubs)} topics)",
+            len(pubs) >= 15 and not missing, f"missing {missing}" if missing else
+            ", ".join(f"{t} {fleet.count[(v, t)]}" for t in sorted(got)))
+    undecoded = sorted(t for t in got if fleet.decoded[(v, t)] == 0)
+    c.check(f"{ns}: every topic decodes (rosbags CDR)", not undecoded, undecoded)
+    od = fleet.keep[(v, "state/odom")]
+    own, others = [], {w: [] for w in logs if w != v}
+    for m in od:
+        t = t_of(m.header.stamp)
+        e = est_err(logs[v], t, m.pose.pose.position)
+        if e is None:
+            continue
+        own.append(e)
+        for w in others:
+            ew = est_err(logs[w], t, m.pose.pose.position)
+            if ew is not None:
+                others[w].append(ew)
+    bad = sum(1 for e in own if e > 1.0)
+    c.check(f"{ns}: state/odom = its own vehicle's estimate (none > 1 m off)",
+            len(own) > 500 and bad == 0,
+            f"{len(own)} aligned, p50 {pct(own, 0.5):.3f} m max {max(own, default=math.nan):.3f} m")
+    fits = {w: sum(1 for e in ev if e > 1.0) / max(1, len(ev)) for w, ev in others.items()}
+    c.check(f"{ns}: state/odom fits no other vehicle's log (> 50 % of samples > 1 m off)",
+            all(f > 0.5 for f in fits.values()),
+            ", ".join(f"uav{w} {100 * f:.0f} %" for w, f in fits.items()))
+    fixes = fleet.keep[(v, "gps/fix")]
+    near = [min(homes, key=lambda w: geo_dist_m(f.latitude, f.longitude, *homes[w]))
+            for f in fixes]
+    c.check(f"{ns}: gps/fix nearest its own home", fixes and all(w == v for w in near),
+            f"{len(fixes)} fixes")
+
+
+def observe(a):
+    c = Checks()
+    peer = zr.RosPeer(connect=a.connect, node="ground_station")
+    fleet = Fleet(peer, a.vehicles)
+    subscribe_all(peer, fleet)
+    t0 = time.monotonic()
+    log = lambda s: print(f"[peer {time.monotonic() - t0:5.1f} s] {s}", flush=True)  # noqa: E731
+    climb = None
+    try:
+        climb = fly_far_vehicle(peer, fleet, a.fly, log)
+    except TimeoutError as e:
+        c.check(f"uav{a.fly}: flown from the other site", False, str(e))
+    while not os.path.exists(a.until_file) and time.monotonic() - t0 < a.timeout:
+        time.sleep(0.2)
+    time.sleep(0.5)
+    with fleet.lock:
+        seen, alive = dict(fleet.seen), dict(fleet.tokens)
+    print(f"graph: {sum(1 for e in seen.values() if e.kind == 'NN')} nodes, {len(seen)} tokens "
+          f"seen; {sum(fleet.count.values())} samples", flush=True)
+    left = sorted({e.node_fqn for e in alive.values() if e.namespace.startswith("/uav")})
+    c.check("every vehicle node's tokens withdrawn once the launcher stopped them", not left, left)
+    vehicles = range(1, a.vehicles + 1)
+    logs = {v: load_csv(os.path.join(a.csv_dir, f"uav{v}.csv")) for v in vehicles}
+    homes = {v: home_of(os.path.join(a.scenarios_dir, f"uav{v}.yaml")) for v in vehicles}
+    c.check("every sample's key parses and decodes", not fleet.bad, fleet.bad[:3])
+    for v in vehicles:
+        check_vehicle(c, a, fleet, v, logs, homes)
+    if climb:
+        t_start, t_end = climb
+        log1 = logs[a.fly]
+        up0, up1 = (-interp(log1, "true_d_m", t) for t in (t_start, t_end + 0.5))
+        armed = interp(log1, "armed", t_end) or 0
+        c.check(f"uav{a.fly} (site A) obeyed the ground station at site B: armed, TRUE altitude "
+                "rose 2–6 m in the 4 s climb", armed > 0.5 and 2.0 < up1 - up0 < 6.0,
+                f"{up1 - up0:.2f} m (truth {up0:.2f} → {up1:.2f} m)")
+    peer.close()
+    return c.done()
+
+
+def silence(a):
+    """The sites are not linked: nothing of the far vehicles reaches this peer (site B), while a
+    control peer at their own site (A) receives them."""
+    c = Checks()
+    far = [int(x) for x in a.expect_silence.split(",")]
+    peer = zr.RosPeer(connect=a.connect, node="ground_station")
+    control = zr.RosPeer(connect=a.control_connect, node="site_a_control")
+    here_, there = Fleet(peer, a.vehicles), Fleet(control, a.vehicles)
+    subscribe_all(peer, here_)
+    subscribe_all(control, there)
+    time.sleep(a.listen_s)
+    for v in far:
+        n_here = sum(n for (w, _), n in here_.count.items() if w == v)
+        n_there = sum(n for (w, _), n in there.count.items() if w == v)
+        tok_here = [k for k, e in here_.tokens.items() if e.namespace == f"/uav{v}"]
+        c.check(f"/uav{v} (site A), sites not linked: site B's peer receives nothing, the "
+                f"control peer at site A receives it", n_here == 0 and not tok_here and n_there > 100,
+                f"site B {n_here} samples {len(tok_here)} tokens; site A {n_there} samples")
+    peer.close()
+    control.close()
+    return c.done()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--connect", default="tcp/127.0.0.1:7448", help="this peer's router (site B)")
+    ap.add_argument("--vehicles", type=int, default=4)
+    ap.add_argument("--fly", type=int, default=1, help="the vehicle flown from this site")
+    ap.add_argument("--csv-dir")
+    ap.add_argument("--scenarios-dir")
+    ap.add_argument("--until-file")
+    ap.add_argument("--timeout", type=float, default=300)
+    ap.add_argument("--expect-silence", help="vehicles of the other site, e.g. 1,2")
+    ap.add_argument("--control-connect", default="tcp/127.0.0.1:7447")
+    ap.add_argument("--listen-s", type=float, default=6.0)
+    a = ap.parse_args()
+    return silence(a) if a.expect_silence else observe(a)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
