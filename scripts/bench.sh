@@ -74,6 +74,13 @@ else
     echo "== rows 4d/4e skipped: scripts/security-setup.sh failed" >&2
 fi
 # Row 5: recorder throughput; fcc-record-bench prints `ROW|recorder throughput|ours|mcap|ratio|goal|verdict`.
+cargo build --release --locked --workspace --bins --features fcc_mission/ros >&2
+if "$py" -c 'import zenoh' 2>/dev/null; then
+    echo "== tests/zenoh/bench_fleet.sh 12 (row 7)" >&2
+    tests/zenoh/bench_fleet.sh 12 "$py" 2>&1 | tee -a "$raw" >&2 || echo "bench_fleet.sh failed" >&2
+else
+    echo "== row 7 skipped: no Python with eclipse-zenoh ($py); run scripts/test.sh once" >&2
+fi
 echo "== fcc-record-bench (row 5)" >&2
 ./target/release/fcc-record-bench | tee "$raw.rec" >&2 || true
 rec=$(grep -m1 '^ROW|recorder throughput|' "$raw.rec" || true)
