@@ -307,9 +307,7 @@ struct Dds {
     mode_pub: Pub<StringMsg>,
     status_pub: Pub<StringMsg>,
     home_sub: Sub<NavSatFix>,
-    /// The action servers: on DDS only for now (ros2-client's Zenoh `ActionServer` has another
-    /// API; on Zenoh the node flies its mission file and serves no action).
-    actions: Option<Servers>,
+    actions: Servers,
 }
 
 /// The participant, node, subscriptions and publishers. Blocking (rustdds can deadlock here
@@ -371,13 +369,8 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     let home_sub = node.subscription::<NavSatFix>(&o.topics[8],
         &topics::HOME.qos.publisher_profile(),
     )?;
-    let actions = match &mut node {
-        RosNode::Dds(n) => {
-            step.set("creating the action server");
-            Some(Servers::new(n, &o.actions)?)
-        }
-        RosNode::Zenoh(_) => None,
-    };
+    step.set("creating the action server");
+    let actions = Servers::new(&mut node, &o.actions)?;
     Ok(Dds {
         _ctx: ctx,
         node,
@@ -586,14 +579,14 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
         }
         let now_ns = clock.now_ns();
         let wall_s = started.elapsed().as_secs_f64();
-        if let Some(a) = dds.actions.as_mut() { a.take_goals(&mut GoalContext {
+        dds.actions.take_goals(&mut GoalContext {
             exec: &mut exec,
             heard: &heard,
             fence,
             wall_s,
             log: &log,
             now_ns,
-        }); }
+        });
         let input = match (heard.odom.as_ref(), heard.status.as_ref(), now_ns) {
             (Some(od), Some(st), Some(now_ns)) => {
                 let (pos_ned_m, vel_ned_mps) = odom_to_ned(od);
@@ -615,7 +608,7 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             exec.setpoint_published();
         }
         if let Some((id, p)) = out.feedback {
-            if let Some(a) = &dds.actions { a.feedback(id, &p); }
+            dds.actions.feedback(id, &p);
         }
         if let Some(f) = out.finished {
             if Some(f.id) == file_goal && f.end != GoalEnd::Preempted {
@@ -624,9 +617,9 @@ async fn fly(o: Options, dds: Dds) -> Result<(), (i32, String)> {
             if Some(f.id) == file_goal {
                 log.line(Level::Warn, now_ns, "the mission file's goal was preempted by an action goal: serving actions from now on (no exit)");
             }
-            if let Some(a) = dds.actions.as_mut() { a.finish(&f, &log, now_ns); }
+            dds.actions.finish(&f, &log, now_ns);
         }
-        if let Some(a) = dds.actions.as_mut() { a.poll_results(); }
+        dds.actions.poll_results();
     }
 }
 
@@ -702,10 +695,7 @@ fn log_start(o: &Options, log: &Log) {
                 Some(d) => format!("DDS Security in enclave {}", d.display()),
                 None => "no DDS Security".into(),
             },
-            match o.rmw {
-                Rmw::Dds => ACTIONS.map(|(name, _)| o.name(name)).join(", "),
-                Rmw::Zenoh => "none (DDS only for now)".into(),
-            },
+            ACTIONS.map(|(name, _)| o.name(name)).join(", "),
             o.rate_hz,
             if o.use_sim_time {
                 "sim (/clock)"

@@ -1,5 +1,5 @@
 //! The action servers of the mission node — `follow_waypoints`, `go_to`, `takeoff`, `land`
-//! ([`ACTIONS`]; `fcc_msgs/action/*`): each is ros2-client's [`ActionServer`] (its `_action/send_goal`, `cancel_goal`, `get_result` services
+//! ([`ACTIONS`]; `fcc_msgs/action/*`): each is ros2-client's [`ActionServer`] on DDS or its Zenoh one ([`ActionSrv`]) (its `_action/send_goal`, `cancel_goal`, `get_result` services
 //! and `feedback`, `status` topics, the names and wrappers rclpy's ActionClient uses), polled
 //! once per cycle. This file keeps the goals' statuses and results and answers the services,
 //! and turns goals into the mission logic's ([`take_goals`], [`finish`], [`feedback`]); what a
@@ -23,11 +23,99 @@ use ros2_client::action_msgs::{
 };
 use ros2_client::builtin_interfaces::Time as RosTime;
 use ros2_client::qos::{Durability, History};
-use ros2_client::dds::{Node, ServiceMapping};
+use fcc_ros::rmw::RosNode;
+use ros2_client::dds::ServiceMapping;
 use ros2_client::{ActionTypeName, Name, QosProfile, RmwRequestId};
 
 /// Every action has FollowWaypoints' result and feedback (the mission executive's).
 type Server<G> = ActionServer<G, FollowWaypointsResult, FollowWaypointsFeedback>;
+type ZenohServer<G> =
+    ros2_client::zenoh::ActionServer<G, FollowWaypointsResult, FollowWaypointsFeedback>;
+
+/// One action's server on either middleware: the calls [`GoalServer`] makes. On Zenoh a cancel
+/// request's stamp is not passed on by ros2-client (cancel by goal id or all goals), and the
+/// goal response carries no acceptance stamp (the status array does). Send failures are not
+/// reported (a client that went away), as before.
+enum ActionSrv<G: ros2_client::Message + Clone> {
+    Dds(Server<G>),
+    Zenoh(ZenohServer<G>),
+}
+
+impl<G: ros2_client::Message + Clone + 'static> ActionSrv<G> {
+    fn receive_goal(&self) -> Option<(RmwRequestId, GoalId, G)> {
+        match self {
+            ActionSrv::Dds(s) => s.receive_goal().ok().flatten().map(|(q, r)| (q, r.goal_id, r.goal)),
+            ActionSrv::Zenoh(s) => s.try_receive_goal(),
+        }
+    }
+    fn accept(&self, req: RmwRequestId, stamp: RosTime) {
+        let _ = match self {
+            ActionSrv::Dds(s) => s
+                .send_goal_response(
+                    req,
+                    ros2_client::action::SendGoalResponse {
+                        accepted: true,
+                        stamp,
+                    },
+                )
+                .is_ok(),
+            ActionSrv::Zenoh(s) => s.respond_goal(req, true).is_ok(),
+        };
+    }
+    fn receive_cancel(&self) -> Option<(RmwRequestId, GoalInfo)> {
+        match self {
+            ActionSrv::Dds(s) => s.receive_cancel_request().ok().flatten().map(|(q, r)| (q, r.goal_info)),
+            ActionSrv::Zenoh(s) => s.try_receive_cancel().map(|(q, goal_id)| {
+                (
+                    q,
+                    GoalInfo {
+                        goal_id,
+                        stamp: RosTime::ZERO,
+                    },
+                )
+            }),
+        }
+    }
+    fn respond_cancel(&self, req: RmwRequestId, r: CancelGoalResponse) {
+        let _ = match self {
+            ActionSrv::Dds(s) => s.send_cancel_response(req, r).is_ok(),
+            ActionSrv::Zenoh(s) => s
+                .respond_cancel(req, r.return_code, r.goals_canceling)
+                .is_ok(),
+        };
+    }
+    fn receive_result_request(&self) -> Option<(RmwRequestId, GoalId)> {
+        match self {
+            ActionSrv::Dds(s) => s.receive_result_request().ok().flatten().map(|(q, r)| (q, r.goal_id)),
+            ActionSrv::Zenoh(s) => s.try_receive_result_request(),
+        }
+    }
+    fn send_result(&self, req: RmwRequestId, status: GoalStatusEnum, result: FollowWaypointsResult) {
+        let _ = match self {
+            ActionSrv::Dds(s) => s
+                .send_result(req, GetResultResponse { status, result })
+                .is_ok(),
+            // action_msgs' status codes: the enum's values (`#[repr(i8)]`).
+            ActionSrv::Zenoh(s) => s
+                .respond_result(req, status as i8, result)
+                .is_ok(),
+        };
+    }
+    fn send_feedback(&self, id: GoalId, f: FollowWaypointsFeedback) {
+        let _ = match self {
+            ActionSrv::Dds(s) => s.send_feedback(id, f).is_ok(),
+            ActionSrv::Zenoh(s) => s.publish_feedback(id, f).is_ok(),
+        };
+    }
+    fn send_statuses(&self, status_list: Vec<GoalStatus>) {
+        let _ = match self {
+            ActionSrv::Dds(s) => s
+                .send_goal_statuses(GoalStatusArray { status_list })
+                .is_ok(),
+            ActionSrv::Zenoh(s) => s.publish_status(status_list).is_ok(),
+        };
+    }
+}
 
 /// Finished goals kept for late result requests.
 const KEEP_FINISHED: usize = 16;
@@ -47,7 +135,7 @@ pub struct NewGoal<G> {
 
 /// One action's server and its goals.
 pub struct GoalServer<G: ros2_client::Message + Clone> {
-    server: Server<G>,
+    server: ActionSrv<G>,
     goals: Vec<Entry>,
     waiting_results: Vec<(GoalId, RmwRequestId)>,
 }
@@ -82,17 +170,25 @@ where
 {
     /// The server of the action type `(package, name)` on the ROS name `name` (relative: under
     /// the node's namespace).
-    pub fn new(node: &mut Node, name: &str, action_type: (&str, &str)) -> Result<Self, String> {
+    pub fn new(node: &mut RosNode, name: &str, action_type: (&str, &str)) -> Result<Self, String> {
         let n = Name::parse(name).map_err(|e| format!("action {name}: {e:?}"))?;
         let (pkg, ty) = action_type;
-        let server = node
-            .create_action_server::<G, FollowWaypointsResult, FollowWaypointsFeedback>(
-                ServiceMapping::Enhanced,
-                &n,
-                &ActionTypeName::new(pkg, ty),
-                qos(),
-            )
-            .map_err(|e| format!("action {name}: {e:?}"))?;
+        let t = ActionTypeName::new(pkg, ty);
+        let server = match node {
+            RosNode::Dds(node) => node
+                .create_action_server::<G, FollowWaypointsResult, FollowWaypointsFeedback>(
+                    ServiceMapping::Enhanced,
+                    &n,
+                    &t,
+                    qos(),
+                )
+                .map(ActionSrv::Dds)
+                .map_err(|e| format!("action {name}: {e:?}"))?,
+            RosNode::Zenoh(node) => node
+                .create_action_server::<G, FollowWaypointsResult, FollowWaypointsFeedback>(&n, &t)
+                .map(ActionSrv::Zenoh)
+                .map_err(|e| format!("action {name}: {e:?}"))?,
+        };
         Ok(GoalServer {
             server,
             goals: Vec::new(),
@@ -104,17 +200,11 @@ where
     /// accepted and aborted with the reason, so the client gets it in the result).
     pub fn new_goals(&mut self) -> Vec<(RmwRequestId, NewGoal<G>)> {
         let mut out = Vec::new();
-        while let Ok(Some((req, r))) = self.server.receive_goal() {
-            if self.goals.iter().any(|g| g.id == r.goal_id) {
+        while let Some((req, id, goal)) = self.server.receive_goal() {
+            if self.goals.iter().any(|g| g.id == id) {
                 continue; // a duplicate id: ignored (its first request was answered)
             }
-            out.push((
-                req,
-                NewGoal {
-                    id: r.goal_id,
-                    goal: r.goal,
-                },
-            ));
+            out.push((req, NewGoal { id, goal }));
         }
         out
     }
@@ -122,13 +212,7 @@ where
     /// Accepts a goal (status ACCEPTED, then EXECUTING).
     pub fn accept(&mut self, req: RmwRequestId, id: GoalId) {
         let accepted = RosTime::now();
-        let _ = self.server.send_goal_response(
-            req,
-            ros2_client::action::SendGoalResponse {
-                accepted: true,
-                stamp: accepted,
-            },
-        );
+        self.server.accept(req, accepted);
         self.goals.push(Entry {
             id,
             accepted,
@@ -142,8 +226,7 @@ where
     /// canceling); returns those goals' ids.
     pub fn cancel_requests(&mut self) -> Vec<GoalId> {
         let mut out = Vec::new();
-        while let Ok(Some((req, r))) = self.server.receive_cancel_request() {
-            let GoalInfo { goal_id, stamp } = r.goal_info;
+        while let Some((req, GoalInfo { goal_id, stamp })) = self.server.receive_cancel() {
             let all = goal_id == GoalId::ZERO && stamp == RosTime::ZERO;
             let named = |g: &Entry| {
                 all || (goal_id != GoalId::ZERO && g.id == goal_id)
@@ -169,7 +252,7 @@ where
                 (true, true) => CancelGoalResponseEnum::Rejected,
             };
             out.extend(canceling.iter().map(|g| g.goal_id));
-            let _ = self.server.send_cancel_response(
+            self.server.respond_cancel(
                 req,
                 CancelGoalResponse {
                     return_code,
@@ -204,8 +287,8 @@ where
     /// Result requests since the last call: answered when the goal has ended (an unknown goal:
     /// status UNKNOWN), else kept until it ends.
     pub fn poll_results(&mut self) {
-        while let Ok(Some((req, r))) = self.server.receive_result_request() {
-            self.waiting_results.push((r.goal_id, req));
+        while let Some((req, goal_id)) = self.server.receive_result_request() {
+            self.waiting_results.push((goal_id, req));
         }
         self.answer_results();
     }
@@ -220,7 +303,7 @@ where
             };
             match reply {
                 Some((status, result)) => {
-                    let _ = server.send_result(*req, GetResultResponse { status, result });
+                    server.send_result(*req, status, result);
                     false
                 }
                 None => true,
@@ -231,7 +314,7 @@ where
     /// Feedback of a running goal of this action (others' are not sent here).
     pub fn feedback(&self, id: GoalId, f: FollowWaypointsFeedback) {
         if self.goals.iter().any(|g| g.id == id) {
-            let _ = self.server.send_feedback(id, f);
+            self.server.send_feedback(id, f);
         }
     }
 
@@ -247,9 +330,7 @@ where
                 status: g.status,
             })
             .collect();
-        let _ = self
-            .server
-            .send_goal_statuses(GoalStatusArray { status_list });
+        self.server.send_statuses(status_list);
     }
 }
 
@@ -285,7 +366,7 @@ pub struct GoalContext<'a> {
 
 impl Servers {
     /// One server per row of [`ACTIONS`], on `names` (the rows' names after the remaps).
-    pub fn new(node: &mut Node, names: &[String; 4]) -> Result<Self, String> {
+    pub fn new(node: &mut RosNode, names: &[String; 4]) -> Result<Self, String> {
         Ok(Servers {
             follow: GoalServer::new(node, &names[0], ACTIONS[0].1)?,
             go_to: GoalServer::new(node, &names[1], ACTIONS[1].1)?,
