@@ -42,10 +42,11 @@ pub mod goal_status {
   pub const EXECUTING: i8 = 2;
   /// The goal completed successfully.
   pub const SUCCEEDED: i8 = 4;
-  /// The goal was aborted.
-  pub const ABORTED: i8 = 5;
-  /// The goal was canceled.
-  pub const CANCELED: i8 = 6;
+  /// The goal was canceled. fcc (vendored): 5 (was 6, swapped with ABORTED; action_msgs/GoalStatus
+  /// has STATUS_CANCELED = 5, STATUS_ABORTED = 6).
+  pub const CANCELED: i8 = 5;
+  /// The goal was aborted. fcc (vendored): 6 (was 5).
+  pub const ABORTED: i8 = 6;
 }
 
 /// `<Action>_SendGoal_Request` — a goal plus its id.
