@@ -4,8 +4,10 @@
 #     uav4) linked to A, every node a Zenoh client of its site's router (RMW_IMPLEMENTATION=
 #     rmw_zenoh_cpp) — while the independent peer (tests/zenoh/fleet_peer.py: eclipse-zenoh,
 #     rosbags' CDR decoder), a client of router B only, reads every vehicle's tokens and topics,
-#     checks them against each vehicle's own CSV truth, and flies uav1 (site A) from site B.
-#     uav2 … uav4 fly their missions with fcc-mission (exit 0, "mission complete").
+#     checks them against each vehicle's own CSV truth, and flies uav1 (site A) from site B by a
+#     FollowWaypoints action goal to uav1's mission node (no mission file; rmw_zenoh's service
+#     protocol, tests/zenoh/action_flight.py). uav2 … uav4 fly their missions with fcc-mission
+#     (exit 0, "mission complete").
 #  2. The same two sites NOT linked (router B's --connect points at a port nothing listens on):
 #     a vehicle at site A is heard by a control peer at site A and not at all at site B.
 #   usage: tests/zenoh/fleet.sh [PYTHON]   (PYTHON must import zenoh (eclipse-zenoh) and rosbags)

@@ -5,16 +5,19 @@
   observe (default): while `fcc-launch launch_configs/zenoh_fleet.yaml` flies four vehicles
     (uav1, uav2 at site A; uav3, uav4 at site B), the peer — a client of router B only — reads
     every vehicle's liveliness tokens (what `ros2 node list` reads under rmw_zenoh) and every data
-    key under 0/uavN/**, and flies uav1 (site A, no mission node) itself: cmd/arm, cmd/mode
-    velocity, setpoint/velocity ENU (0, 0, 1) for 4 s stamped with /uav1/clock, then cmd/mode
-    land. After --until-file appears, with each simulator's CSV (--csv-dir/uavN.csv) and GPS
-    home (--scenarios-dir/uavN.yaml):
-      * each vehicle's bridge (and mission node, uav2 … uav4) is in the graph, under its namespace;
+    key under 0/uavN/**, and flies uav1 (site A; its mission node has no mission file) by an
+    action goal (tests/zenoh/action_flight.py): FollowWaypoints to /uav1/mission/follow_waypoints
+    (three 6 m legs at 3 m, 2 m/s, land at the end) through rmw_zenoh's service protocol, the
+    goal accepted, feedback and status received, get_result SUCCEEDED with outcome 0. After
+    --until-file appears, with each simulator's CSV (--csv-dir/uavN.csv) and GPS home
+    (--scenarios-dir/uavN.yaml):
+      * each vehicle's bridge and mission node is in the graph, under its namespace;
       * every topic those nodes publish (their MP tokens, namespaced ones) was received and
         decodes with rosbags' typestore;
       * state/odom = its own vehicle's estimate in its CSV at the same simulated time (none more
         than 1 m off) and does not fit any other vehicle's log; gps/fix nearest its own home;
-      * uav1 obeyed the far site: armed, and its TRUE altitude rose 2–6 m during the climb.
+      * uav1 obeyed the far site: on its TRUE track each waypoint passed within 1 m
+        horizontally, then landed at the last one and disarmed.
   --expect-silence uav1,uav2: the sites are not linked (router B's link points nowhere): the peer
     must receive nothing and see no token of those vehicles while a control peer at their own
     site (--control-connect) does — routing, not multicast, carries the data.
@@ -34,6 +37,7 @@ sys.path.insert(0, here)
 sys.path.insert(0, os.path.join(here, "..", "lib"))
 
 import zenoh_ros as zr  # noqa: E402
+from action_flight import check_flight, fly_waypoints  # noqa: E402
 from truth import Checks, interp, load_csv, pct, t_of  # noqa: E402
 
 # Decoding every sample in Python would cost more CPU than the four vehicles: each topic's first
@@ -44,6 +48,13 @@ GLOBAL = {"/rosout", "/parameter_events"}
 # Published only on demand: fcc-mission sends a heading only for waypoints with yaw_deg (none in
 # these missions).
 ON_DEMAND = {"setpoint/heading"}
+# An action's feedback and status are published only while it has goals: of the mission nodes'
+# four actions, only uav1's follow_waypoints gets one (its checks are action_flight.py's).
+
+
+def on_demand(topic):
+    rel = topic.split("/", 2)[2]
+    return rel in ON_DEMAND or "/_action/" in rel
 
 
 class Fleet:
@@ -123,48 +134,6 @@ def wait(pred, secs, what):
     raise TimeoutError(f"timeout ({secs} s) waiting for {what}")
 
 
-def fly_far_vehicle(peer, fleet, v, log):
-    """Arm uav`v`, velocity mode, climb ENU (0, 0, 1) m/s for 4 s (50 Hz, stamped with its own
-    /clock), then land. Returns (sim time at climb start, at climb end)."""
-    ns = f"/uav{v}"
-    ts = peer.store.types
-    Bool, String = ts["std_msgs/msg/Bool"], ts["std_msgs/msg/String"]
-    Twist, TwistStamped = ts["geometry_msgs/msg/Twist"], ts["geometry_msgs/msg/TwistStamped"]
-    Vector3, Header, Time = (ts["geometry_msgs/msg/Vector3"], ts["std_msgs/msg/Header"],
-                             ts["builtin_interfaces/msg/Time"])
-    arm = peer.publisher(f"{ns}/cmd/arm", "std_msgs/msg/Bool")
-    mode = peer.publisher(f"{ns}/cmd/mode", "std_msgs/msg/String")
-    sp = peer.publisher(f"{ns}/setpoint/velocity", "geometry_msgs/msg/TwistStamped")
-    wait(lambda: v in fleet.status and v in fleet.clock_s, 30, f"{ns}/status and {ns}/clock")
-    end = time.monotonic() + 60
-    while not fleet.status[v].armed and time.monotonic() < end:
-        arm.publish(Bool(data=True))
-        time.sleep(0.5)
-    log(f"uav{v} armed: {fleet.status[v].armed} ({fleet.status[v].last_reject})")
-    mode.publish(String(data="velocity"))
-
-    def setpoint(z):
-        t = fleet.clock_s[v]
-        sec = int(t)
-        stamp = Time(sec=sec, nanosec=int((t - sec) * 1e9))
-        return TwistStamped(header=Header(stamp=stamp, frame_id="map"),
-                            twist=Twist(linear=Vector3(x=0.0, y=0.0, z=z),
-                                        angular=Vector3(x=0.0, y=0.0, z=0.0)))
-
-    t_start = fleet.clock_s[v]
-    w0 = time.monotonic()
-    while time.monotonic() - w0 < 4.0:
-        sp.publish(setpoint(1.0))
-        time.sleep(0.02)
-    t_end = fleet.clock_s[v]
-    for _ in range(10):
-        sp.publish(setpoint(0.0))
-        time.sleep(0.02)
-    mode.publish(String(data="land"))
-    log(f"uav{v}: climbed from sim {t_start:.2f} s to {t_end:.2f} s, then land")
-    return t_start, t_end
-
-
 def home_of(path):
     text = open(path).read()
     lat = float(re.search(r"origin_lat_deg:\s*([-\d.]+)", text).group(1))
@@ -187,12 +156,12 @@ def est_err(log, t, p):
 def check_vehicle(c, a, fleet, v, logs, homes):
     ns = f"/uav{v}"
     nodes = {e.node_fqn for e in fleet.seen.values() if e.kind == "NN"}
-    want = {f"{ns}/fcc_bridge"} | ({f"{ns}/fcc_mission"} if v != a.fly else set())
+    want = {f"{ns}/fcc_bridge", f"{ns}/fcc_mission"}
     c.check(f"{ns}: its nodes in the graph (liveliness tokens)", want <= nodes,
             sorted(n for n in nodes if n.startswith(ns)))
     pubs = {e.topic for e in fleet.seen.values()
             if e.kind == "MP" and e.node_fqn in want and e.topic not in GLOBAL
-            and e.topic.split("/", 2)[2] not in ON_DEMAND}
+            and not on_demand(e.topic)}
     got = {t for (w, t), n in fleet.count.items() if w == v and n > 0}
     missing = sorted(t for t in pubs if t.strip("/").split("/", 1)[1] not in got)
     c.check(f"{ns}: every topic its nodes publish received ({len(pubs)} topics)",
@@ -234,11 +203,7 @@ def observe(a):
     subscribe_all(peer, fleet)
     t0 = time.monotonic()
     log = lambda s: print(f"[peer {time.monotonic() - t0:5.1f} s] {s}", flush=True)  # noqa: E731
-    climb = None
-    try:
-        climb = fly_far_vehicle(peer, fleet, a.fly, log)
-    except TimeoutError as e:
-        c.check(f"uav{a.fly}: flown from the other site", False, str(e))
+    flown = fly_waypoints(peer, c, a.fly, log)
     while not os.path.exists(a.until_file) and time.monotonic() - t0 < a.timeout:
         time.sleep(0.2)
     time.sleep(0.5)
@@ -254,14 +219,8 @@ def observe(a):
     c.check("every sample's key parses and decodes", not fleet.bad, fleet.bad[:3])
     for v in vehicles:
         check_vehicle(c, a, fleet, v, logs, homes)
-    if climb:
-        t_start, t_end = climb
-        log1 = logs[a.fly]
-        up0, up1 = (-interp(log1, "true_d_m", t) for t in (t_start, t_end + 0.5))
-        armed = interp(log1, "armed", t_end) or 0
-        c.check(f"uav{a.fly} (site A) obeyed the ground station at site B: armed, TRUE altitude "
-                "rose 2–6 m in the 4 s climb", armed > 0.5 and 2.0 < up1 - up0 < 6.0,
-                f"{up1 - up0:.2f} m (truth {up0:.2f} → {up1:.2f} m)")
+    if flown:
+        check_flight(c, a.fly, logs[a.fly], flown)
     peer.close()
     return c.done()
 

@@ -18,6 +18,12 @@ Formats (domain id = $ROS_DOMAIN_ID, default 0):
               enclave, namespace and qualified name "mangled": '/' -> '%', empty -> '%'.
 * attachment of every put: int64 LE sequence number | int64 LE source timestamp (ns since the
               UNIX epoch) | 1 byte length of the GID (16) | 16 bytes publisher GID  (33 bytes).
+* service:    a Zenoh `get` on `<domain>/<service>/<dds type>/<service type hash>` (e.g.
+              2/add_two_ints/example_interfaces::srv::dds_::AddTwoInts_/RIHS01_e118...c81a),
+              target ALL_COMPLETE, consolidation NONE, the CDR request and the attachment above
+              (client's sequence number and GID); the reply echoes sequence number and GID
+              (design.md "Service Clients", rmw_client_data.cpp, rmw_service_data.cpp).
+              Actions are services and topics under `<action>/_action/` (ActionClient).
 * put encoding: none set (Zenoh's default), as rmw_zenoh's publisher; the payload is CDR
               (with its 4-byte encapsulation header), as rosbags' serialize_cdr makes it.
 
@@ -39,6 +45,7 @@ import dataclasses
 import hashlib
 import json
 import os
+import re
 import secrets
 import struct
 import sys
@@ -54,6 +61,7 @@ from rosbags.typesys.base import Nodetype
 ADMIN_SPACE = "@ros2_lv"
 DEFAULT_ROUTER = "tcp/127.0.0.1:7447"
 MSG_DIR = Path(__file__).resolve().parents[2] / "msg" / "msg"
+ACTION_DIR = MSG_DIR.parent / "action"
 OUR_PACKAGE = "fcc_msgs"
 GID_SIZE = 16
 ATTACHMENT = struct.Struct("<qqB")  # sequence, source timestamp, GID length; then the GID
@@ -62,13 +70,76 @@ ATTACHMENT = struct.Struct("<qqB")  # sequence, source timestamp, GID length; th
 
 
 def make_typestore():
-    """rosbags' ROS 2 Jazzy typestore plus our fcc_msgs messages (msg/msg/*.msg)."""
+    """rosbags' ROS 2 Jazzy typestore plus our fcc_msgs messages (msg/msg/*.msg), our actions
+    (msg/action/*.action: Goal/Result/Feedback and the messages of the action protocol, see
+    action_types) and action_msgs/srv/CancelGoal."""
     store = get_typestore(Stores.ROS2_JAZZY)
     types = {}
     for path in sorted(MSG_DIR.glob("*.msg")):
         types.update(get_types_from_msg(path.read_text(), f"{OUR_PACKAGE}/msg/{path.stem}"))
     store.register(types)
+    types = {}
+    for path in sorted(ACTION_DIR.glob("*.action")):
+        types.update(action_types(path.read_text(), f"{OUR_PACKAGE}/action/{path.stem}"))
+    if "action_msgs/srv/CancelGoal_Request" not in store.types:
+        types.update(service_types("action_msgs/srv/CancelGoal",
+                                   [("goal_info", _name("action_msgs/msg/GoalInfo"))],
+                                   [("return_code", _base("int8")),
+                                    ("goals_canceling", (Nodetype.SEQUENCE,
+                                                         (_name("action_msgs/msg/GoalInfo"), 0)))],
+                                   consts_response=[("ERROR_NONE", "int8", 0),
+                                                    ("ERROR_REJECTED", "int8", 1),
+                                                    ("ERROR_UNKNOWN_GOAL_ID", "int8", 2),
+                                                    ("ERROR_GOAL_TERMINATED", "int8", 3)]))
+    store.register(types)
     return store
+
+
+def _base(name: str):
+    return (Nodetype.BASE, (name, 0))
+
+
+def _name(ros_type: str):
+    return (Nodetype.NAME, ros_type)
+
+
+def service_types(srv: str, request: list, response: list, consts_response=()) -> dict:
+    """rosbags type definitions of a service `pkg/srv/Name` (or an action's `pkg/action/Name_X`):
+    `<srv>_Request`, `<srv>_Response` and `<srv>_Event` (rosidl's service event message:
+    service_msgs/ServiceEventInfo info, Request[<=1] request, Response[<=1] response; part of
+    the service's REP-2016 type hash)."""
+    return {
+        f"{srv}_Request": ([], list(request)),
+        f"{srv}_Response": (list(consts_response), list(response)),
+        f"{srv}_Event": ([], [("info", _name("service_msgs/msg/ServiceEventInfo")),
+                              ("request", (Nodetype.SEQUENCE, (_name(f"{srv}_Request"), 1))),
+                              ("response", (Nodetype.SEQUENCE, (_name(f"{srv}_Response"), 1)))]),
+    }
+
+
+def action_types(text: str, action: str) -> dict:
+    """The types of an action `pkg/action/Name` from its .action text (goal, result, feedback
+    separated by `---`), as rosidl generates them: `<action>_Goal`, `_Result`, `_Feedback`; the
+    services `<action>_SendGoal` (request: unique_identifier_msgs/UUID goal_id + Goal goal;
+    response: bool accepted + builtin_interfaces/Time stamp) and `<action>_GetResult` (request:
+    UUID goal_id; response: int8 status + Result result); the message `<action>_FeedbackMessage`
+    (UUID goal_id + Feedback feedback)."""
+    sections = re.split(r"^---[ \t]*$", text, flags=re.M)
+    if len(sections) != 3:
+        raise ValueError(f"{action}: {len(sections)} sections, not 3 (goal, result, feedback)")
+    types = {}
+    for suffix, section in zip(("Goal", "Result", "Feedback"), sections):
+        types.update(get_types_from_msg(section, f"{action}_{suffix}"))
+    uuid = _name("unique_identifier_msgs/msg/UUID")
+    types.update(service_types(f"{action}_SendGoal",
+                               [("goal_id", uuid), ("goal", _name(f"{action}_Goal"))],
+                               [("accepted", _base("bool")),
+                                ("stamp", _name("builtin_interfaces/msg/Time"))]))
+    types.update(service_types(f"{action}_GetResult", [("goal_id", uuid)],
+                               [("status", _base("int8")), ("result", _name(f"{action}_Result"))]))
+    types[f"{action}_FeedbackMessage"] = ([], [("goal_id", uuid),
+                                                ("feedback", _name(f"{action}_Feedback"))])
+    return types
 
 
 def dds_type_name(ros_type: str) -> str:
@@ -85,10 +156,12 @@ def ros_type_name(dds_type: str) -> str:
 
 # REP-2016 type hash (RIHS01): sha256 of the type description (fields of the type and of every
 # type it references, by name; constants and default values are not hashed) as compact JSON.
-# FieldType ids of type_description_interfaces/msg/FieldType.
+# FieldType ids of type_description_interfaces/msg/FieldType. A .msg `char` is uint8 in rosidl's
+# IDL (rosidl_adapter), so it hashes as uint8 (service_msgs/ServiceEventInfo's char[16]
+# client_gid: with it the AddTwoInts service hash is rmw_zenoh's design document's).
 _FIELD_TYPE_IDS = {
     "int8": 2, "uint8": 3, "int16": 4, "uint16": 5, "int32": 6, "uint32": 7, "int64": 8,
-    "uint64": 9, "float32": 10, "float64": 11, "char": 13, "bool": 15, "byte": 16, "string": 17,
+    "uint64": 9, "float32": 10, "float64": 11, "char": 3, "bool": 15, "byte": 16, "string": 17,
 }
 _NESTED, _BOUNDED_STRING = 1, 21
 _ARRAY_OFFSET, _BOUNDED_SEQUENCE_OFFSET, _SEQUENCE_OFFSET = 48, 96, 144
@@ -129,7 +202,23 @@ def _individual_description(store, ros_type: str) -> tuple[dict, list[str]]:
 
 def type_hash(store, ros_type: str) -> str:
     """REP-2016 `RIHS01_<sha256>` of a message type known to `store`."""
-    main, pending = _individual_description(store, ros_type)
+    return _hash_description(store, *_individual_description(store, ros_type))
+
+
+def service_type_hash(store, srv: str) -> str:
+    """REP-2016 hash of a service `pkg/srv/Name` (or an action's `pkg/action/Name_SendGoal`):
+    the description of a type `srv` with the fields request_message, response_message and
+    event_message (nested `<srv>_Request`, `_Response`, `_Event`), as rosidl describes services
+    and as rmw_zenoh puts it in the service's key expression."""
+    fields = [{"name": name, "type": {"type_id": _NESTED, "capacity": 0, "string_capacity": 0,
+                                      "nested_type_name": f"{srv}_{suffix}"}}
+              for name, suffix in (("request_message", "Request"), ("response_message", "Response"),
+                                   ("event_message", "Event"))]
+    return _hash_description(store, {"type_name": srv, "fields": fields},
+                             [f"{srv}_Request", f"{srv}_Response", f"{srv}_Event"])
+
+
+def _hash_description(store, main: dict, pending: list[str]) -> str:
     referenced: dict[str, dict] = {}
     while pending:
         name = pending.pop()
@@ -353,6 +442,25 @@ class RosPeer:
             message = self.store.deserialize_cdr(sample.payload.to_bytes(), ros_type)
         return Received(topic, ros_type, rihs, message, attachment, key)
 
+    def service_client(self, service: str, srv_type: str, key_hash: Optional[str] = None):
+        return ServiceClient(self, service, srv_type, key_hash)
+
+    def call(self, service: str, srv_type: str, request, timeout_s: Optional[float] = None):
+        """One call of `service` (a new client each time: sequence number 1)."""
+        return ServiceClient(self, service, srv_type,
+                             self.server_hash(service, srv_type)).call(request, timeout_s)
+
+    def server_hash(self, service: str, srv_type: str, timeout_s: float = 2.0) -> Optional[str]:
+        """The type hash in the SS liveliness token of a server of `service` with `srv_type`'s
+        dds type name (None if none is alive). rmw_zenoh's client puts the service's REP-2016
+        hash in its key; a server that advertises (and so serves) another hash is reachable
+        only with that one."""
+        service = "/" + service.strip("/")
+        for e in self.graph(timeout_s):
+            if e.kind == "SS" and e.topic == service and e.type == srv_type:
+                return e.type_hash
+        return None
+
     def graph(self, timeout_s: float = 2.0) -> list[Entity]:
         """The alive tokens of this domain (what `ros2 node list` / `topic list` read)."""
         entities = []
@@ -376,10 +484,148 @@ class RosPeer:
         return subscriber
 
 
+# ------------------------------------------------------------------------ services, actions --
+
+
+class ServiceError(Exception):
+    pass
+
+
+class ServiceClient:
+    """A ROS 2 service client as rmw_zenoh's (rmw_client_data.cpp; design.md "Service Clients"):
+    a Zenoh `get` on the service's key `<domain>/<service>/<dds type>/<type hash>` (the dds type
+    of `pkg/srv/Name` is `pkg::srv::dds_::Name_`, of an action's `pkg/action/Name_SendGoal`
+    `pkg::action::dds_::Name_SendGoal_`; the hash is the service's REP-2016 hash), target
+    ALL_COMPLETE (service queryables are complete), consolidation NONE, the CDR request as
+    payload and the attachment sequence number (1, 2, ... per client) | source timestamp |
+    client GID; the reply carries the response and the same sequence number and GID. An SC
+    liveliness token announces the client. Timeout 10 s (Zenoh's default), unlimited for
+    `**/_action/get_result/**` as rmw_zenoh's.
+
+    `key_hash`: the hash put in the key if not the service's REP-2016 hash (see
+    `RosPeer.server_hash`)."""
+
+    def __init__(self, peer: "RosPeer", service: str, srv_type: str,
+                 key_hash: Optional[str] = None):
+        self._peer, self.service, self.type = peer, "/" + service.strip("/"), srv_type
+        self.rihs = service_type_hash(peer.store, srv_type)
+        self.key_hash = key_hash or self.rihs
+        self.key = f"{peer.domain}/{self.service.strip('/')}/{dds_type_name(srv_type)}/" \
+                   f"{self.key_hash}"
+        self.gid = secrets.token_bytes(GID_SIZE)
+        self._sequence = 0
+        self.timeout_s = None if "/_action/get_result" in self.service else 10.0
+        peer._keep.append(peer.session.liveliness().declare_token(
+            peer._entity_token("SC", self.service, srv_type, self.rihs)))
+
+    def call(self, request, timeout_s: Optional[float] = None):
+        """Send `request` (a rosbags `<srv>_Request`) and return the decoded response."""
+        self._sequence += 1
+        sequence = self._sequence
+        payload = bytes(self._peer.store.serialize_cdr(request, f"{self.type}_Request"))
+        attachment = Attachment(sequence, time.time_ns(), self.gid).encode()
+        timeout = timeout_s if timeout_s is not None else self.timeout_s
+        replies = self._peer.session.get(
+            self.key, payload=payload, attachment=attachment,
+            target=zenoh.QueryTarget.ALL_COMPLETE, consolidation=zenoh.ConsolidationMode.NONE,
+            timeout=timeout if timeout is not None else 1e6)
+        errors = []
+        for reply in replies:
+            if reply.ok is None:
+                errors.append(reply.err.payload.to_string())
+                continue
+            sample = reply.ok
+            raw = sample.attachment.to_bytes() if sample.attachment is not None else b""
+            got = Attachment.decode(raw)
+            if got.sequence_number != sequence or got.source_gid != self.gid:
+                errors.append(f"reply for seq {got.sequence_number} gid {got.source_gid.hex()}")
+                continue
+            return self._peer.store.deserialize_cdr(sample.payload.to_bytes(),
+                                                    f"{self.type}_Response")
+        raise ServiceError(f"no reply from {self.key}" + (f": {errors}" if errors else ""))
+
+
+GOAL_STATUS = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: "SUCCEEDED",
+               5: "CANCELED", 6: "ABORTED"}
+
+
+class ActionClient:
+    """A ROS 2 action client (rcl_action's composition, no middleware concept in rmw_zenoh):
+    services `<action>/_action/send_goal` (`<type>_SendGoal`), `_action/get_result`
+    (`<type>_GetResult`), `_action/cancel_goal` (action_msgs/srv/CancelGoal) and topics
+    `_action/feedback` (`<type>_FeedbackMessage`), `_action/status`
+    (action_msgs/msg/GoalStatusArray). Feedback and status of every goal are collected in
+    `feedback` / `status` as (monotonic time, message)."""
+
+    def __init__(self, peer: "RosPeer", action: str, action_type: str,
+                 key_hashes: Optional[dict] = None):
+        self._peer, self.action, self.type = peer, "/" + action.strip("/"), action_type
+        hashes = key_hashes or {}
+        base = f"{self.action}/_action"
+        self.send_goal_client = ServiceClient(peer, f"{base}/send_goal", f"{action_type}_SendGoal",
+                                              hashes.get("send_goal"))
+        self.get_result_client = ServiceClient(peer, f"{base}/get_result",
+                                               f"{action_type}_GetResult",
+                                               hashes.get("get_result"))
+        self.cancel_client = ServiceClient(peer, f"{base}/cancel_goal", "action_msgs/srv/CancelGoal",
+                                           hashes.get("cancel_goal"))
+        self.lock = threading.Lock()
+        self.feedback: list[tuple[float, object]] = []
+        self.status: list[tuple[float, object]] = []
+        peer.subscribe(f"{base}/feedback", f"{action_type}_FeedbackMessage", self._on_feedback)
+        peer.subscribe(f"{base}/status", "action_msgs/msg/GoalStatusArray", self._on_status)
+
+    def _on_feedback(self, received: Received):
+        with self.lock:
+            self.feedback.append((time.monotonic(), received.message))
+
+    def _on_status(self, received: Received):
+        with self.lock:
+            self.status.append((time.monotonic(), received.message))
+
+    def send_goal(self, goal, timeout_s: Optional[float] = None):
+        """(goal id: 16 bytes, `<type>_SendGoal_Response`)."""
+        ts = self._peer.store.types
+        goal_id = secrets.token_bytes(16)
+        uuid = ts["unique_identifier_msgs/msg/UUID"](uuid=_uint8_array(goal_id))
+        request = ts[f"{self.type}_SendGoal_Request"](goal_id=uuid, goal=goal)
+        return goal_id, self.send_goal_client.call(request, timeout_s)
+
+    def get_result(self, goal_id: bytes, timeout_s: Optional[float] = None):
+        """`<type>_GetResult_Response` (status: action_msgs/GoalStatus, result)."""
+        ts = self._peer.store.types
+        uuid = ts["unique_identifier_msgs/msg/UUID"](uuid=_uint8_array(goal_id))
+        return self.get_result_client.call(ts[f"{self.type}_GetResult_Request"](goal_id=uuid),
+                                           timeout_s)
+
+    def cancel(self, goal_id: bytes):
+        ts = self._peer.store.types
+        uuid = ts["unique_identifier_msgs/msg/UUID"](uuid=_uint8_array(goal_id))
+        info = ts["action_msgs/msg/GoalInfo"](
+            goal_id=uuid, stamp=ts["builtin_interfaces/msg/Time"](sec=0, nanosec=0))
+        return self.cancel_client.call(ts["action_msgs/srv/CancelGoal_Request"](goal_info=info))
+
+    def feedback_of(self, goal_id: bytes) -> list:
+        with self.lock:
+            return [m for _, m in self.feedback if bytes(m.goal_id.uuid) == goal_id]
+
+    def statuses_of(self, goal_id: bytes) -> list[int]:
+        """The goal's status in each status array that lists it, in order."""
+        with self.lock:
+            return [s.status for _, a in self.status for s in a.status_list
+                    if bytes(s.goal_info.goal_id.uuid) == goal_id]
+
+
+def _uint8_array(raw: bytes):
+    import numpy
+    return numpy.frombuffer(raw, dtype=numpy.uint8).copy()
+
+
 # --------------------------------------------------------------------------------- the CLI --
 
 # REP-2016 hashes as ROS 2 Jazzy publishes them (String: rmw_zenoh's design document).
 STRING_HASH = "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
+ADD_TWO_INTS_HASH = "RIHS01_e118de6bf5eeb66a2491b5bda11202e7b68f198d6f67922cf30364858239c81a"
 IMU_HASH = "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b"
 
 
@@ -389,6 +635,12 @@ def selftest(connect: str, echo_connect: str, timeout_s: float) -> int:
           "REP-2016 hash of std_msgs/msg/String matches rmw_zenoh's design doc")
     check(type_hash(store, "sensor_msgs/msg/Imu") == IMU_HASH,
           "REP-2016 hash of sensor_msgs/msg/Imu (nested types) matches Jazzy's")
+    srv = "example_interfaces/srv/AddTwoInts"
+    store.register(service_types(srv, [("a", _base("int64")), ("b", _base("int64"))],
+                                 [("sum", _base("int64"))]))
+    check(service_type_hash(store, srv) == ADD_TWO_INTS_HASH,
+          "REP-2016 hash of the service example_interfaces/srv/AddTwoInts matches rmw_zenoh's "
+          "design doc")
     check(attachment_matches_zenoh_ext(), "attachment bytes = zenoh-ext serializer's "
           "(int64, int64, 16 bytes), as rmw_zenoh's AttachmentData")
     check(split_data_key(topic_keyexpr(0, "/uav1/imu", "sensor_msgs/msg/Imu", "H"))
