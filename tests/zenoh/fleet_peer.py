@@ -12,6 +12,8 @@
     --until-file appears, with each simulator's CSV (--csv-dir/uavN.csv) and GPS home
     (--scenarios-dir/uavN.yaml):
       * each vehicle's bridge and mission node is in the graph, under its namespace;
+      * every publisher, subscription, service server and client token of those nodes carries
+        the REP-2016 type hash computed here for its type (none the placeholder RIHS01_000…);
       * every topic those nodes publish (their MP tokens, namespaced ones) was received and
         decodes with rosbags' typestore;
       * state/odom = its own vehicle's estimate in its CSV at the same simulated time (none more
@@ -153,12 +155,37 @@ def est_err(log, t, p):
     return math.dist((p.x, p.y, p.z), (ee, en, -ed))
 
 
+def check_type_hashes(c, fleet, ns, nodes):
+    """Every entity token of `nodes` (publishers, subscriptions, servers, clients) advertises
+    the REP-2016 hash this peer computes for its type (a message's, or the service's for SS/SC),
+    as an rmw_zenoh peer expects it: none the placeholder RIHS01_000…, none stale (fcc_ros's
+    generated type_hashes.rs, tests/zenoh/gen_type_hashes.py)."""
+    store, kinds, wrong, computed = fleet.peer.store, defaultdict(int), [], {}
+    for e in fleet.seen.values():
+        if e.kind not in ("MP", "MS", "SS", "SC") or e.node_fqn not in nodes:
+            continue
+        kinds[e.kind] += 1
+        key = (e.kind in ("SS", "SC"), e.type)
+        if key not in computed:
+            try:
+                computed[key] = zr.entity_type_hash(store, e.kind, e.type)
+            except KeyError as err:
+                computed[key] = f"unknown type ({err})"
+        if e.type_hash != computed[key]:
+            wrong.append(f"{e.kind} {e.topic} {e.type}: {e.type_hash} (want {computed[key]})")
+    c.check(f"{ns}: every MP/MS/SS/SC token of its nodes advertises the REP-2016 hash of its type",
+            sum(kinds.values()) >= 20 and not wrong,
+            "; ".join(sorted(set(wrong))[:4]) + (f" ... ({len(wrong)})" if len(wrong) > 4 else "")
+            if wrong else ", ".join(f"{k} {n}" for k, n in sorted(kinds.items())))
+
+
 def check_vehicle(c, a, fleet, v, logs, homes):
     ns = f"/uav{v}"
     nodes = {e.node_fqn for e in fleet.seen.values() if e.kind == "NN"}
     want = {f"{ns}/fcc_bridge", f"{ns}/fcc_mission"}
     c.check(f"{ns}: its nodes in the graph (liveliness tokens)", want <= nodes,
             sorted(n for n in nodes if n.startswith(ns)))
+    check_type_hashes(c, fleet, ns, want)
     pubs = {e.topic for e in fleet.seen.values()
             if e.kind == "MP" and e.node_fqn in want and e.topic not in GLOBAL
             and not on_demand(e.topic)}

@@ -91,8 +91,45 @@ def make_typestore():
                                                     ("ERROR_REJECTED", "int8", 1),
                                                     ("ERROR_UNKNOWN_GOAL_ID", "int8", 2),
                                                     ("ERROR_GOAL_TERMINATED", "int8", 3)]))
+    types.update(std_service_types(store))
     store.register(types)
     return store
+
+
+def _seq(node, bound: int = 0):
+    return (Nodetype.SEQUENCE, (node, bound))
+
+
+def std_service_types(store) -> dict:
+    """The services our nodes serve on top of rosbags' Jazzy messages (rosbags has no .srv):
+    std_srvs/srv/SetBool and Trigger (fcc-bridge's arm, land, hold) and rcl_interfaces' six
+    parameter services (every node), from their Jazzy .srv files (constants are not hashed)."""
+    types = {}
+    ok = [("success", _base("bool")), ("message", _base("string"))]
+    strings = _seq(_base("string"))
+    rcl = "rcl_interfaces/msg/"
+    services = {
+        "std_srvs/srv/SetBool": ([("data", _base("bool"))], ok),
+        "std_srvs/srv/Trigger": ([], ok),
+        "rcl_interfaces/srv/GetParameters": ([("names", strings)],
+                                             [("values", _seq(_name(rcl + "ParameterValue")))]),
+        "rcl_interfaces/srv/GetParameterTypes": ([("names", strings)],
+                                                 [("types", _seq(_base("uint8")))]),
+        "rcl_interfaces/srv/SetParameters": (
+            [("parameters", _seq(_name(rcl + "Parameter")))],
+            [("results", _seq(_name(rcl + "SetParametersResult")))]),
+        "rcl_interfaces/srv/SetParametersAtomically": (
+            [("parameters", _seq(_name(rcl + "Parameter")))],
+            [("result", _name(rcl + "SetParametersResult"))]),
+        "rcl_interfaces/srv/ListParameters": ([("prefixes", strings), ("depth", _base("uint64"))],
+                                              [("result", _name(rcl + "ListParametersResult"))]),
+        "rcl_interfaces/srv/DescribeParameters": (
+            [("names", strings)], [("descriptors", _seq(_name(rcl + "ParameterDescriptor")))]),
+    }
+    for srv, (request, response) in services.items():
+        if f"{srv}_Request" not in store.types:
+            types.update(service_types(srv, request, response))
+    return types
 
 
 def _base(name: str):
@@ -216,6 +253,16 @@ def service_type_hash(store, srv: str) -> str:
                                    ("event_message", "Event"))]
     return _hash_description(store, {"type_name": srv, "fields": fields},
                              [f"{srv}_Request", f"{srv}_Response", f"{srv}_Event"])
+
+
+def entity_type_hash(store, kind: str, ros_type: str) -> str:
+    """The REP-2016 hash an rmw_zenoh entity of `kind` (liveliness MP, MS, SS, SC) with the
+    type `ros_type` (as in the token, demangled) advertises: a message's hash for publishers and
+    subscriptions, the service's hash for servers and clients (also an action's
+    `pkg/action/Name_SendGoal` / `_GetResult`)."""
+    if kind in ("SS", "SC"):
+        return service_type_hash(store, ros_type)
+    return type_hash(store, ros_type)
 
 
 def _hash_description(store, main: dict, pending: list[str]) -> str:

@@ -91,7 +91,10 @@ pub enum RosContext {
 }
 
 /// The Zenoh context: domain `domain_id`, the session from rmw_zenoh's environment variables.
+/// Registers [`crate::type_hashes::TYPE_HASHES`] with ros2-client first, so that our entities
+/// carry the REP-2016 type hashes an rmw_zenoh peer expects.
 pub fn zenoh_context(domain_id: u16) -> Result<RosContext, String> {
+    zenoh::register_type_hashes(crate::type_hashes::TYPE_HASHES);
     let opts = zenoh::ContextOptions::new().domain_id(domain_id);
     zenoh::Context::with_options(opts)
         .map(RosContext::Zenoh)

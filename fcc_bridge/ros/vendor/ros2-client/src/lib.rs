@@ -247,6 +247,9 @@ pub mod zenoh {
   pub use crate::zenoh_backend::parameters::{ParameterClient, ParameterEvent, ParameterServer};
   #[doc(inline)]
   pub use crate::zenoh_backend::rosout::Logger;
+  // fcc (vendored): REP-2016 hashes of the application's types (rmw_zenoh interop).
+  #[doc(inline)]
+  pub use crate::zenoh_backend::type_hash::{known_type_hash as type_hash, register_type_hashes};
 }
 
 // Re-exports from crate root to simplify usage

@@ -14,6 +14,10 @@
 //!   wildcard/placeholder and send-direction interop with C++ peers may not
 //!   match until full IDL hashing lands.
 //!
+//! fcc (vendored): an application registers hashes for its other types with
+//! [`register_type_hashes`] (`ros2_client::zenoh::register_type_hashes`); they
+//! are used after the built-in tables, before the placeholder.
+//!
 //! `std_msgs/String` is the published hash. The other Jazzy interop types
 //! (AddTwoInts, actions, parameters, rosout) are computed from their field
 //! descriptions in [`super::jazzy_types`] and match the `type_hashes` in the
@@ -79,11 +83,55 @@ lazy_static::lazy_static! {
   };
 }
 
+// fcc (vendored): hashes registered by the application (rmw_zenoh interop for
+// the types this crate does not describe itself), consulted by
+// `known_type_hash` after the built-in tables and before the placeholder.
+static REGISTERED_HASHES: std::sync::RwLock<
+  Option<std::collections::HashMap<&'static str, &'static str>>,
+> = std::sync::RwLock::new(None);
+
+/// fcc (vendored): register REP-2016 hashes (`(DDS type name, "RIHS01_<64 hex>")`,
+/// e.g. `("sensor_msgs::msg::dds_::Imu_", "RIHS01_7d9a…")`; a service by its
+/// service type name, `std_srvs::srv::dds_::SetBool_`, with the service type's
+/// hash) for types the backend has no description of, so that publishers,
+/// subscriptions' tokens, clients and servers created afterwards use the real
+/// hash instead of [`PLACEHOLDER_HASH`] (an rmw_zenoh peer puts the real hash
+/// in its keys). May be called more than once (a later value for the same name
+/// replaces an earlier one); the built-in hashes take precedence. A malformed
+/// hash is skipped with a warning.
+pub fn register_type_hashes(hashes: &'static [(&'static str, &'static str)]) {
+  let mut guard = REGISTERED_HASHES
+    .write()
+    .unwrap_or_else(std::sync::PoisonError::into_inner);
+  let map = guard.get_or_insert_with(Default::default);
+  for &(dds, hash) in hashes {
+    if is_rihs01(hash) {
+      map.insert(dds, hash);
+    } else {
+      log::warn!("register_type_hashes: {dds}: {hash:?} is not RIHS01_<64 hex digits>, skipped");
+    }
+  }
+}
+
+fn is_rihs01(hash: &str) -> bool {
+  hash.len() == 71
+    && hash.starts_with("RIHS01_")
+    && hash[7..].bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
+}
+
+fn registered_type_hash(dds_type_name: &str) -> Option<&'static str> {
+  let guard = REGISTERED_HASHES
+    .read()
+    .unwrap_or_else(std::sync::PoisonError::into_inner);
+  guard.as_ref()?.get(dds_type_name).copied()
+}
+
 /// Look up the REP-2016 type hash for a DDS-form type name
 /// (e.g. `std_msgs::msg::dds_::String_`).
 ///
 /// Covers the hard-coded interop types plus the computed `std_msgs` scalar
-/// messages ([`STD_MSGS_SCALAR_HASHES`]). Returns `None` for anything else;
+/// messages ([`STD_MSGS_SCALAR_HASHES`]), then (fcc (vendored)) the hashes
+/// given to [`register_type_hashes`]. Returns `None` for anything else;
 /// callers then fall back to a wildcard/placeholder for the send direction.
 pub fn known_type_hash(dds_type_name: &str) -> Option<&'static str> {
   if dds_type_name == "std_msgs::msg::dds_::String_" {
@@ -97,6 +145,7 @@ pub fn known_type_hash(dds_type_name: &str) -> Option<&'static str> {
   STD_MSGS_SCALAR_HASHES
     .get(dds_type_name)
     .map(String::as_str)
+    .or_else(|| registered_type_hash(dds_type_name)) // fcc (vendored)
 }
 
 /// The hash to place in a *sender's* (publisher/client) concrete key: the known
@@ -131,6 +180,26 @@ mod tests {
     assert_eq!(sender_hash("pkg::msg::dds_::Nope_"), PLACEHOLDER_HASH);
     assert_ne!(sender_hash("pkg::msg::dds_::Nope_"), WILDCARD);
     assert!(sender_hash("std_msgs::msg::dds_::String_").starts_with("RIHS01_"));
+  }
+
+  // fcc (vendored)
+  #[test]
+  fn registered_hashes_are_used_and_builtins_win() {
+    const IMU: &str = "RIHS01_7d9a00ff131080897a5ec7e26e315954b8eae3353c3f995c55faf71574000b5b";
+    static TABLE: &[(&str, &str)] = &[
+      ("test_msgs::msg::dds_::Registered_", IMU),
+      ("test_msgs::msg::dds_::Malformed_", "RIHS01_00"),
+      ("std_msgs::msg::dds_::String_", IMU),
+    ];
+    assert_eq!(known_type_hash("test_msgs::msg::dds_::Registered_"), None);
+    register_type_hashes(TABLE);
+    assert_eq!(known_type_hash("test_msgs::msg::dds_::Registered_"), Some(IMU));
+    assert_eq!(sender_hash("test_msgs::msg::dds_::Registered_"), IMU);
+    assert_eq!(known_type_hash("test_msgs::msg::dds_::Malformed_"), None);
+    assert_eq!(
+      known_type_hash("std_msgs::msg::dds_::String_"),
+      Some("RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18")
+    );
   }
 
   #[test]
