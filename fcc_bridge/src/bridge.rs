@@ -280,19 +280,7 @@ fn subscribe<T: RosMsg + Sync>(
             .subscription::<T>(&name, &inbound_qos())
             .map_err(BridgeError::Ros)?,
     };
-    tokio::spawn(async move {
-        let text = |e| format!("{e:?}");
-        match sub {
-            Sub::Dds(s) => {
-                let st = s.async_stream().map(|r| r.map(|(m, _)| m).map_err(text));
-                forward(st, &name, tx, wrap).await
-            }
-            Sub::Zenoh(s) => {
-                let st = s.async_stream().map(|r| r.map(|(m, _)| m).map_err(text));
-                forward(st, &name, tx, wrap).await
-            }
-        }
-    });
+    tokio::spawn(async move { forward(sub.stream(), &name, tx, wrap).await });
     Ok(())
 }
 
@@ -367,21 +355,12 @@ async fn forward<T: RosMsg>(
 /// The DDS participant (`fcc_ros::ros_node::context`): loopback only unless disabled.
 /// On Zenoh, the session of rmw_zenoh's environment ([`fcc_ros::rmw`]); SROS2 is DDS-only.
 fn context(opts: &Options) -> Result<RosContext, BridgeError> {
-    match opts.rmw {
-        Rmw::Dds => fcc_ros::ros_node::context(fcc_ros::ros_node::DdsEnv {
-            domain_id: opts.domain_id,
-            localhost_only: opts.localhost_only,
-            enclave_dir: opts.enclave_dir.clone(),
-        })
-        .map(RosContext::Dds),
-        Rmw::Zenoh if opts.enclave_dir.is_some() => Err(
-            "ROS 2 security (an SROS2 enclave) is DDS-only in this stack: unset \
-             ROS_SECURITY_ENABLE or run on DDS"
-                .into(),
-        ),
-        Rmw::Zenoh => fcc_ros::rmw::zenoh_context(opts.domain_id),
-    }
-    .map_err(BridgeError::Ros)
+    let env = fcc_ros::ros_node::DdsEnv {
+        domain_id: opts.domain_id,
+        localhost_only: opts.localhost_only,
+        enclave_dir: opts.enclave_dir.clone(),
+    };
+    fcc_ros::rmw::context(opts.rmw, env).map_err(BridgeError::Ros)
 }
 
 /// The ROS-side requests waiting for the MCU (services, parameter sets) and what the link
@@ -694,10 +673,7 @@ async fn start_dds(opts: &Options) -> Result<Dds, BridgeError> {
 /// The DDS participant, the node (its spinner and /rosout threads), publishers, subscriptions
 /// and services. Blocking: called on the `dds-setup` thread.
 fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
-    step.set(match opts.rmw {
-        Rmw::Dds => "creating the DDS participant",
-        Rmw::Zenoh => "opening the Zenoh session",
-    });
+    step.set(opts.rmw.opening());
     let ctx = context(opts)?;
     let (ltx, lrx) = mpsc::channel::<LinkRequest>(64);
     let shared = Arc::new(ParamShared {
@@ -741,11 +717,7 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
         opts.node_name,
         opts.rmw.label(),
         opts.domain_id,
-        match (opts.rmw, opts.localhost_only) {
-            (Rmw::Zenoh, _) => "session from ZENOH_SESSION_CONFIG_URI / ZENOH_CONFIG_OVERRIDE",
-            (Rmw::Dds, true) => "loopback only",
-            (Rmw::Dds, false) => "all interfaces",
-        },
+        opts.rmw.reach(opts.localhost_only),
         opts.device,
         opts.baud
     );

@@ -67,6 +67,23 @@ impl Rmw {
             Rmw::Zenoh => "Zenoh",
         }
     }
+
+    /// What [`context`] does, for the start-up watchdog's step.
+    pub fn opening(self) -> &'static str {
+        match self {
+            Rmw::Dds => "creating the DDS participant",
+            Rmw::Zenoh => "opening the Zenoh session",
+        }
+    }
+
+    /// Where the node's traffic may go, for its first log line.
+    pub fn reach(self, localhost_only: bool) -> &'static str {
+        match (self, localhost_only) {
+            (Rmw::Zenoh, _) => "session from ZENOH_SESSION_CONFIG_URI / ZENOH_CONFIG_OVERRIDE",
+            (Rmw::Dds, true) => "loopback only",
+            (Rmw::Dds, false) => "all interfaces",
+        }
+    }
 }
 
 /// The tokio runtime of a node's main loop: current-thread on DDS (the serial port's readiness
@@ -88,6 +105,20 @@ pub fn runtime(rmw: Rmw) -> std::io::Result<tokio::runtime::Runtime> {
 pub enum RosContext {
     Dds(dds::Context),
     Zenoh(zenoh::Context),
+}
+
+/// The node's context on `rmw`: the DDS participant of [`crate::ros_node::context`], or the
+/// Zenoh session ([`zenoh_context`]); an SROS2 enclave with Zenoh is refused (DDS Security only).
+pub fn context(rmw: Rmw, env: crate::ros_node::DdsEnv) -> Result<RosContext, String> {
+    match rmw {
+        Rmw::Dds => crate::ros_node::context(env).map(RosContext::Dds),
+        Rmw::Zenoh if env.enclave_dir.is_some() => Err(
+            "ROS 2 security (an SROS2 enclave) is DDS-only in this stack: unset \
+             ROS_SECURITY_ENABLE or run on DDS"
+                .into(),
+        ),
+        Rmw::Zenoh => zenoh_context(env.domain_id),
+    }
 }
 
 /// The Zenoh context: domain `domain_id`, the session from rmw_zenoh's environment variables.
@@ -292,13 +323,16 @@ impl<T: ros2_client::Message + 'static> Sub<T> {
         }
     }
 
-    /// Every message, as a stream (for a `select!` loop).
-    pub fn stream(&self) -> futures::stream::LocalBoxStream<'_, Result<T, String>> {
+    /// Every message, as a stream (a `select!` loop, a forwarding task).
+    pub fn stream(&self) -> futures::stream::BoxStream<'_, Result<T, String>>
+    where
+        T: Send + Sync,
+    {
         use futures::StreamExt;
         let text = |e| format!("{e:?}");
         match self {
-            Sub::Dds(s) => s.async_stream().map(move |r| r.map(|(m, _)| m).map_err(text)).boxed_local(),
-            Sub::Zenoh(s) => s.async_stream().map(move |r| r.map(|(m, _)| m).map_err(text)).boxed_local(),
+            Sub::Dds(s) => s.async_stream().map(move |r| r.map(|(m, _)| m).map_err(text)).boxed(),
+            Sub::Zenoh(s) => s.async_stream().map(move |r| r.map(|(m, _)| m).map_err(text)).boxed(),
         }
     }
 }

@@ -313,21 +313,8 @@ struct Dds {
 /// The participant, node, subscriptions and publishers. Blocking (rustdds can deadlock here
 /// when several participants start together): run under `startup::App::setup_dds`.
 fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
-    let ctx = match o.rmw {
-        Rmw::Dds => {
-            step.set("creating the DDS participant");
-            RosContext::Dds(ros_node::context(o.dds.clone())?)
-        }
-        Rmw::Zenoh if o.dds.enclave_dir.is_some() => {
-            return Err("ROS 2 security (an SROS2 enclave) is DDS-only in this stack: unset \
-                        ROS_SECURITY_ENABLE or run on DDS"
-                .into())
-        }
-        Rmw::Zenoh => {
-            step.set("opening the Zenoh session");
-            fcc_ros::rmw::zenoh_context(o.dds.domain_id)?
-        }
-    };
+    step.set(o.rmw.opening());
+    let ctx = fcc_ros::rmw::context(o.rmw, o.dds.clone())?;
     step.set("creating the ROS node");
     let live = Arc::new(AtomicBool::new(false));
     let opts = node_options(&o.params, live.clone());
@@ -686,11 +673,7 @@ fn log_start(o: &Options, log: &Log) {
             o.node_name,
             o.rmw.label(),
             o.dds.domain_id,
-            match (o.rmw, o.dds.localhost_only) {
-                (Rmw::Zenoh, _) => "session from ZENOH_SESSION_CONFIG_URI / ZENOH_CONFIG_OVERRIDE",
-                (Rmw::Dds, true) => "loopback only",
-                (Rmw::Dds, false) => "all interfaces",
-            },
+            o.rmw.reach(o.dds.localhost_only),
             match &o.dds.enclave_dir {
                 Some(d) => format!("DDS Security in enclave {}", d.display()),
                 None => "no DDS Security".into(),
