@@ -202,18 +202,20 @@ tests/e2e/flood_uplink.sh "$FCC_DDS_PYTHON"
 # odometry at 93 of 100, the stack at 138 % of a core). ~70 s.
 mark "four_uav"
 FCC_E2E_SPEED=1 tests/e2e/four_uav.sh "$FCC_DDS_PYTHON"
-# A fleet on Zenoh (issue 18): four vehicles at two sites, each site's nodes clients of its own
-# fcc-zenoh-router, the routers linked; the independent eclipse-zenoh peer at site B checks every
-# vehicle's tokens and topics against its own truth and flies a vehicle of site A; then, sites
-# not linked, nothing of site A reaches site B. At speed 1 (four vehicles, as four_uav). ~85 s.
-mark "zenoh fleet"
+# Zenoh (issue 18), two tests side by side, each in its own loopback-only namespace (each about
+# half a core at speed 1; alone one after the other they took 75 + 67 s of the CI's 30 min):
+# - a fleet (tests/zenoh/fleet.sh): four vehicles at two sites, each site's nodes clients of its
+#   own fcc-zenoh-router, the routers linked; the independent eclipse-zenoh peer at site B checks
+#   every vehicle's tokens and topics against its own truth and flies a vehicle of site A; then,
+#   sites not linked, nothing of site A reaches site B. At speed 1 (four vehicles, as four_uav).
+# - faults (tests/zenoh/faults.sh): the link between the sites cut (a TCP relay killed) for 5 s,
+#   then router A killed for 5 s and restarted: the resume time at site B printed, no gap at the
+#   peer's own site, uav2 landed by the MCU's failsafes and uav3's mission complete, checked on
+#   the simulators' truth (touchdowns, no flyaway). At speed 1.
+mark "zenoh fleet + faults (side by side)"
+bg_start "zenoh faults" tests/zenoh/faults.sh "$FCC_DDS_PYTHON"
 tests/zenoh/fleet.sh "$FCC_DDS_PYTHON"
-# Faults on Zenoh (issue 18): the link between the sites cut (a TCP relay killed) for 5 s, then
-# router A killed for 5 s and restarted: the resume time at site B printed, no gap at the peer's
-# own site, uav2 landed by the MCU's failsafes and uav3's mission complete, checked on the
-# simulators' truth (touchdowns, no flyaway). At speed 1. ~70 s.
-mark "zenoh faults"
-tests/zenoh/faults.sh "$FCC_DDS_PYTHON"
+bg_wait "zenoh faults"
 # The bridge with ROS 2 security (issue 19): Enforce refuses a missing enclave, a tampered
 # permissions file and an expired certificate with one line; in enclave /fcc/fcc_bridge it
 # authenticates with Debian's Cyclone DDS 0.10 (rustdds' DDS Security): the ground station gets
