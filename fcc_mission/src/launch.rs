@@ -5,6 +5,7 @@
 //!   [`Config::from_yaml_str`] and checked with [`Config::check`];
 //! * [`resolve_vars`]: the defaults, the `when` rules and the command line's `name:=value`;
 //! * [`expand`]: `${NAME}` variables;
+//! * [`apply_rmw`]: the middleware of every process (`rmw:=…`), and a Zenoh router when needed;
 //! * [`next_after_exit`]: what to do when a process exits (main processes, groups, early exits).
 //!
 //! Pure logic: no I/O (the environment is passed in to [`expand`]).
@@ -181,6 +182,59 @@ impl Config {
     }
 }
 
+/// The launch variable that chooses every process's middleware: `rmw:=rmw_zenoh_cpp` (else the
+/// launcher's own `RMW_IMPLEMENTATION`, as ROS 2 launch inherits it).
+pub const RMW_VAR: &str = "rmw";
+/// The launch variable that keeps [`apply_rmw`] from adding a router: `zenoh_router:=false`
+/// (one already runs, e.g. `rmw_zenohd`).
+pub const ZENOH_ROUTER_VAR: &str = "zenoh_router";
+/// The process [`apply_rmw`] adds on Zenoh.
+pub const ROUTER_PROC: &str = "zenoh_router";
+/// Programs that are Zenoh routers (the last path component of a process's `cmd[0]`).
+const ROUTERS: [&str; 3] = ["fcc-zenoh-router", "rmw_zenohd", "zenohd"];
+
+/// The middleware `rmw` (an `RMW_IMPLEMENTATION` value) applied to the processes of a run: each
+/// gets `RMW_IMPLEMENTATION=rmw` unless its `env:` names one. On Zenoh (`zenoh`), with
+/// `start_router` and no router among the processes, a router is put first — `fcc-zenoh-router`
+/// on rmw_zenoh's port 7447 (loopback), where the nodes' default session looks — as
+/// `ros2 run rmw_zenoh_cpp rmw_zenohd` is started before a launch on rmw_zenoh. It is not main
+/// and has no group: it runs until the main processes end, and its early exit (e.g. the port
+/// taken) ends the run. Returns what it did, for the log.
+pub fn apply_rmw(cfg: &mut Config, rmw: &str, zenoh: bool, start_router: bool) -> Vec<String> {
+    let mut notes = Vec::new();
+    let mut set = 0;
+    for p in &mut cfg.processes {
+        if !p.env.contains_key("RMW_IMPLEMENTATION") {
+            p.env.insert("RMW_IMPLEMENTATION".into(), rmw.into());
+            set += 1;
+        }
+    }
+    notes.push(format!("RMW_IMPLEMENTATION={rmw} for {set} of {} processes", cfg.processes.len()));
+    let is_router = |p: &Proc| {
+        p.cmd.first().and_then(|c| c.rsplit('/').next()).is_some_and(|c| ROUTERS.contains(&c))
+    };
+    if zenoh && start_router && !cfg.processes.iter().any(is_router) {
+        cfg.processes.insert(
+            0,
+            Proc {
+                name: ROUTER_PROC.into(),
+                cmd: vec!["${BIN}/fcc-zenoh-router".into()],
+                env: BTreeMap::new(),
+                wait_for: None,
+                wait_timeout_s: default_wait(),
+                main: false,
+                group: None,
+                delay_s: 0.5,
+            },
+        );
+        notes.push(format!(
+            "the config starts no Zenoh router: starting {ROUTER_PROC} (fcc-zenoh-router, \
+             tcp/127.0.0.1:7447) first; {ZENOH_ROUTER_VAR}:=false if one already runs"
+        ));
+    }
+    notes
+}
+
 /// Expand `${NAME}` from `vars`, then `env` (the environment); values may use other variables.
 pub fn expand(
     s: &str,
@@ -305,6 +359,40 @@ mod tests {
             code: None,
             stopping: false,
         }
+    }
+
+    fn cfg(text: &str) -> Config {
+        let c = Config::from_yaml_str(text).expect("yaml");
+        c.check().expect("check");
+        c
+    }
+
+    #[test]
+    fn rmw_sets_every_process_and_adds_a_router_on_zenoh() {
+        let text = "processes:\n  - {name: sitl, cmd: [a]}\n  - {name: bridge, cmd: [b], env: {RMW_IMPLEMENTATION: rmw_cyclonedds_cpp}}\n  - {name: mission, cmd: [c], main: true}\n";
+        // DDS: the variable only; no router.
+        let mut c = cfg(text);
+        let notes = apply_rmw(&mut c, "rmw_fastrtps_cpp", false, true);
+        assert_eq!(c.processes.len(), 3);
+        assert_eq!(c.processes[0].env["RMW_IMPLEMENTATION"], "rmw_fastrtps_cpp");
+        assert_eq!(c.processes[1].env["RMW_IMPLEMENTATION"], "rmw_cyclonedds_cpp", "a process's own env wins");
+        assert!(notes[0].contains("2 of 3"), "{notes:?}");
+        // Zenoh: a router first, not main, no group, with the variable too.
+        let mut c = cfg(text);
+        let notes = apply_rmw(&mut c, "rmw_zenoh_cpp", true, true);
+        assert_eq!(c.processes.len(), 4);
+        let r = &c.processes[0];
+        assert_eq!((r.name.as_str(), r.main, r.group.is_none()), (ROUTER_PROC, false, true));
+        assert_eq!(r.cmd, vec!["${BIN}/fcc-zenoh-router".to_string()]);
+        assert_eq!(c.processes[3].env["RMW_IMPLEMENTATION"], "rmw_zenoh_cpp");
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        // zenoh_router:=false, or a config with its own router: none added.
+        let mut c = cfg(text);
+        apply_rmw(&mut c, "rmw_zenoh_cpp", true, false);
+        assert_eq!(c.processes.len(), 3);
+        let mut c = cfg("processes:\n  - {name: r, cmd: [/opt/ros/bin/rmw_zenohd]}\n  - {name: m, cmd: [c], main: true}\n");
+        apply_rmw(&mut c, "rmw_zenoh_cpp", true, true);
+        assert_eq!(c.processes.len(), 2);
     }
 
     #[test]

@@ -2,9 +2,10 @@
 //! flight must give the host build's motor commands (scripts/test-mcu.sh does the work).
 //!
 //! When the cross toolchain (Debian rustc-web/cargo-web + rust-web-src, binutils-arm-none-eabi)
-//! or qemu-system-arm is not installed, the test FAILS if `FCC_REQUIRE_MCU=1` (set by
-//! `scripts/test.sh`, i.e. in CI, which installs them first by running `scripts/test-mcu.sh`),
-//! and otherwise skips with a message (a developer's plain `cargo test`). `scripts/build-mcu.sh`
+//! or qemu-system-arm is not installed, the test FAILS if `FCC_REQUIRE_MCU=1` (for a CI that
+//! runs a plain `cargo test`), and otherwise skips with a message (a developer's plain
+//! `cargo test`). `scripts/test.sh` skips this test and runs `scripts/test-mcu.sh` itself, beside
+//! its other steps. `scripts/build-mcu.sh`
 //! installs them and fetches the board crate's dependencies, which this test then builds offline.
 
 use std::path::{Path, PathBuf};

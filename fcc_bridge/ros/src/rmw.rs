@@ -1,5 +1,6 @@
 //! The middleware a node runs on, chosen the ROS way (`RMW_IMPLEMENTATION`), and the handles
-//! the nodes use whatever it is: [`RosContext`], [`RosNode`], [`Pub`], [`Sub`], [`Srv`].
+//! the nodes use whatever it is: [`RosContext`], [`RosNode`], [`Pub`], [`Sub`], [`Srv`] (and
+//! [`RawCdr`], a bag's bytes republished as they are).
 //!
 //! | `RMW_IMPLEMENTATION` | middleware | discovery |
 //! |---|---|---|
@@ -209,6 +210,29 @@ impl RosNode {
         }
     }
 
+    /// Publisher of already-serialised messages (a bag's CDR bodies, [`RawCdr`]) of the type
+    /// `type_name` on a ROS name, with `qos` as given (its history depth too: a replayed topic
+    /// keeps its recorded QoS).
+    pub fn raw_publisher(
+        &mut self,
+        name: &str,
+        type_name: ros2_client::MessageTypeName,
+        qos: &QosProfile,
+    ) -> Result<Pub<RawCdr>, String> {
+        let n = parse_name(name)?;
+        let fail = |e| format!("publisher {name}: {e:?}");
+        match self {
+            RosNode::Dds(node) => {
+                let topic = node.create_topic(&n, type_name, qos).map_err(|e| format!("topic {name}: {e:?}"))?;
+                node.create_publisher::<RawCdr>(&topic, None).map(Pub::Dds).map_err(fail)
+            }
+            RosNode::Zenoh(node) => {
+                let topic = node.create_topic(&n, type_name, qos);
+                node.create_publisher::<RawCdr>(&topic, None).map(Pub::Zenoh).map_err(fail)
+            }
+        }
+    }
+
     /// A service server on a ROS name, type `pkg/srv/Type` given as (package, type).
     pub fn server<Req, Resp>(
         &mut self,
@@ -307,6 +331,30 @@ impl<T: ros2_client::Message + std::fmt::Debug> Pub<T> {
         }
     }
 }
+
+/// A CDR body passed through unchanged (serialised as its raw bytes, without a length): what
+/// [`RosNode::raw_publisher`] publishes. Publish-only.
+#[derive(Clone, Debug)]
+pub struct RawCdr(pub Vec<u8>);
+
+impl serde::Serialize for RawCdr {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeTuple;
+        let mut t = s.serialize_tuple(self.0.len())?;
+        for b in &self.0 {
+            t.serialize_element(b)?;
+        }
+        t.end()
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for RawCdr {
+    fn deserialize<D: serde::Deserializer<'de>>(_: D) -> Result<Self, D::Error> {
+        Err(serde::de::Error::custom("RawCdr is publish-only"))
+    }
+}
+
+impl ros2_client::Message for RawCdr {}
 
 /// A subscription on either middleware.
 pub enum Sub<T> {

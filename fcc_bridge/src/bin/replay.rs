@@ -6,6 +6,8 @@
 //! only if all were, transient local only if all were), so `/tf_static` is transient local again
 //! and a late joiner gets it. A topic without a usable profile gets the default (reliable,
 //! volatile, keep last 1000); such topics are counted and printed.
+//! DDS by default; Zenoh (rmw_zenoh's wire protocol, through a Zenoh router) with
+//! `RMW_IMPLEMENTATION=rmw_zenoh_cpp`, as the bridge and the mission node (`fcc_ros::rmw`).
 //! Run DDS only in a loopback-only namespace (netns-run) on shared machines.
 
 use clap::Parser;
@@ -230,18 +232,27 @@ async fn play(
     rate: f64,
     prefix: &str,
 ) -> anyhow::Result<()> {
-    use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions};
-    // The one participant builder: ROS_DOMAIN_ID, and loopback only unless ROS_LOCALHOST_ONLY=0
-    // or ROS_AUTOMATIC_DISCOVERY_RANGE says otherwise (as the bridge and the mission node).
+    use fcc_ros::rmw::{Pub, RawCdr, Rmw, RosNode};
+    use ros2_client::{MessageTypeName, NodeOptions};
+    // DDS or Zenoh as ROS chooses (`RMW_IMPLEMENTATION`, fcc_ros::rmw). On DDS the one
+    // participant builder: ROS_DOMAIN_ID, and loopback only unless ROS_LOCALHOST_ONLY=0 or
+    // ROS_AUTOMATIC_DISCOVERY_RANGE says otherwise (as the bridge and the mission node); on Zenoh
+    // the session from rmw_zenoh's variables (ZENOH_SESSION_CONFIG_URI, ZENOH_CONFIG_OVERRIDE).
+    let rmw = Rmw::from_env().map_err(anyhow::Error::msg)?;
     let dds = fcc_ros::ros_node::DdsEnv::from_env(&fcc_ros::params::RosArgs::default())
         .map_err(anyhow::Error::msg)?;
-    let ctx = fcc_ros::ros_node::context(dds).map_err(anyhow::Error::msg)?;
-    let mut node = ctx.new_node(NodeName::new("/", "fcc_replay")?, NodeOptions::new())?;
-    tokio::spawn(node.spinner()?.spin());
+    let ctx = fcc_ros::rmw::context(rmw, dds).map_err(anyhow::Error::msg)?;
+    let mut node = ctx
+        .new_node("/", "fcc_replay", NodeOptions::new())
+        .map_err(anyhow::Error::msg)?;
+    if let RosNode::Dds(n) = &mut node {
+        tokio::spawn(n.spinner()?.spin());
+    }
+    eprintln!("fcc-replay: on {}", rmw.label());
     let mut from_bag = 0usize;
     let mut defaulted: Vec<String> = Vec::new();
     // Raw CDR passthrough: publish the recorded bytes as they are.
-    let mut pubs: BTreeMap<String, ros2_client::dds::Publisher<RawCdr>> = BTreeMap::new();
+    let mut pubs: BTreeMap<String, Pub<RawCdr>> = BTreeMap::new();
     for m in &msgs {
         if pubs.contains_key(&m.topic) {
             continue;
@@ -270,15 +281,10 @@ async fn play(
             describe(&q),
             if recorded.is_some() { "" } else { " (default)" }
         );
-        let topic = node.create_topic(
-            &Name::parse(&full).map_err(|e| anyhow::anyhow!("{full}: {e:?}"))?,
-            MessageTypeName::new(pkg, name),
-            &profile(&q),
-        )?;
-        pubs.insert(
-            m.topic.clone(),
-            node.create_publisher::<RawCdr>(&topic, None)?,
-        );
+        let p = node
+            .raw_publisher(&full, MessageTypeName::new(pkg, name), &profile(&q))
+            .map_err(anyhow::Error::msg)?;
+        pubs.insert(m.topic.clone(), p);
     }
     eprintln!(
         "fcc-replay: QoS from the bag's offered_qos_profiles on {from_bag} topics; {} without a usable profile → default ({}){}",
@@ -319,25 +325,6 @@ async fn play(
     std::process::exit(0)
 }
 
-/// A CDR body passed through unchanged (serialised as raw bytes, without a length).
-#[derive(Clone, Debug)]
-struct RawCdr(Vec<u8>);
-impl serde::Serialize for RawCdr {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeTuple;
-        let mut t = s.serialize_tuple(self.0.len())?;
-        for b in &self.0 {
-            t.serialize_element(b)?;
-        }
-        t.end()
-    }
-}
-impl<'de> serde::Deserialize<'de> for RawCdr {
-    fn deserialize<D: serde::Deserializer<'de>>(_: D) -> Result<Self, D::Error> {
-        Err(serde::de::Error::custom("RawCdr is publish-only"))
-    }
-}
-impl ros2_client::Message for RawCdr {}
 
 #[cfg(test)]
 mod tests {

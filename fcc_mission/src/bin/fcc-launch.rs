@@ -42,9 +42,16 @@
 //! Variables: `${BIN}` (the directory of this executable), `${CONFIG_DIR}`, `${RUN}` (a fresh
 //! temporary directory, removed at the end), `vars`, the `when` rules (each printed when it sets
 //! a variable), command-line `name:=value` (wins over both), and the environment. `env:` per process adds environment variables.
+//!
+//! The middleware: `rmw:=rmw_zenoh_cpp` (or any `RMW_IMPLEMENTATION` value; else the launcher's
+//! own `RMW_IMPLEMENTATION`) sets `RMW_IMPLEMENTATION` for every process whose `env:` does not;
+//! on Zenoh, a config that starts no Zenoh router gets `fcc-zenoh-router` first (rmw_zenoh's
+//! port 7447 on loopback), unless `zenoh_router:=false` (one already runs). An unknown name:
+//! one error line, exit 2.
 
 use fcc_mission::launch::{
-    expand, next_after_exit, resolve_vars, Config, Next, Proc, Report, Reports, Slot,
+    apply_rmw, expand, next_after_exit, resolve_vars, Config, Next, Proc, Report, Reports, Slot,
+    RMW_VAR, ZENOH_ROUTER_VAR,
 };
 use nix::sys::signal::{self, SigHandler, Signal};
 use nix::unistd::Pid;
@@ -183,7 +190,7 @@ fn stop_all(procs: &mut [Running], timeout: Duration, cpu: &mut CpuMeter) {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.is_empty() || args.iter().any(|a| a == "-h" || a == "--help") {
-        println!("usage: fcc-launch CONFIG.yaml [name:=value ...]\n(see launch_configs/square_flight.yaml)");
+        println!("usage: fcc-launch CONFIG.yaml [name:=value ...]\n(see launch_configs/square_flight.yaml; rmw:=rmw_zenoh_cpp runs every node on Zenoh)");
         std::process::exit(if args.is_empty() { 2 } else { 0 });
     }
     let launch = Launch::load(&args);
@@ -237,6 +244,8 @@ impl Launch {
         for a in applied {
             eprintln!("fcc-launch: {a}");
         }
+        let mut cfg = cfg;
+        choose_rmw(&mut cfg, &vars);
         let exe_dir = std::env::current_exe()
             .ok()
             .and_then(|p| p.parent().map(Path::to_path_buf))
@@ -266,6 +275,30 @@ impl Launch {
         let env = |name: &str| std::env::var(name).ok();
         expand(s, &self.vars, &env)
             .unwrap_or_else(|e| die(format!("{}: {e}", self.cfg_path.display())))
+    }
+}
+
+/// The middleware of every process: `rmw:=NAME`, else the launcher's `RMW_IMPLEMENTATION`
+/// (unset or empty: the processes' own choice, DDS by default). An unknown name exits (code 2)
+/// with the known ones; on Zenoh a router is added when the config has none ([`apply_rmw`]).
+fn choose_rmw(cfg: &mut Config, vars: &BTreeMap<String, String>) {
+    let name = vars
+        .get(RMW_VAR)
+        .cloned()
+        .or_else(|| std::env::var("RMW_IMPLEMENTATION").ok())
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty());
+    let Some(name) = name else { return };
+    let rmw = fcc_ros::rmw::Rmw::from_env_value(Some(&name))
+        .unwrap_or_else(|e| die(format!("{RMW_VAR}: {e}")));
+    let start_router = match vars.get(ZENOH_ROUTER_VAR).map(String::as_str) {
+        None | Some("true") => true,
+        Some("false") => false,
+        Some(v) => die(format!("{ZENOH_ROUTER_VAR}:={v}: expected true or false")),
+    };
+    let zenoh = rmw == fcc_ros::rmw::Rmw::Zenoh;
+    for note in apply_rmw(cfg, &name, zenoh, start_router) {
+        eprintln!("fcc-launch: {note}");
     }
 }
 

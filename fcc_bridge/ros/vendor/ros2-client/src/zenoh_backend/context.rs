@@ -251,16 +251,18 @@ fn apply_config_overrides(config: &mut Config, overrides: &str) -> zenoh::Result
 
 /// Default Zenoh configuration for a ROS 2 peer.
 ///
-/// Peer mode, listening on an IPv4 loopback port and with multicast scouting
-/// disabled — the same shape as `rmw_zenoh`'s default session config, which
-/// also keeps the crate working in IPv6-less / restricted-network environments
-/// (Zenoh's own default listens on `tcp/[::]:0`, which fails where IPv6 is
-/// unavailable, e.g. many CI runners).
+/// Peer mode, connecting to the router at `tcp/localhost:7447`, listening on an
+/// IPv4 loopback port and with multicast scouting disabled — the shape of
+/// `rmw_zenoh`'s default session config (its `connect/endpoints` too: without
+/// it two nodes of the default config never meet, as nothing else discovers
+/// the router), which also keeps the crate working in IPv6-less /
+/// restricted-network environments (Zenoh's own default listens on
+/// `tcp/[::]:0`, which fails where IPv6 is unavailable, e.g. many CI runners).
+/// A peer keeps retrying the router in the background, so opening succeeds
+/// without one.
 ///
-/// For a full `rmw_zenoh`-style deployment (connect to `tcp/localhost:7447`,
-/// gossip scouting, timestamping) point `ZENOH_SESSION_CONFIG_URI` at the
-/// desired JSON5 file or supply `ZENOH_CONFIG_OVERRIDE` (see
-/// [`config_from_env`]).
+/// For other deployments point `ZENOH_SESSION_CONFIG_URI` at the desired JSON5
+/// file or supply `ZENOH_CONFIG_OVERRIDE` (see [`config_from_env`]).
 fn default_config() -> Config {
   let mut config = Config::default();
   // These keys are stable Zenoh config paths; a failure here is a programming
@@ -268,6 +270,9 @@ fn default_config() -> Config {
   config
     .insert_json5("mode", "\"peer\"")
     .expect("valid zenoh config key: mode");
+  config
+    .insert_json5("connect/endpoints", "[\"tcp/localhost:7447\"]")
+    .expect("valid zenoh config key: connect/endpoints");
   config
     .insert_json5("listen/endpoints", "[\"tcp/127.0.0.1:0\"]")
     .expect("valid zenoh config key: listen/endpoints");

@@ -14,6 +14,7 @@ use std::{
 
 use serde::{Serialize, de::DeserializeOwned};
 use zenoh::{Wait, liveliness::LivelinessToken};
+use zenoh_ext::{AdvancedPublisherBuilderExt, CacheConfig, MissDetectionConfig};
 use async_channel::Receiver;
 
 use super::{
@@ -24,7 +25,7 @@ use super::{
   context::Context,
   gid, keyexpr,
   parameters::{ParameterClient, ParameterEvent, ParameterServer},
-  pubsub::{Publisher, Subscription},
+  pubsub::{Publisher, Subscription, ZenohPub},
   qos_encoding,
   rosout::Logger,
   service::{Client, Server},
@@ -38,8 +39,11 @@ use crate::{
   log::Log,
   names::{ActionTypeName, MessageTypeName, Name, NodeName, ServiceTypeName},
   parameters::{Parameter, ParameterStore},
-  qos::QosProfile,
+  qos::{Durability, History, QosProfile},
 };
+
+/// The cache of a TRANSIENT_LOCAL publisher with KEEP_ALL history (samples).
+const TRANSIENT_LOCAL_KEEP_ALL: usize = 1000;
 
 /// The `get_result` action service is queried with a long timeout, mirroring
 /// rmw_zenoh's `**/_action/get_result/**` heuristic (a goal may take a long
@@ -205,7 +209,29 @@ impl Node {
       &topic.dds_type_name,
       sender_hash,
     );
-    let zenoh_publisher = self.context.session().declare_publisher(key).wait()?;
+    let builder = self.context.session().declare_publisher(key);
+    let zenoh_publisher = match (qos.durability, &qos.history) {
+      // TRANSIENT_LOCAL: a cache of the history depth for late joiners (KEEP_ALL:
+      // the most a writer keeps, as the DDS backend's writers).
+      (Durability::TransientLocal, history) => {
+        let depth = match history {
+          History::KeepLast { depth } => (*depth).max(1),
+          History::KeepAll => TRANSIENT_LOCAL_KEEP_ALL,
+        };
+        // Sequence numbers (sample miss detection, no heartbeat) order the
+        // cached samples; without them the cache needs the session's
+        // `timestamping` setting, which a user's ZENOH_SESSION_CONFIG_URI may
+        // not enable.
+        ZenohPub::Cached(
+          builder
+            .cache(CacheConfig::default().max_samples(depth))
+            .sample_miss_detection(MissDetectionConfig::default())
+            .publisher_detection()
+            .wait()?,
+        )
+      }
+      _ => ZenohPub::Plain(builder.wait()?),
+    };
 
     let entity_id = self.next_entity_id.fetch_add(1, Ordering::Relaxed);
     let liveliness_key = self.entity_liveliness_key(

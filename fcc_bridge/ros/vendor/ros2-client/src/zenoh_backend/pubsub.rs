@@ -23,6 +23,8 @@ use zenoh::{
   sample::Sample,
 };
 
+use zenoh_ext::AdvancedPublisher;
+
 use super::{attachment::AttachmentData, cdr, node::Node};
 use crate::{
   error::{ReadError, ReadResult, WriteResult, write_middleware, write_serialization},
@@ -38,9 +40,20 @@ fn now_nanos() -> i64 {
     .unwrap_or(0)
 }
 
+/// The Zenoh publisher under a ROS 2 publisher: a plain one, or, for
+/// TRANSIENT_LOCAL durability, an `AdvancedPublisher` that keeps the last
+/// `depth` samples in a cache and announces itself (publisher detection), so
+/// that a late-joining subscription with history (rmw_zenoh's TRANSIENT_LOCAL
+/// subscriber: an `AdvancedSubscriber` detecting late publishers) gets them —
+/// what rmw_zenoh does for TRANSIENT_LOCAL publishers.
+pub(crate) enum ZenohPub {
+  Plain(ZenohPublisher<'static>),
+  Cached(AdvancedPublisher<'static>),
+}
+
 /// A ROS 2 publisher over Zenoh.
 pub struct Publisher<M> {
-  zenoh_publisher: ZenohPublisher<'static>,
+  zenoh_publisher: ZenohPub,
   seq: AtomicI64,
   source_gid: [u8; 16],
   // Kept alive so the entity stays discoverable; dropped => token undeclared.
@@ -54,7 +67,7 @@ pub struct Publisher<M> {
 
 impl<M: Serialize> Publisher<M> {
   pub(crate) fn new(
-    zenoh_publisher: ZenohPublisher<'static>,
+    zenoh_publisher: ZenohPub,
     source_gid: [u8; 16],
     liveliness_token: Option<LivelinessToken>,
     topic_fqn: String,
@@ -88,12 +101,11 @@ impl<M: Serialize> Publisher<M> {
       Ok(encoded) => encoded,
       Err(e) => return Err(write_serialization(e.to_string(), msg)),
     };
-    self
-      .zenoh_publisher
-      .put(payload)
-      .attachment(attachment)
-      .await
-      .map_err(|e| write_middleware(e.to_string(), msg))
+    let sent = match &self.zenoh_publisher {
+      ZenohPub::Plain(p) => p.put(payload).attachment(attachment).await,
+      ZenohPub::Cached(p) => p.put(payload).attachment(attachment).await,
+    };
+    sent.map_err(|e| write_middleware(e.to_string(), msg))
   }
 
   /// Publish a message (blocking).
@@ -102,12 +114,11 @@ impl<M: Serialize> Publisher<M> {
       Ok(encoded) => encoded,
       Err(e) => return Err(write_serialization(e.to_string(), msg)),
     };
-    self
-      .zenoh_publisher
-      .put(payload)
-      .attachment(attachment)
-      .wait()
-      .map_err(|e| write_middleware(e.to_string(), msg))
+    let sent = match &self.zenoh_publisher {
+      ZenohPub::Plain(p) => p.put(payload).attachment(attachment).wait(),
+      ZenohPub::Cached(p) => p.put(payload).attachment(attachment).wait(),
+    };
+    sent.map_err(|e| write_middleware(e.to_string(), msg))
   }
 
   /// This publisher's source [`Gid`].
