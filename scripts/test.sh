@@ -67,11 +67,13 @@ scripts/security-setup.sh
 # one-off init), records a 16 s SITL flight on the host, replays it through the core in QEMU
 # (Cortex-M4, mps2-an386), requires bit-identical motor commands, and prints instructions per
 # 500 Hz step and the share of the 240,000-cycle budget (QEMU counts instructions: the figures do
-# not depend on the host's load). It is ~370 s of CPU with no deadline: it runs beside every
-# step below at nice 19, on the CPU they leave idle (the end-to-end steps wait on real-time
-# flights most of the time), and is waited for at the end; first in the test command it held
-# both cores for ~235 s before the workspace build could start. tests/tests/mcu_qemu.rs (the same
-# script for a plain `cargo test`) is skipped in the workspace tests below for that reason.
+# not depend on the host's load). It is ~370 s of CPU with no deadline: it runs at nice 19 beside
+# the builds and the workspace tests, on the CPU they leave idle (the release build's serial
+# stretches: one big crate or a link at a time), and is waited for before the end-to-end steps
+# (first in the test command it held both cores for ~235 s before the workspace build could
+# start; running on beside end-to-end phase 1 it paused the mission node's setpoints past the
+# MCU's 0.3 s TTL once in a CI rehearsal, robust_stack kill-mission). tests/tests/mcu_qemu.rs
+# (the same script for a plain `cargo test`) is skipped in the workspace tests for that reason.
 mark "MCU toolchain"
 MCU_INSTALL_ONLY=1 MCU_WITH_QEMU=1 scripts/build-mcu.sh
 bg_start test-mcu nice -n 19 scripts/test-mcu.sh
@@ -154,6 +156,9 @@ run cargo test --offline --locked --manifest-path fcc_firmware/board/Cargo.toml 
 # Measured alone on this machine (wall s / CPU s): run_stack 85/55, robust_stack 118/59,
 # flood_uplink 12/11, command_safety 26/11, heading 47/22, slow_link 46/14, keystore 8/3,
 # secure_stack 64/35, churn 75/14, soak (3.5 min) 211/58, four_uav ~40/80, the two waiting cargo tests ~150.
+# The MCU step (above) ends here: nothing timing-sensitive runs beside it.
+mark "MCU (its wait, if it is still running)"
+bg_wait test-mcu
 mark "e2e phase 1 (two lanes beside the soak)"
 # --- lane 3: leaks (issue 14): the churn test beside the soak (started above) ----------------------
 # - participant churn: 40 cycles of 20 Cyclone DDS participants joining and leaving the bridge,
@@ -249,8 +254,6 @@ tests/security/secure_stack.sh
 bg_wait ros2-setup
 mark "ros2 peer"
 tests/ros2/run_ros2_peer.sh
-mark "MCU (its wait, if it is still running)"
-bg_wait test-mcu
 mark "end"
 echo "=== test.sh: wall time per step (s)"
 for ((i = 0; i + 1 < ${#marks[@]}; i++)); do
