@@ -108,7 +108,8 @@ start_relay
   > "$tmp/router_b.log" 2>&1 &
 router_b=$!
 wait_port $port_b
-"$py" "$here/fault_peer.py" --connect "tcp/127.0.0.1:$port_b" --state-file "$tmp/state" \
+# Hang guard (exit 124: the peer's check fails), far beyond the test's ~70 s.
+timeout -k 5 400 "$py" "$here/fault_peer.py" --connect "tcp/127.0.0.1:$port_b" --state-file "$tmp/state" \
   --until-file "$tmp/done" --events "$tmp/events" --csv-dir "$tmp" --missions-dir "$cfg/missions" \
   > "$tmp/peer.log" 2>&1 &
 peer=$!

@@ -34,11 +34,13 @@ wait_port() {
 
 echo "=== 1. four vehicles, two sites, routers linked; the ground station at site B (speed $speed)"
 t0=$(date +%s.%N)
-"$bin/fcc-launch" "$root/launch_configs/zenoh_fleet.yaml" BIN:="$bin" out:="$tmp" speed:="$speed" \
+# Every long-running step has a hang guard (timeout: exit 124, the step fails with its log),
+# far beyond its ~75 s: a hang must fail the test command, not stall it.
+timeout -k 5 400 "$bin/fcc-launch" "$root/launch_configs/zenoh_fleet.yaml" BIN:="$bin" out:="$tmp" speed:="$speed" \
   > "$tmp/launch.log" 2>&1 &
 launch=$!
 wait_port 7448
-"$py" "$here/fleet_peer.py" --connect tcp/127.0.0.1:7448 --until-file "$tmp/done" --csv-dir "$tmp" \
+timeout -k 5 260 "$py" "$here/fleet_peer.py" --connect tcp/127.0.0.1:7448 --timeout 200 --until-file "$tmp/done" --csv-dir "$tmp" \
   --scenarios-dir "$root/launch_configs/scenarios" > "$tmp/peer.log" 2>&1 &
 peer=$!
 set +e
@@ -79,7 +81,7 @@ RMW_IMPLEMENTATION=rmw_zenoh_cpp \
 ZENOH_CONFIG_OVERRIDE='mode="client";connect/endpoints=["tcp/127.0.0.1:7457"];scouting/multicast/enabled=false' \
   "$bin/fcc-bridge" --device "$tmp/s1.tty" --ros-args -r __ns:=/uav1 > "$tmp/b1.log" 2>&1 &
 set +e
-"$py" "$here/fleet_peer.py" --connect tcp/127.0.0.1:7458 --control-connect tcp/127.0.0.1:7457 \
+timeout -k 5 90 "$py" "$here/fleet_peer.py" --connect tcp/127.0.0.1:7458 --control-connect tcp/127.0.0.1:7457 \
   --expect-silence 1 --listen-s 6
 src=$?
 set -e

@@ -26,6 +26,7 @@
 Run only inside a loopback-only network namespace (../shared/tools/netns-run).
 """
 import argparse
+import faulthandler
 import math
 import os
 import re
@@ -225,11 +226,12 @@ def check_vehicle(c, a, fleet, v, logs, homes):
 
 def observe(a):
     c = Checks()
+    t0 = time.monotonic()
+    log = lambda s: print(f"[peer {time.monotonic() - t0:5.1f} s] {s}", flush=True)  # noqa: E731
     peer = zr.RosPeer(connect=a.connect, node="ground_station")
     fleet = Fleet(peer, a.vehicles)
     subscribe_all(peer, fleet)
-    t0 = time.monotonic()
-    log = lambda s: print(f"[peer {time.monotonic() - t0:5.1f} s] {s}", flush=True)  # noqa: E731
+    log(f"connected to {a.connect}, subscribed to every vehicle's topics")
     flown = fly_waypoints(peer, c, a.fly, log)
     while not os.path.exists(a.until_file) and time.monotonic() - t0 < a.timeout:
         time.sleep(0.2)
@@ -288,6 +290,9 @@ def main():
     ap.add_argument("--control-connect", default="tcp/127.0.0.1:7447")
     ap.add_argument("--listen-s", type=float, default=6.0)
     a = ap.parse_args()
+    # A hang (none is expected: every wait below has its timeout) prints every thread's stack
+    # and exits 1, so the test says where it stuck instead of stalling the test command.
+    faulthandler.dump_traceback_later(a.timeout + 30, exit=True)
     return silence(a) if a.expect_silence else observe(a)
 
 

@@ -62,7 +62,7 @@ import sys
 s = make_reader(open(sys.argv[1], 'rb')).get_summary().statistics
 print((s.message_end_time - s.message_start_time) / 1e9)" "$tmp/square.mcap")
   secs=$(awk -v s="$span" 'BEGIN{printf "%.0f", s / 4 + 8}')
-  PYTHONPATH="$here${PYTHONPATH:+:$PYTHONPATH}" "$py" "$here/replay_sub.py" "$tmp/square.mcap" /fcc/state/odom "$secs" \
+  PYTHONPATH="$here${PYTHONPATH:+:$PYTHONPATH}" timeout -k 5 $((secs + 120)) "$py" "$here/replay_sub.py" "$tmp/square.mcap" /fcc/state/odom "$secs" \
     --prefix /replay --late-transient /tf_static --ready-file "$tmp/sub_ready" > "$tmp/sub.log" 2>&1 &
   sub=$!
   for _ in $(seq 200); do [ -e "$tmp/sub_ready" ] && break; sleep 0.05; done

@@ -64,6 +64,8 @@ MSG_DIR = Path(__file__).resolve().parents[2] / "msg" / "msg"
 ACTION_DIR = MSG_DIR.parent / "action"
 OUR_PACKAGE = "fcc_msgs"
 GID_SIZE = 16
+# Capacity of the channel a graph query's replies go through (RosPeer.graph).
+GRAPH_REPLIES_MAX = 1 << 16
 ATTACHMENT = struct.Struct("<qqB")  # sequence, source timestamp, GID length; then the GID
 
 # ------------------------------------------------------------------------------------ types --
@@ -511,7 +513,13 @@ class RosPeer:
     def graph(self, timeout_s: float = 2.0) -> list[Entity]:
         """The alive tokens of this domain (what `ros2 node list` / `topic list` read)."""
         entities = []
+        # The replies go through a channel far larger than any graph: with a liveliness
+        # subscriber on the session (watch_graph, history) the session answers from its own
+        # token cache, in this thread, before get() returns — and the default channel (256)
+        # then blocks this thread on the 257th token forever (a fleet of four vehicles has
+        # ~300 tokens: fleet_peer.py hung in CI-like runs).
         for reply in self.session.liveliness().get(f"{ADMIN_SPACE}/{self.domain}/**",
+                                                   zenoh.handlers.FifoChannel(GRAPH_REPLIES_MAX),
                                                    timeout=timeout_s):
             if reply.ok is not None:
                 entity = parse_liveliness(str(reply.ok.key_expr))

@@ -14,7 +14,8 @@
 //! | `rig` | paper B's rig at 0.3–10 m, −10…40 °C | fused height RMS ≤ 3 cm, max ≤ 10 cm |
 //!
 //! Every flying family also checks: no crash or tip-over, no unplanned ground contact, no
-//! flyaway, touchdown ≤ 0.5 m/s down, ≤ 0.3 m/s horizontal, ≤ 5° tilt, and no time truly
+//! flyaway, one touchdown per landing (no hop off the ground), touchdown ≤ 0.5 m/s down,
+//! ≤ 0.3 m/s horizontal, ≤ 5° tilt, and no time truly
 //! airborne with the attitude loops off; and measures how long LAND's touchdown gate waited
 //! for a lull (`touchdown_gate_wait_s`) and whether its timeout committed the touchdown
 //! (`touchdown_gate_forced`: its last chance, or GPS lost).
@@ -105,6 +106,14 @@ pub const OPEN_CHECKS: [(&str, &[&str]); 2] = [
     ("gps_loss", &["touchdown_horiz_mps", "touchdown_tilt_deg"]),
 ];
 
+/// Checks of every flying family printed with their failures but not asserted yet:
+/// `touchdowns`, one touchdown per landing. Added on 2026-12-02 (it had not been checked):
+/// 28 of the 576 flights of seed set 1000 touched down twice — the touchdown's own jolt read
+/// as a gust by the touchdown gate, which climbed back to its hold height; the gate now feels
+/// the ground (`fcc_firmware::touchdown_gate::TouchdownGate::feel_ground`) and 6 remain, a
+/// gust's abort 3–4 cm (estimated) above a ground the gear already touches.
+pub const OPEN_IN_EVERY_FAMILY: [&str; 1] = ["touchdowns"];
+
 /// The family named `name` (one of [`FAMILIES`]).
 pub fn family(name: &str) -> Option<&'static str> {
     FAMILIES.iter().copied().find(|f| *f == name)
@@ -112,9 +121,10 @@ pub fn family(name: &str) -> Option<&'static str> {
 
 /// Is `check` of a flight of `family` one the vehicle does not meet yet (not asserted)?
 pub fn is_open(family: &str, check: &str) -> bool {
-    OPEN_CHECKS
-        .iter()
-        .any(|(f, checks)| *f == family && checks.contains(&check))
+    OPEN_IN_EVERY_FAMILY.contains(&check)
+        || OPEN_CHECKS
+            .iter()
+            .any(|(f, checks)| *f == family && checks.contains(&check))
 }
 
 fn wind_yaml(speed: f64, dir: f64, w20: f64) -> String {
@@ -318,6 +328,9 @@ fn score_safety(o: &mut Outcome, log: &FlightLog, t: &TruthReport, still_armed: 
             figure(o, "touchdown_horiz_mps", w[1], Some(0.3));
             figure(o, "touchdown_tilt_deg", w[2], Some(5.0));
             let planned = || t.contacts.iter().filter(|c| c.planned);
+            // A landing touches down once: a second planned contact is a hop (the gear
+            // touched, the vehicle climbed off the ground again and came down).
+            figure(o, "touchdowns", planned().count() as f64, Some(1.0));
             let wait_s = planned().map(|c| c.gate_wait_s).fold(0.0, f64::max);
             figure(o, "touchdown_gate_wait_s", wait_s, None);
             let forced = planned().any(|c| c.gate_forced);
