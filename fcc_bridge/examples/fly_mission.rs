@@ -12,8 +12,8 @@ use fcc_mission::{Request, WaypointFollower};
 use fcc_msgs::ros::*;
 use fcc_ros::frames::ned_to_enu;
 use futures::{FutureExt, StreamExt};
-use ros2_client::qos::{History, WhenFull};
 use ros2_client::dds::{Node, Publisher, Subscription};
+use ros2_client::qos::{History, WhenFull};
 use ros2_client::{Name, NodeName, NodeOptions, QosProfile};
 use std::time::{Duration, Instant};
 

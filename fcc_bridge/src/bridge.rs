@@ -11,13 +11,13 @@ use fcc_msgs as link;
 use fcc_msgs::ros::*;
 use fcc_ros::now_ns;
 use fcc_ros::params;
+use fcc_ros::rmw::{Pub, Rmw, RosContext, RosNode, Sub};
 use fcc_ros::startup::{self, Step};
 use fcc_ros::topics::{self, Topic};
 use futures::StreamExt;
+use ros2_client::dds::Context;
 use ros2_client::parameters::ParameterValue;
 use ros2_client::qos::{Durability, History, WhenFull};
-use fcc_ros::rmw::{Pub, Rmw, RosContext, RosNode, Sub};
-use ros2_client::dds::Context;
 use ros2_client::{Name, NodeName, NodeOptions, QosProfile};
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
@@ -321,8 +321,7 @@ fn dds_reader<T: RosMsg>(
             rustdds::TopicKind::NoKey,
         )
         .map_err(ros_err)?;
-    node.create_subscription::<T>(&topic, None)
-        .map_err(ros_err)
+    node.create_subscription::<T>(&topic, None).map_err(ros_err)
 }
 
 /// Each message of `stream` (an inbound topic) to `tx`, cut to its bounds; read errors logged
@@ -695,11 +694,14 @@ fn setup_dds(opts: &Options, step: &Step) -> Result<Dds, BridgeError> {
             spinner = Some(spawn_spinner(n)?);
             // With security on, every refusal is a WARN (hence /rosout) and counted for
             // /diagnostics.
-            security = opts.enclave_dir.as_ref().and_then(|_| {
-                fcc_ros::security_events::watch(n, |line| tracing::warn!("{line}"))
-            });
+            security = opts
+                .enclave_dir
+                .as_ref()
+                .and_then(|_| fcc_ros::security_events::watch(n, |line| tracing::warn!("{line}")));
         }
-        RosNode::Zenoh(_) => node.spin_parameters(stop_params.clone()).map_err(BridgeError::Ros)?,
+        RosNode::Zenoh(_) => node
+            .spin_parameters(stop_params.clone())
+            .map_err(BridgeError::Ros)?,
     }
     shared.live.store(true, Ordering::SeqCst);
     spawn_rosout(&node, opts)?;
@@ -815,7 +817,9 @@ fn node_options(opts: &Options, shared: &Arc<ParamShared>) -> NodeOptions {
 
 /// The spinner serves discovery, /clock and the parameter services. It runs on its own thread
 /// because the parameter validator blocks while the MCU acknowledges a set.
-fn spawn_spinner(node: &mut ros2_client::dds::Node) -> Result<std::thread::JoinHandle<()>, BridgeError> {
+fn spawn_spinner(
+    node: &mut ros2_client::dds::Node,
+) -> Result<std::thread::JoinHandle<()>, BridgeError> {
     let spinner = node.spinner().map_err(ros_err)?;
     std::thread::Builder::new()
         .name("ros-spinner".into())

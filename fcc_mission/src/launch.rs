@@ -209,9 +209,15 @@ pub fn apply_rmw(cfg: &mut Config, rmw: &str, zenoh: bool, start_router: bool) -
             set += 1;
         }
     }
-    notes.push(format!("RMW_IMPLEMENTATION={rmw} for {set} of {} processes", cfg.processes.len()));
+    notes.push(format!(
+        "RMW_IMPLEMENTATION={rmw} for {set} of {} processes",
+        cfg.processes.len()
+    ));
     let is_router = |p: &Proc| {
-        p.cmd.first().and_then(|c| c.rsplit('/').next()).is_some_and(|c| ROUTERS.contains(&c))
+        p.cmd
+            .first()
+            .and_then(|c| c.rsplit('/').next())
+            .is_some_and(|c| ROUTERS.contains(&c))
     };
     if zenoh && start_router && !cfg.processes.iter().any(is_router) {
         cfg.processes.insert(
@@ -375,14 +381,20 @@ mod tests {
         let notes = apply_rmw(&mut c, "rmw_fastrtps_cpp", false, true);
         assert_eq!(c.processes.len(), 3);
         assert_eq!(c.processes[0].env["RMW_IMPLEMENTATION"], "rmw_fastrtps_cpp");
-        assert_eq!(c.processes[1].env["RMW_IMPLEMENTATION"], "rmw_cyclonedds_cpp", "a process's own env wins");
+        assert_eq!(
+            c.processes[1].env["RMW_IMPLEMENTATION"], "rmw_cyclonedds_cpp",
+            "a process's own env wins"
+        );
         assert!(notes[0].contains("2 of 3"), "{notes:?}");
         // Zenoh: a router first, not main, no group, with the variable too.
         let mut c = cfg(text);
         let notes = apply_rmw(&mut c, "rmw_zenoh_cpp", true, true);
         assert_eq!(c.processes.len(), 4);
         let r = &c.processes[0];
-        assert_eq!((r.name.as_str(), r.main, r.group.is_none()), (ROUTER_PROC, false, true));
+        assert_eq!(
+            (r.name.as_str(), r.main, r.group.is_none()),
+            (ROUTER_PROC, false, true)
+        );
         assert_eq!(r.cmd, vec!["${BIN}/fcc-zenoh-router".to_string()]);
         assert_eq!(c.processes[3].env["RMW_IMPLEMENTATION"], "rmw_zenoh_cpp");
         assert_eq!(notes.len(), 2, "{notes:?}");

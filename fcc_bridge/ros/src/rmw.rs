@@ -93,7 +93,9 @@ impl Rmw {
 /// ros2-client's Zenoh publishers use) panic on a current-thread runtime.
 pub fn runtime(rmw: Rmw) -> std::io::Result<tokio::runtime::Runtime> {
     match rmw {
-        Rmw::Dds => tokio::runtime::Builder::new_current_thread().enable_all().build(),
+        Rmw::Dds => tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build(),
         Rmw::Zenoh => tokio::runtime::Builder::new_multi_thread()
             .worker_threads(1)
             .enable_all()
@@ -157,10 +159,18 @@ fn parse_name(name: &str) -> Result<Name, String> {
 
 impl RosContext {
     /// A node `namespace/name` with these options (no spinner started).
-    pub fn new_node(&self, namespace: &str, name: &str, opts: NodeOptions) -> Result<RosNode, String> {
+    pub fn new_node(
+        &self,
+        namespace: &str,
+        name: &str,
+        opts: NodeOptions,
+    ) -> Result<RosNode, String> {
         let n = node_name(namespace, name)?;
         match self {
-            RosContext::Dds(c) => c.new_node(n, opts).map(RosNode::Dds).map_err(|e| format!("node: {e:?}")),
+            RosContext::Dds(c) => c
+                .new_node(n, opts)
+                .map(RosNode::Dds)
+                .map_err(|e| format!("node: {e:?}")),
             RosContext::Zenoh(c) => c
                 .new_node(n, opts)
                 .map(|n| RosNode::Zenoh(Arc::new(n)))
@@ -192,13 +202,21 @@ impl RosNode {
     }
 
     /// Publisher with a topic table entry's QoS.
-    pub fn publisher_info<T: RosMsg>(&mut self, name: &str, qos: QosInfo) -> Result<Pub<T>, String> {
+    pub fn publisher_info<T: RosMsg>(
+        &mut self,
+        name: &str,
+        qos: QosInfo,
+    ) -> Result<Pub<T>, String> {
         self.publisher(name, &qos.publisher_profile())
     }
 
     /// Subscription on a ROS name with `qos` (on DDS, ros2-client's reader; the bridge builds its
     /// own bounded DDS readers and uses this on Zenoh only).
-    pub fn subscription<T: RosMsg>(&mut self, name: &str, qos: &QosProfile) -> Result<Sub<T>, String> {
+    pub fn subscription<T: RosMsg>(
+        &mut self,
+        name: &str,
+        qos: &QosProfile,
+    ) -> Result<Sub<T>, String> {
         match self {
             RosNode::Dds(n) => crate::ros_node::subscription(n, name, qos).map(Sub::Dds),
             RosNode::Zenoh(n) => {
@@ -223,12 +241,18 @@ impl RosNode {
         let fail = |e| format!("publisher {name}: {e:?}");
         match self {
             RosNode::Dds(node) => {
-                let topic = node.create_topic(&n, type_name, qos).map_err(|e| format!("topic {name}: {e:?}"))?;
-                node.create_publisher::<RawCdr>(&topic, None).map(Pub::Dds).map_err(fail)
+                let topic = node
+                    .create_topic(&n, type_name, qos)
+                    .map_err(|e| format!("topic {name}: {e:?}"))?;
+                node.create_publisher::<RawCdr>(&topic, None)
+                    .map(Pub::Dds)
+                    .map_err(fail)
             }
             RosNode::Zenoh(node) => {
                 let topic = node.create_topic(&n, type_name, qos);
-                node.create_publisher::<RawCdr>(&topic, None).map(Pub::Zenoh).map_err(fail)
+                node.create_publisher::<RawCdr>(&topic, None)
+                    .map(Pub::Zenoh)
+                    .map_err(fail)
             }
         }
     }
@@ -297,7 +321,9 @@ impl RosNode {
         &self,
         stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
     ) -> Result<(), String> {
-        let RosNode::Zenoh(n) = self else { return Ok(()) };
+        let RosNode::Zenoh(n) = self else {
+            return Ok(());
+        };
         if n.parameter_server().is_none() {
             return Ok(());
         }
@@ -366,8 +392,16 @@ impl<T: ros2_client::Message + 'static> Sub<T> {
     /// The next message (waits); a message that could not be read is returned as text.
     pub async fn take(&self) -> Result<T, String> {
         match self {
-            Sub::Dds(s) => s.async_take().await.map(|(m, _)| m).map_err(|e| format!("{e:?}")),
-            Sub::Zenoh(s) => s.async_take().await.map(|(m, _)| m).map_err(|e| format!("{e:?}")),
+            Sub::Dds(s) => s
+                .async_take()
+                .await
+                .map(|(m, _)| m)
+                .map_err(|e| format!("{e:?}")),
+            Sub::Zenoh(s) => s
+                .async_take()
+                .await
+                .map(|(m, _)| m)
+                .map_err(|e| format!("{e:?}")),
         }
     }
 
@@ -379,8 +413,14 @@ impl<T: ros2_client::Message + 'static> Sub<T> {
         use futures::StreamExt;
         let text = |e| format!("{e:?}");
         match self {
-            Sub::Dds(s) => s.async_stream().map(move |r| r.map(|(m, _)| m).map_err(text)).boxed(),
-            Sub::Zenoh(s) => s.async_stream().map(move |r| r.map(|(m, _)| m).map_err(text)).boxed(),
+            Sub::Dds(s) => s
+                .async_stream()
+                .map(move |r| r.map(|(m, _)| m).map_err(text))
+                .boxed(),
+            Sub::Zenoh(s) => s
+                .async_stream()
+                .map(move |r| r.map(|(m, _)| m).map_err(text))
+                .boxed(),
         }
     }
 }
@@ -395,7 +435,15 @@ impl Rosout {
     /// One record: ROS time `stamp_ns`, `logger` (`ns.node`), the source file and line. On
     /// Zenoh the record carries the node's base name and the current time (ros2-client's
     /// `Logger`).
-    pub fn log(&self, stamp_ns: i64, level: LogLevel, logger: &str, msg: &str, file: &str, line: u32) {
+    pub fn log(
+        &self,
+        stamp_ns: i64,
+        level: LogLevel,
+        logger: &str,
+        msg: &str,
+        file: &str,
+        line: u32,
+    ) {
         match self {
             Rosout::Dds(h) => {
                 use dds::RosoutRaw;
@@ -425,8 +473,14 @@ where
     /// The next request (waits).
     pub async fn receive(&self) -> Result<(ros2_client::service::RmwRequestId, Req), String> {
         match self {
-            Srv::Dds(s) => s.async_receive_request().await.map_err(|e| format!("{e:?}")),
-            Srv::Zenoh(s) => s.async_receive_request().await.map_err(|e| format!("{e:?}")),
+            Srv::Dds(s) => s
+                .async_receive_request()
+                .await
+                .map_err(|e| format!("{e:?}")),
+            Srv::Zenoh(s) => s
+                .async_receive_request()
+                .await
+                .map_err(|e| format!("{e:?}")),
         }
     }
 
@@ -451,6 +505,9 @@ mod tests {
             assert_eq!(Rmw::from_env_value(Some(d)), Ok(Rmw::Dds));
         }
         let e = Rmw::from_env_value(Some("rmw_zenoh")).unwrap_err();
-        assert!(e.contains("RMW_IMPLEMENTATION=rmw_zenoh: unknown") && e.contains("rmw_zenoh_cpp"), "{e}");
+        assert!(
+            e.contains("RMW_IMPLEMENTATION=rmw_zenoh: unknown") && e.contains("rmw_zenoh_cpp"),
+            "{e}"
+        );
     }
 }

@@ -6,8 +6,8 @@
 use crate::params::{self, RosArgs};
 use crate::security::{Decision, SecurityEnv};
 use fcc_msgs::ros::{Clock, RosMsg};
-use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::dds::{Context, Node, Publisher, Subscription};
+use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{Name, NodeName, NodeOptions, QosProfile};
 use std::net::Ipv4Addr;
 use std::path::PathBuf;

@@ -3,8 +3,8 @@
 //! (`../shared/tools/netns-run cargo test -p fcc_ros`).
 
 use fcc_ros::ros_node::{self, DdsEnv};
-use ros2_client::parameters::ParameterValue;
 use ros2_client::dds::Context;
+use ros2_client::parameters::ParameterValue;
 use ros2_client::Gid;
 use rustdds::RTPSEntity;
 use std::time::{Duration, Instant};

@@ -325,7 +325,6 @@ async fn play(
     std::process::exit(0)
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -40,6 +40,7 @@ use fcc_msgs::ros::{
 };
 use fcc_ros::frames;
 use fcc_ros::params::{self, parse_bool};
+use fcc_ros::rmw::{Pub, Rmw, RosContext, RosNode, Rosout, Sub};
 use fcc_ros::ros_node::{self, DdsEnv, RosClock};
 use fcc_ros::startup;
 use fcc_ros::topics;
@@ -47,7 +48,6 @@ use futures::StreamExt;
 use ros2_client::action::GoalId;
 use ros2_client::log::LogLevel;
 use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType, ParameterValue};
-use fcc_ros::rmw::{Pub, Rmw, RosContext, RosNode, Rosout, Sub};
 use ros2_client::NodeOptions;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -319,7 +319,9 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     let live = Arc::new(AtomicBool::new(false));
     let opts = node_options(&o.params, live.clone());
     let mut node = match &ctx {
-        RosContext::Dds(c) => RosNode::Dds(ros_node::node_with(c, &o.namespace, &o.node_name, opts)?),
+        RosContext::Dds(c) => {
+            RosNode::Dds(ros_node::node_with(c, &o.namespace, &o.node_name, opts)?)
+        }
         RosContext::Zenoh(_) => {
             let n = ctx.new_node(&o.namespace, &o.node_name, opts)?;
             // The parameter thread runs as long as the process: the node exits by process exit.
@@ -329,33 +331,23 @@ fn setup_dds(o: &DdsSetup, step: &startup::Step) -> Result<Dds, String> {
     };
     live.store(true, Ordering::SeqCst); // from now on every parameter set is refused
     step.set("creating the subscriptions");
-    let odom_sub =
-        node.subscription::<Odometry>(&o.topics[0], &ros_node::best_effort_qos(1))?;
-    let status_sub =
-        node.subscription::<Status>(&o.topics[1], &ros_node::best_effort_qos(5))?;
+    let odom_sub = node.subscription::<Odometry>(&o.topics[0], &ros_node::best_effort_qos(1))?;
+    let status_sub = node.subscription::<Status>(&o.topics[1], &ros_node::best_effort_qos(5))?;
     let clock_sub = if o.use_sim_time {
-        Some(node.subscription::<Clock>(&o.topics[2],
-            &ros_node::best_effort_qos(1),
-        )?)
+        Some(node.subscription::<Clock>(&o.topics[2], &ros_node::best_effort_qos(1))?)
     } else {
         None
     };
     step.set("creating the publishers");
-    let sp_pub =
-        node.publisher::<TwistStamped>(&o.topics[3], &ros_node::reliable_qos(10))?;
-    let heading_pub = node.publisher::<QuaternionStamped>(&o.topics[7],
-        &ros_node::reliable_qos(10),
-    )?;
-    let arm_pub =
-        node.publisher::<Bool>(&o.topics[4], &ros_node::reliable_qos(10))?;
-    let mode_pub =
-        node.publisher::<StringMsg>(&o.topics[5], &ros_node::reliable_qos(10))?;
-    let status_pub =
-        node.publisher::<StringMsg>(&o.topics[6], &ros_node::reliable_qos(10))?;
+    let sp_pub = node.publisher::<TwistStamped>(&o.topics[3], &ros_node::reliable_qos(10))?;
+    let heading_pub =
+        node.publisher::<QuaternionStamped>(&o.topics[7], &ros_node::reliable_qos(10))?;
+    let arm_pub = node.publisher::<Bool>(&o.topics[4], &ros_node::reliable_qos(10))?;
+    let mode_pub = node.publisher::<StringMsg>(&o.topics[5], &ros_node::reliable_qos(10))?;
+    let status_pub = node.publisher::<StringMsg>(&o.topics[6], &ros_node::reliable_qos(10))?;
     // Latched: the reader is reliable and transient local, as the bridge's writer.
-    let home_sub = node.subscription::<NavSatFix>(&o.topics[8],
-        &topics::HOME.qos.publisher_profile(),
-    )?;
+    let home_sub =
+        node.subscription::<NavSatFix>(&o.topics[8], &topics::HOME.qos.publisher_profile())?;
     step.set("creating the action server");
     let actions = Servers::new(&mut node, &o.actions)?;
     Ok(Dds {

@@ -15,6 +15,7 @@ use fcc_msgs::ros::{
     FollowWaypointsFeedback, FollowWaypointsGoal, FollowWaypointsResult, GoToGoal, LandGoal,
     TakeoffGoal, Waypoint,
 };
+use fcc_ros::rmw::RosNode;
 use ros2_client::action::{
     ActionServer, ActionServerQosPolicies, GetResultResponse, GoalId, GoalInfo, GoalStatusEnum,
 };
@@ -22,9 +23,8 @@ use ros2_client::action_msgs::{
     CancelGoalResponse, CancelGoalResponseEnum, GoalStatus, GoalStatusArray,
 };
 use ros2_client::builtin_interfaces::Time as RosTime;
-use ros2_client::qos::{Durability, History};
-use fcc_ros::rmw::RosNode;
 use ros2_client::dds::ServiceMapping;
+use ros2_client::qos::{Durability, History};
 use ros2_client::{ActionTypeName, Name, QosProfile, RmwRequestId};
 
 /// Every action has FollowWaypoints' result and feedback (the mission executive's).
@@ -44,7 +44,11 @@ enum ActionSrv<G: ros2_client::Message + Clone> {
 impl<G: ros2_client::Message + Clone + 'static> ActionSrv<G> {
     fn receive_goal(&self) -> Option<(RmwRequestId, GoalId, G)> {
         match self {
-            ActionSrv::Dds(s) => s.receive_goal().ok().flatten().map(|(q, r)| (q, r.goal_id, r.goal)),
+            ActionSrv::Dds(s) => s
+                .receive_goal()
+                .ok()
+                .flatten()
+                .map(|(q, r)| (q, r.goal_id, r.goal)),
             ActionSrv::Zenoh(s) => s.try_receive_goal(),
         }
     }
@@ -64,7 +68,11 @@ impl<G: ros2_client::Message + Clone + 'static> ActionSrv<G> {
     }
     fn receive_cancel(&self) -> Option<(RmwRequestId, GoalInfo)> {
         match self {
-            ActionSrv::Dds(s) => s.receive_cancel_request().ok().flatten().map(|(q, r)| (q, r.goal_info)),
+            ActionSrv::Dds(s) => s
+                .receive_cancel_request()
+                .ok()
+                .flatten()
+                .map(|(q, r)| (q, r.goal_info)),
             ActionSrv::Zenoh(s) => s.try_receive_cancel().map(|(q, goal_id)| {
                 (
                     q,
@@ -86,19 +94,26 @@ impl<G: ros2_client::Message + Clone + 'static> ActionSrv<G> {
     }
     fn receive_result_request(&self) -> Option<(RmwRequestId, GoalId)> {
         match self {
-            ActionSrv::Dds(s) => s.receive_result_request().ok().flatten().map(|(q, r)| (q, r.goal_id)),
+            ActionSrv::Dds(s) => s
+                .receive_result_request()
+                .ok()
+                .flatten()
+                .map(|(q, r)| (q, r.goal_id)),
             ActionSrv::Zenoh(s) => s.try_receive_result_request(),
         }
     }
-    fn send_result(&self, req: RmwRequestId, status: GoalStatusEnum, result: FollowWaypointsResult) {
+    fn send_result(
+        &self,
+        req: RmwRequestId,
+        status: GoalStatusEnum,
+        result: FollowWaypointsResult,
+    ) {
         let _ = match self {
             ActionSrv::Dds(s) => s
                 .send_result(req, GetResultResponse { status, result })
                 .is_ok(),
             // action_msgs' status codes: the enum's values (`#[repr(i8)]`).
-            ActionSrv::Zenoh(s) => s
-                .respond_result(req, status as i8, result)
-                .is_ok(),
+            ActionSrv::Zenoh(s) => s.respond_result(req, status as i8, result).is_ok(),
         };
     }
     fn send_feedback(&self, id: GoalId, f: FollowWaypointsFeedback) {
