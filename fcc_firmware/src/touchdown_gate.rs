@@ -13,7 +13,8 @@
 //! final speed with the tilt limited to [`LEVEL_TILT_DEG`] (flight.rs). A committed descent
 //! whose demand the level limit clips (`d > LEVEL_TILT_DEG`: a gust it cannot hold without
 //! sliding) or that is pushed faster than [`ABORT_SPEED_MPS`] while still above
-//! [`ABORT_ABOVE_M`] goes back to the gate. Judging the demand, not the tilt alone, is what
+//! [`ABORT_ABOVE_M`] goes back to the gate — unless the gear meets the ground on its way
+//! back ([`REFEEL_S`]): sent back 1–3 cm up, it touches anyway, and climbing on is a hop. Judging the demand, not the tilt alone, is what
 //! keeps a commit out of a gust the controller is already leaning into (mag seed 1014 committed
 //! at 2.3° of tilt with the command at the then 4.5° limit, and slid to 0.40 m/s).
 //!
@@ -42,8 +43,9 @@
 //!   late = max(0, wait_s − PATIENCE_S) / RELAX_S
 //!   k = min(1 + wait_s/RELAX_S, RELAX_MAX) + late;   k_abort = 1 + late
 //!   k_last = 1 + (wait_s − MAX_WAIT_S) / LAST_RELAX_S
-//!   committed, not forced, c > ABORT_ABOVE, d > k_abort·LEVEL_TILT or
+//!   committed, not forced, not felt, c > ABORT_ABOVE, d > k_abort·LEVEL_TILT or
 //!       v > min(k_abort·ABORT_SPEED, ABORT_SPEED_CAP) → waiting
+//!   waiting, < REFEEL_S after that, c < IMPACT_BELOW, a contact → committed, felt
 //!   committed:  descend (final speed)
 //!   never within ARRIVED of the gate yet:  hold (the approach)
 //!   waiting:  hold c = GATE;  wait_s += dt;  calm_s += dt while d ≤ k·CALM_TILT and
@@ -125,6 +127,16 @@ pub const IMPACT_DROP_MPS: f32 = 0.07;
 /// … or fell faster than this in one step, m/s² (the estimate's step-to-step jitter in the
 /// final descent reads ≤ 6.5 m/s², the contact 25–30).
 pub const IMPACT_DECEL_MPS2: f32 = 12.0;
+/// Within [`REFEEL_S`] after a gust sent a committed descent back, only a step this sharp is
+/// the ground, m/s²: the climb back decelerates the descent at up to ≈ 7 m/s² (thrust 75 N
+/// of 43 N hover), which the low-passed drop above would read as an impact …
+pub const REFEEL_DECEL_MPS2: f32 = 20.0;
+/// … and a contact felt then commits the descent again, felt, s. The gust that sent it back
+/// 1–3 cm above the ground (estimated: the fused height's σ is ≈ 2 cm) had come too late: the
+/// gear touches within tens of milliseconds anyway, and the climb back to the gate lifted it
+/// off again — a hop and a second touchdown (`landing` seed 1020: sent back at 1 cm true,
+/// 0.25 m/s down, touched 30 ms later, hopped 17 cm).
+pub const REFEEL_S: f32 = 0.3;
 /// The time constant of that recent value, s.
 pub const IMPACT_TAU_S: f32 = 0.02;
 /// The impact is looked for below this gear clearance (estimated), m: the fused height
@@ -152,6 +164,8 @@ pub struct TouchdownGate {
     /// The committed descent felt the ground ([`TouchdownGate::feel_ground`]): no gust sends
     /// it back to the gate any more.
     felt: bool,
+    /// Time since a gust last sent the committed descent back, s (∞: none yet).
+    since_abort_s: f32,
     /// The descent rate low-passed with [`IMPACT_TAU_S`], m/s (down positive).
     descent_lp_mps: f32,
     /// Last step's descent rate, m/s (down positive).
@@ -168,6 +182,7 @@ impl TouchdownGate {
             forced: false,
             unlevel: false,
             felt: false,
+            since_abort_s: f32::INFINITY,
             descent_lp_mps: 0.0,
             descent_prev_mps: 0.0,
         }
@@ -197,6 +212,15 @@ impl TouchdownGate {
         if self.committed && clearance_m < IMPACT_BELOW_M && impact {
             self.felt = true;
         }
+        // Just sent back by a gust: a contact now is the ground met anyway (no hop).
+        if !self.committed
+            && self.since_abort_s < REFEEL_S
+            && clearance_m < IMPACT_BELOW_M
+            && step_drop_mps > REFEEL_DECEL_MPS2 * dt_s
+        {
+            self.committed = true;
+            self.felt = true;
+        }
     }
 
     /// The committed descent has touched down ([`Self::feel_ground`]).
@@ -222,7 +246,11 @@ impl TouchdownGate {
             if gust {
                 self.committed = false;
                 self.calm_s = 0.0;
+                self.since_abort_s = 0.0;
             }
+        }
+        if !self.committed {
+            self.since_abort_s += dt_s;
         }
         if self.committed {
             return GateAction::Descend;
@@ -519,6 +547,63 @@ mod tests {
         assert!(!g.felt());
         g.reset();
         assert!(!g.felt());
+    }
+
+    #[test]
+    fn a_contact_just_after_a_gust_sent_it_back_stays_down() {
+        // `landing` seed 1020: committed, a gust sends it back 3 cm (estimated) up; 30 ms
+        // later the gear meets the ground (0.29 → 0.01 m/s): it stays down, felt.
+        let sent_back = || {
+            let mut g = TouchdownGate::new();
+            assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
+            for _ in 0..50 {
+                g.feel_ground(DT, 0.04, 0.3);
+                assert_eq!(
+                    g.update(DT, 0.04, 2f32.to_radians(), 0.05),
+                    GateAction::Descend
+                );
+            }
+            g.feel_ground(DT, 0.035, 0.3);
+            assert_eq!(
+                g.update(DT, 0.035, 8f32.to_radians(), 0.05),
+                GateAction::Hold
+            );
+            g
+        };
+        let mut g = sent_back();
+        // The climb back brakes the descent at 7 m/s² for 30 ms: no contact.
+        let climb = descend_waiting(&mut g, 15, |i| 0.3 - 7.0 * DT * (i + 1) as f32);
+        assert_eq!(climb, GateAction::Hold);
+        assert!(!g.felt());
+        // Then the gear stops the rest in a few steps.
+        let contact = [0.12, 0.05, 0.01];
+        assert_eq!(
+            descend_waiting(&mut g, 3, |i| contact[i]),
+            GateAction::Descend
+        );
+        assert!(g.felt() && g.committed());
+        // Felt: no gust sends it back any more.
+        assert_eq!(run(&mut g, 0.2, 0.04, 10.0, 0.5), GateAction::Descend);
+        // The same contact REFEEL_S after the abort is a hop already: it is not taken.
+        let mut g = sent_back();
+        descend_waiting(&mut g, (REFEEL_S / DT) as usize + 1, |_| 0.3);
+        assert_eq!(descend_waiting(&mut g, 3, |i| contact[i]), GateAction::Hold);
+        assert!(!g.felt());
+    }
+
+    /// `steps` steps at 4 cm of clearance, waiting at the gate in an 8° demand, with the descent
+    /// rate `rate(i)`; the last action.
+    fn descend_waiting(
+        g: &mut TouchdownGate,
+        steps: usize,
+        rate: impl Fn(usize) -> f32,
+    ) -> GateAction {
+        let mut a = GateAction::Hold;
+        for i in 0..steps {
+            g.feel_ground(DT, 0.04, rate(i));
+            a = g.update(DT, 0.04, 8f32.to_radians(), 0.05);
+        }
+        a
     }
 
     #[test]
