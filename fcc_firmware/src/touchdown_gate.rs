@@ -500,24 +500,39 @@ mod tests {
         clearance: f32,
         rate: impl Fn(usize) -> f32,
     ) -> GateAction {
+        descend_at(g, steps, clearance, 8.0, rate)
+    }
+
+    /// The same with a demand of `demand_deg`.
+    fn descend_at(
+        g: &mut TouchdownGate,
+        steps: usize,
+        clearance: f32,
+        demand_deg: f32,
+        rate: impl Fn(usize) -> f32,
+    ) -> GateAction {
         let mut a = GateAction::Hold;
         for i in 0..steps {
             g.feel_ground(DT, clearance, rate(i));
-            a = g.update(DT, clearance, 8f32.to_radians(), 0.05);
+            a = g.update(DT, clearance, demand_deg.to_radians(), 0.05);
         }
         a
     }
 
+    /// Committed at the gate, then 0.1 s of a calm descent at `rate` (m/s) at `clearance`.
+    fn committed_descent(clearance: f32, rate: f32) -> TouchdownGate {
+        let mut g = TouchdownGate::new();
+        assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
+        assert_eq!(
+            descend_at(&mut g, 50, clearance, 2.0, |_| rate),
+            GateAction::Descend
+        );
+        g
+    }
+
     #[test]
     fn the_ground_felt_is_not_a_gust() {
-        let committed = || {
-            let mut g = TouchdownGate::new();
-            assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
-            for _ in 0..50 {
-                g.feel_ground(DT, 0.09, 0.36);
-            }
-            g
-        };
+        let committed = || committed_descent(0.09, 0.36);
         // `hover` seed 1008's contact: 0.37 → 0.32 → 0.26 m/s in two steps while the fused
         // height still reads 9 cm; the touchdown's jolt asks for 8°: it stays down.
         let mut g = committed();
@@ -554,15 +569,7 @@ mod tests {
         // `landing` seed 1020: committed, a gust sends it back 3 cm (estimated) up; 30 ms
         // later the gear meets the ground (0.29 → 0.01 m/s): it stays down, felt.
         let sent_back = || {
-            let mut g = TouchdownGate::new();
-            assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
-            for _ in 0..50 {
-                g.feel_ground(DT, 0.04, 0.3);
-                assert_eq!(
-                    g.update(DT, 0.04, 2f32.to_radians(), 0.05),
-                    GateAction::Descend
-                );
-            }
+            let mut g = committed_descent(0.04, 0.3);
             g.feel_ground(DT, 0.035, 0.3);
             assert_eq!(
                 g.update(DT, 0.035, 8f32.to_radians(), 0.05),
@@ -572,13 +579,13 @@ mod tests {
         };
         let mut g = sent_back();
         // The climb back brakes the descent at 7 m/s² for 30 ms: no contact.
-        let climb = descend_waiting(&mut g, 15, |i| 0.3 - 7.0 * DT * (i + 1) as f32);
+        let climb = descend(&mut g, 15, 0.04, |i| 0.3 - 7.0 * DT * (i + 1) as f32);
         assert_eq!(climb, GateAction::Hold);
         assert!(!g.felt());
         // Then the gear stops the rest in a few steps.
         let contact = [0.12, 0.05, 0.01];
         assert_eq!(
-            descend_waiting(&mut g, 3, |i| contact[i]),
+            descend(&mut g, 3, 0.04, |i| contact[i]),
             GateAction::Descend
         );
         assert!(g.felt() && g.committed());
@@ -586,24 +593,9 @@ mod tests {
         assert_eq!(run(&mut g, 0.2, 0.04, 10.0, 0.5), GateAction::Descend);
         // The same contact REFEEL_S after the abort is a hop already: it is not taken.
         let mut g = sent_back();
-        descend_waiting(&mut g, (REFEEL_S / DT) as usize + 1, |_| 0.3);
-        assert_eq!(descend_waiting(&mut g, 3, |i| contact[i]), GateAction::Hold);
+        descend(&mut g, (REFEEL_S / DT) as usize + 1, 0.04, |_| 0.3);
+        assert_eq!(descend(&mut g, 3, 0.04, |i| contact[i]), GateAction::Hold);
         assert!(!g.felt());
-    }
-
-    /// `steps` steps at 4 cm of clearance, waiting at the gate in an 8° demand, with the descent
-    /// rate `rate(i)`; the last action.
-    fn descend_waiting(
-        g: &mut TouchdownGate,
-        steps: usize,
-        rate: impl Fn(usize) -> f32,
-    ) -> GateAction {
-        let mut a = GateAction::Hold;
-        for i in 0..steps {
-            g.feel_ground(DT, 0.04, rate(i));
-            a = g.update(DT, 0.04, 8f32.to_radians(), 0.05);
-        }
-        a
     }
 
     #[test]
