@@ -236,11 +236,13 @@ impl SecureDiscovery {
     }
     info!("Completed setting local crypto tokens as remote tokens");
 
+    drop(plugins); // Drop plugins so that they can be moved to self
+
     // Set ourself as authenticated
+    // fcc (vendored): after the plugins' lock is released (never the DB while holding it: see
+    // `validate_remote_participant_permissions`).
     discovery_db_write(discovery_db)
       .update_authentication_status(participant_guid_prefix, AuthenticationStatus::Authenticated);
-
-    drop(plugins); // Drop plugins so that they can be moved to self
 
     Ok(Self {
       security_plugins,
@@ -2558,13 +2560,21 @@ impl SecureDiscovery {
     remote_guid_prefix: GuidPrefix,
     discovery_db: &Arc<RwLock<DiscoveryDB>>,
   ) -> SecurityResult<()> {
-    let mut sec_plugins = self.security_plugins.get_plugins();
-
     // Get PermissionsToken
+    // fcc (vendored): read from the Discovery DB *before* taking the security plugins' lock,
+    // never while holding it. The DP event loop holds the DB's read lock in
+    // `update_participant` and takes the plugins' lock inside it (a reader proxy matched there
+    // sends, and `security_encode` locks the plugins), and a thread creating an entity waits
+    // for the DB's write lock meanwhile: std's RwLock then blocks new readers, so this thread
+    // (plugins held, DB read wanted), the event loop (DB read held, plugins wanted) and the
+    // creating thread (DB write wanted) waited on each other for ever — the mission node's
+    // `I need my lock!!` in `tests/security/secure_stack.sh` at start-up.
     let permissions_token = discovery_db_read(discovery_db)
       .find_participant_proxy(remote_guid_prefix)
       .and_then(|data| data.permissions_token.clone())
       .ok_or_else(|| security_error("Could not get PermissionsToken from DiscoveryDB"))?;
+
+    let mut sec_plugins = self.security_plugins.get_plugins();
 
     // Get AuthenticatedPeerCredentialToken
     let auth_credential_token =
