@@ -126,13 +126,30 @@ if [ -n "${FCC_SECURITY_NO_FLIGHT:-}" ]; then keep; exit $rc; fi  # debugging: p
 #     through fcc-launch at speed 4, every setpoint and command of the mission node over DDS
 #     Security. A failed key exchange leaves the mission without a vehicle: it times out. The
 #     bridge's bag of it is plaintext (the recorder is on the bridge's side of DDS Security).
-t0=$SECONDS
-set +e
-ROS_SECURITY_KEYSTORE="$ks" RUST_LOG=info timeout 150 "$bin/fcc-launch" \
-  "$root/launch_configs/square_flight.yaml" BIN:="$bin" out:="$tmp/square" speed:=4 hover_s:=0 \
-  record:="$tmp/square/secure.mcap" > "$tmp/launch.log" 2>&1
-lrc=$?
-set -e
+part3() {
+  t0=$SECONDS
+  rm -rf "$tmp/square"
+  set +e
+  ROS_SECURITY_KEYSTORE="$ks" RUST_LOG=info timeout 150 "$bin/fcc-launch" \
+    "$root/launch_configs/square_flight.yaml" BIN:="$bin" out:="$tmp/square" speed:=4 hover_s:=0 \
+    record:="$tmp/square/secure.mcap" > "$tmp/launch.log" 2>&1
+  lrc=$?
+  set -e
+}
+part3
+# An open defect (README, "Security"): now and then (2 of 4 CI rehearsals on 2026-12-05, none
+# of 3 runs alone) the mission node's rustdds hangs at start-up on its security plugins' lock
+# ("I need my lock!!" every 100 ms) and the mission never starts. Only that case is retried,
+# once, and said: any other failure, or the same hang twice, fails the test.
+if [ $lrc -ne 0 ] && grep -q 'I need my lock!!' "$tmp/launch.log" \
+    && ! grep -q 'fcc-mission: mission complete' "$tmp/launch.log"; then
+  echo "RETRY part 3 (known rustdds security-lock hang of the mission node): fcc-launch exit" \
+    "$lrc after $((SECONDS - t0)) s, $(grep -c 'I need my lock!!' "$tmp/launch.log") lock" \
+    "messages; attempt 1's launch log ends:"
+  grep -v '^\s*$' "$tmp/launch.log" | grep -v 'I need my lock' | tail -15 | sed 's/^/  attempt 1: /'
+  mv "$tmp/launch.log" "$tmp/launch1.log"
+  part3
+fi
 # The bag is recorded on the bridge's side of DDS Security: plaintext, read by Foxglove's mcap
 # and rosbags (tests/mcap/check_bag.py), every message the bridge published in it.
 bagpy="${FCC_DDS_PYTHON:-$root/.venv-dds/bin/python}"

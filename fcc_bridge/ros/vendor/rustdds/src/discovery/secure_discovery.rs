@@ -2567,8 +2567,8 @@ impl SecureDiscovery {
     // sends, and `security_encode` locks the plugins), and a thread creating an entity waits
     // for the DB's write lock meanwhile: std's RwLock then blocks new readers, so this thread
     // (plugins held, DB read wanted), the event loop (DB read held, plugins wanted) and the
-    // creating thread (DB write wanted) waited on each other for ever — the mission node's
-    // `I need my lock!!` in `tests/security/secure_stack.sh` at start-up.
+    // creating thread (DB write wanted) can wait on each other for ever. (Found while looking
+    // for the mission node's start-up hang, `I need my lock!!`: not its only cause, VENDOR.md.)
     let permissions_token = discovery_db_read(discovery_db)
       .find_participant_proxy(remote_guid_prefix)
       .and_then(|data| data.permissions_token.clone())
