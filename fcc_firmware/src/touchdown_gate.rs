@@ -14,9 +14,10 @@
 //! whose demand the level limit clips (`d > LEVEL_TILT_DEG`: a gust it cannot hold without
 //! sliding) or that is pushed faster than [`ABORT_SPEED_MPS`] while still above
 //! [`ABORT_ABOVE_M`] goes back to the gate — unless the gear meets the ground on its way
-//! back ([`REFEEL_S`]): sent back 1–3 cm up, it touches anyway, and climbing on is a hop. Judging the demand, not the tilt alone, is what
-//! keeps a commit out of a gust the controller is already leaning into (mag seed 1014 committed
-//! at 2.3° of tilt with the command at the then 4.5° limit, and slid to 0.40 m/s).
+//! back ([`REFEEL_S`]): sent back 1–3 cm up, it touches anyway, and climbing on is a hop.
+//! Judging the demand, not the tilt alone, is what keeps a commit out of a gust the controller
+//! is already leaning into (mag seed 1014 committed at 2.3° of tilt with the command at the
+//! then 4.5° limit, and slid to 0.40 m/s).
 //!
 //! The longer the wait, the wider the calm thresholds (by their own value per [`RELAX_S`]), at
 //! first by no more than the factor [`RELAX_MAX`] (the widest calm demand stays below the level

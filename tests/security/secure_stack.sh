@@ -138,7 +138,7 @@ part3() {
 }
 part3
 # An open defect (README, "Security"): now and then (2 of 4 CI rehearsals on 2026-12-05, none
-# of 3 runs alone) the mission node's rustdds hangs at start-up on its security plugins' lock
+# of 4 runs alone) the mission node's rustdds hangs at start-up on its security plugins' lock
 # ("I need my lock!!" every 100 ms) and the mission never starts. Only that case is retried,
 # once, and said: any other failure, or the same hang twice, fails the test.
 if [ $lrc -ne 0 ] && grep -q 'I need my lock!!' "$tmp/launch.log" \
