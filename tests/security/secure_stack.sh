@@ -147,6 +147,8 @@ if [ $lrc -ne 0 ] && grep -q 'I need my lock!!' "$tmp/launch.log" \
     "$lrc after $((SECONDS - t0)) s, $(grep -c 'I need my lock!!' "$tmp/launch.log") lock" \
     "messages; attempt 1's launch log ends:"
   grep -v '^\s*$' "$tmp/launch.log" | grep -v 'I need my lock' | tail -15 | sed 's/^/  attempt 1: /'
+  # rustdds names the waiting thread and call site and the lock's holder (thread, call site).
+  grep 'I need my lock' "$tmp/launch.log" | head -2 | sed 's/^/  attempt 1 (first waits): /'
   mv "$tmp/launch.log" "$tmp/launch1.log"
   part3
 fi

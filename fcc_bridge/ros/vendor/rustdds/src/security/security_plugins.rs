@@ -1364,7 +1364,37 @@ impl SecurityPlugins {
 #[derive(Clone)]
 pub(crate) struct SecurityPluginsHandle {
   inner: Arc<Mutex<SecurityPlugins>>,
-  who_has_it: Arc<Mutex<Option<String>>>,
+  /// Who holds the lock now (thread name, call site of `get_plugins`), cleared when the
+  /// guard drops: a thread that waits long for the lock names the holder (fcc: the mission
+  /// node's start-up hang, VENDOR.md).
+  who_has_it: Arc<Mutex<Option<(Option<String>, &'static std::panic::Location<'static>)>>>,
+}
+
+/// The security plugins, locked; records its holder in [`SecurityPluginsHandle`] until it drops.
+pub(crate) struct SecurityPluginsGuard<'a> {
+  guard: MutexGuard<'a, SecurityPlugins>,
+  who_has_it: &'a Mutex<Option<(Option<String>, &'static std::panic::Location<'static>)>>,
+}
+
+impl std::ops::Deref for SecurityPluginsGuard<'_> {
+  type Target = SecurityPlugins;
+  fn deref(&self) -> &SecurityPlugins {
+    &self.guard
+  }
+}
+
+impl std::ops::DerefMut for SecurityPluginsGuard<'_> {
+  fn deref_mut(&mut self) -> &mut SecurityPlugins {
+    &mut self.guard
+  }
+}
+
+impl Drop for SecurityPluginsGuard<'_> {
+  fn drop(&mut self) {
+    if let Ok(mut w) = self.who_has_it.lock() {
+      *w = None;
+    }
+  }
 }
 
 impl SecurityPluginsHandle {
@@ -1375,19 +1405,27 @@ impl SecurityPluginsHandle {
     }
   }
 
-  pub(crate) fn get_plugins(&self) -> MutexGuard<'_, SecurityPlugins> {
+  #[track_caller]
+  pub(crate) fn get_plugins(&self) -> SecurityPluginsGuard<'_> {
+    let caller = std::panic::Location::caller();
     let mut count = 0;
     loop {
-      match self.try_lock() {
+      match self.inner.try_lock() {
         Ok(guard) => {
-          *self.who_has_it.lock().unwrap() = std::thread::current().name().map(|s| s.to_owned());
-          return guard;
+          *self.who_has_it.lock().unwrap() =
+            Some((std::thread::current().name().map(|s| s.to_owned()), caller));
+          return SecurityPluginsGuard {
+            guard,
+            who_has_it: &self.who_has_it,
+          };
         }
         Err(std::sync::TryLockError::WouldBlock) => {
           if count > 10 {
             error!(
-              "I need my lock!! {:?} Looks like {:?} has it.",
+              "I need my lock!! {:?} (thread {:?} at {}) Looks like {:?} has it.",
               count,
+              std::thread::current().name(),
+              caller,
               self.who_has_it.lock().unwrap()
             );
           }
@@ -1409,9 +1447,4 @@ impl fmt::Debug for SecurityPluginsHandle {
   }
 }
 
-impl std::ops::Deref for SecurityPluginsHandle {
-  type Target = Mutex<SecurityPlugins>;
-  fn deref(&self) -> &Self::Target {
-    &self.inner
-  }
-}
+
