@@ -12,7 +12,7 @@ use fcc_msgs::geodesy::{Lla, LocalNed};
 use fcc_nav::attitude::{
     accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, AttitudeEstimator, Euler,
 };
-use fcc_nav::gps_tilt::{GpsTiltAid, TiltError};
+use fcc_nav::tilt_kf::{GpsTiltKf, TiltCorrection};
 use fcc_nav::ground_altitude::{GroundAltitude, GroundAltitudeFilter, GroundAltitudeParams};
 use fcc_nav::horizontal::HorizontalEstimator;
 use fcc_nav::lowpass::LowPass2;
@@ -124,12 +124,12 @@ pub struct Navigator {
     /// manoeuvres are not mistaken for tilt (as ArduPilot's DCM does).
     gps_accel_ned_mps2: [f32; 3],
     last_gps_vel: Option<(u64, [f32; 3])>,
-    /// Roll/pitch errors from the GPS velocity's change against the inertial velocity's over
-    /// the same fix interval: the tilt's correction while GPS velocities arrive (see
+    /// Roll/pitch and their rate biases from the GPS velocity's innovation (steady-state
+    /// Kalman gains): the tilt's correction while GPS velocities arrive (see
     /// [`Self::gps_tilt_aided`]).
-    gps_tilt: GpsTiltAid,
-    /// The correction `gps_tilt` made in the last step, if any (for replaying the estimator).
-    gps_tilt_applied: Option<TiltError>,
+    tilt_kf: GpsTiltKf,
+    /// The correction `tilt_kf` made in the last step, if any (for replaying the estimator).
+    gps_tilt_applied: Option<TiltCorrection>,
     ground: GroundAltitudeFilter,
     /// Air temperature for the sonar's speed-of-sound correction: the barometer's sensor
     /// temperature (the MS5611 sits in the airflow on the paper's board), °C.
@@ -181,7 +181,7 @@ impl Navigator {
             tilt_accel_lpf: [LowPass2::new(params.tilt_accel_lpf_hz, 500.0); 3],
             gps_accel_ned_mps2: [0.0; 3],
             last_gps_vel: None,
-            gps_tilt: GpsTiltAid::new(),
+            tilt_kf: GpsTiltKf::new(),
             gps_tilt_applied: None,
             ground: GroundAltitudeFilter::new(GroundAltitudeParams::default()),
             air_temp_c: 15.0,
@@ -204,16 +204,18 @@ impl Navigator {
         (self.att.mag_disturbed(), self.att.mag_rejects())
     }
 
-    /// Whether the next IMU step's tilt is corrected by the GPS velocity ([`GpsTiltAid`], at
+    /// Whether the next IMU step's tilt is corrected by the GPS velocity ([`GpsTiltKf`], at
     /// each fix) instead of the accelerometer's gravity direction: while GPS velocities
     /// arrive (the last one at most [`GPS_ACCEL_MAX_AGE_S`] old), the GPS is healthy and the
     /// vehicle is more than [`GPS_TILT_MIN_HEIGHT_M`] above the ground.
     ///
     /// The accelerometer compared with a GPS-differenced acceleration mixes two times (that
     /// difference lags by the latency plus half an interval, and its 0.5 s smoothing more);
-    /// the two velocity changes over one latency-aligned interval do not. Attitude bench
-    /// (`tests/benches/attitude_filter.rs`, 6 seeds each, RMS roll/pitch, offline re-run):
-    /// square 0.312/0.337° → 0.249/0.292°, manoeuvre 0.328/0.537° → 0.218/0.257°.
+    /// the inertial velocity against the GPS's at the same (latency-aligned) instant does not.
+    /// Attitude bench (`tests/benches/attitude_filter.rs`, 6 seeds each, RMS roll/pitch,
+    /// offline re-run), with the velocity *change* over one fix interval as the tilt
+    /// measurement (the aid before the Kalman gains): square 0.312/0.337° → 0.249/0.292°,
+    /// manoeuvre 0.328/0.537° → 0.218/0.257°.
     pub fn gps_tilt_aided(&self) -> bool {
         self.gps_vel_fresh() && self.state.ground.height_m > GPS_TILT_MIN_HEIGHT_M
     }
@@ -227,7 +229,7 @@ impl Navigator {
     }
 
     /// The tilt correction the GPS velocity made in the last step (see [`Self::gps_tilt_aided`]).
-    pub fn gps_tilt_applied(&self) -> Option<TiltError> {
+    pub fn gps_tilt_applied(&self) -> Option<TiltCorrection> {
         self.gps_tilt_applied
     }
 
@@ -396,7 +398,7 @@ impl Navigator {
         }
         let a_ned = linear_accel_ned_mps2(&euler, imu.accel_frd_mps2);
         if self.calibrated {
-            self.gps_tilt.step([a_ned[0], a_ned[1]], dt_s);
+            self.tilt_kf.step([a_ned[0], a_ned[1]], dt_s);
             self.horiz.update([a_ned[0], a_ned[1]], dt_s);
             self.vert.update(a_ned[2], dt_s);
         }
@@ -463,7 +465,7 @@ impl Navigator {
                 }
             }
             self.last_gps_vel = Some((now_us, g.vel_ned_mps));
-            self.gps_tilt_update(now_us, g.vel_ned_mps);
+            self.gps_tilt_update(g.vel_ned_mps);
             if let Some(home) = &self.home {
                 let ned = home.lla_to_ned(&lla);
                 let delay_steps = self.gps_delay_steps();
@@ -500,18 +502,18 @@ impl Navigator {
     }
 
     /// The GPS velocity's tilt correction ([`Self::gps_tilt_aided`]), while the GPS is healthy.
-    fn gps_tilt_update(&mut self, now_us: u64, vel_ned_mps: [f32; 3]) {
+    fn gps_tilt_update(&mut self, vel_ned_mps: [f32; 3]) {
         if !self.calibrated || !self.state.gps_ok {
-            self.gps_tilt.forget_fix();
+            self.tilt_kf.reset();
             return;
         }
         let delay_steps = self.gps_delay_steps();
         let v = [vel_ned_mps[0], vel_ned_mps[1]];
         let yaw = self.state.euler.yaw_rad;
-        if let Some(e) = self.gps_tilt.gps_velocity(now_us, v, delay_steps, yaw) {
+        if let Some(c) = self.tilt_kf.gps_velocity(v, delay_steps, yaw) {
             if self.gps_tilt_aided() {
-                self.att.correct_tilt_error(&e);
-                self.gps_tilt_applied = Some(e);
+                self.att.apply_tilt_correction(&c);
+                self.gps_tilt_applied = Some(c);
             }
         }
     }

@@ -176,7 +176,7 @@ pub struct AttitudeEstimator {
     /// step's cost.
     pub tilt_every: u8,
     /// Roll and pitch are corrected from the accelerometer's gravity direction (default true).
-    /// False while another tilt measurement corrects them ([`Self::correct_tilt_error`]): the
+    /// False while another tilt measurement corrects them ([`Self::apply_tilt_correction`]): the
     /// compensated specific force is still formed ([`Self::tilt_specific_force_frd_mps2`]),
     /// the tilt read from it (asin, atan2) is not.
     pub accel_tilt: bool,
@@ -431,13 +431,11 @@ impl AttitudeEstimator {
         self.euler()
     }
 
-    /// Correct roll and pitch by a measured error `e` (estimate minus truth, e.g. from
-    /// [`crate::gps_tilt::GpsTiltAid`]) with the filters' gains for its interval: the same
-    /// crossover as the accelerometer's correction, sampled at the measurement's rate.
-    pub fn correct_tilt_error(&mut self, e: &crate::gps_tilt::TiltError) {
-        let (r, p) = (self.roll.angle_rad(), self.pitch.angle_rad());
-        self.roll.correct(r - e.roll_rad, e.interval_s);
-        self.pitch.correct(p - e.pitch_rad, e.interval_s);
+    /// Remove a tilt error and its rate ([`crate::tilt_kf::GpsTiltKf`]) from roll and pitch
+    /// and their rate-bias estimates.
+    pub fn apply_tilt_correction(&mut self, c: &crate::tilt_kf::TiltCorrection) {
+        self.roll.nudge(-c.roll_rad, -c.roll_rate_radps);
+        self.pitch.nudge(-c.pitch_rad, -c.pitch_rate_radps);
         self.trig = None;
     }
 

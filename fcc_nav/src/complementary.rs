@@ -251,6 +251,14 @@ impl AngleCf {
         a
     }
 
+    /// Add `angle_rad` to the angle and `bias_radps` to the rate-bias estimate (a correction
+    /// computed elsewhere, e.g. by [`crate::tilt_kf`]).
+    pub fn nudge(&mut self, angle_rad: f32, bias_radps: f32) {
+        let a = self.angle_rad + angle_rad;
+        self.angle_rad = if self.wrap { wrap_pi(a) } else { a };
+        self.bias_radps += bias_radps;
+    }
+
     /// Current angle estimate \[rad].
     pub fn angle_rad(&self) -> f32 {
         self.angle_rad

@@ -7,13 +7,13 @@
 //! |---|---|---|---|
 //! | [`complementary`] | 2nd-order complementary filters (eq. 1): [`AngleCf`], [`PosVelCf`] | rate / accel, angle / position measurement | angle + rate bias, position + velocity |
 //! | [`attitude`] | roll/pitch/yaw estimation (eqs. 2–4), frame rotations | gyro \[rad/s] FRD, accel \[m/s²] FRD, mag \[µT] FRD | [`Euler`] \[rad], NED linear acceleration \[m/s²] |
-//! | [`gps_tilt`] | roll/pitch errors from the GPS velocity's change over a fix interval vs the inertial velocity's over the same (latency-aligned) interval | NED accel NE \[m/s²] per step, GPS velocity NE \[m/s] + delay steps, yaw \[rad] | roll/pitch error \[rad] |
 //! | [`horizontal`] | NE position/velocity from GPS + NED accel | accel NE \[m/s²], GPS NE \[m] + delay steps | pos NE \[m], vel NE \[m/s] |
 //! | [`vertical`] | altitude/vertical speed from baro + accel (eqs. 5–6) | accel down \[m/s²], baro altitude \[m] or pressure \[Pa] | altitude up \[m], vel down \[m/s] |
 //! | [`range_aid`] | range-aided height: the rangefinder altitude replaces the baro in the vertical filter while valid, baro offset learnt, terrain steps re-anchored | altitude estimate, baro altitude \[m], height above ground \[m] | altitude measurement \[m] |
 //! | [`observer`] | Luenberger linear-acceleration observer (eqs. 10–14) | tilt, tilt command \[rad], measured accel \[m/s²] | filtered accel \[m/s²] |
 //! | [`math`] | the `f32` elementary functions every module uses (no `f64` on the single-precision FPU) | | |
 //! | [`sysid`] | paper A's "3D curve fitting" of `a = k1·θ − k2·v`: streaming least squares ([`PlaneFit`]), and with a wind term per window by least squares (`WindPlaneFit`) or instrumental variables (`WindIvFit`, setpoints as instruments), with standard errors | tilt \[rad], vel \[m/s], accel \[m/s²] (+ instruments) | k1 \[m/s²/rad], k2 \[1/s], intervals |
+//! | [`tilt_kf`] | roll/pitch and their rate biases from the GPS velocity's innovation against the latency-aligned inertial velocity, steady-state Kalman gains | NED accel NE \[m/s²] per step, GPS velocity NE \[m/s] + delay steps, yaw \[rad] | roll/pitch corrections \[rad], \[rad/s] |
 //!
 //! # Conventions
 //!
@@ -39,7 +39,6 @@ extern crate std;
 
 pub mod attitude;
 pub mod complementary;
-pub mod gps_tilt;
 pub mod ground_altitude;
 pub mod horizontal;
 pub mod lowpass;
@@ -47,6 +46,7 @@ pub mod math;
 pub mod observer;
 pub mod range_aid;
 pub mod sysid;
+pub mod tilt_kf;
 pub mod vertical;
 
 #[cfg(test)]

@@ -26,8 +26,9 @@
 //! feeds it (same low-pass, same compensation, same magnetometer reference and gates); the
 //! bench asserts on every tick that its output equals, bit for bit, the attitude the simulator's
 //! flight core reported, so the figures are those of the estimate that flies. Above 1 m with GPS
-//! velocities arriving, the core corrects the tilt from the GPS velocity's change against the
-//! inertial one (`fcc_nav::gps_tilt`) instead of the accelerometer's gravity direction; the
+//! velocities arriving, the core corrects the tilt and its rate bias from the GPS velocity's
+//! innovation against the inertial one (`fcc_nav::tilt_kf`) instead of the accelerometer's
+//! gravity direction; the
 //! bench replays the core's flag and correction on each tick. The peers get the same GPS
 //! information in their own form: the GPS-derived acceleration removed from their
 //! accelerometer (smoothed as the core's, or unsmoothed).
@@ -52,7 +53,7 @@ use common::{best_of, capture_seeded, note, row, thousands, verdict};
 use fcc_firmware::nav::GPS_ACCEL_MAX_AGE_US;
 use fcc_firmware::params::NavParams;
 use fcc_nav::attitude::{accel_tilt_rad, mag_heading_rad, AttitudeEstimator, Euler};
-use fcc_nav::gps_tilt::TiltError;
+use fcc_nav::tilt_kf::TiltCorrection;
 use fcc_nav::lowpass::LowPass2;
 use nalgebra_034::{UnitQuaternion, Vector3};
 use std::f64::consts::PI;
@@ -81,7 +82,7 @@ struct In {
     /// The core corrected the tilt from the GPS velocity this tick (not the accelerometer).
     gps_tilt_aided: bool,
     /// The GPS velocity's tilt correction, after this tick's step.
-    gps_tilt: Option<TiltError>,
+    gps_tilt: Option<TiltCorrection>,
     /// New magnetometer sample this tick.
     mag_new: Option<[f32; 3]>,
     /// Newest magnetometer sample so far (held).
@@ -360,7 +361,7 @@ fn ours_step(est: &mut AttitudeEstimator, x: &In) -> Euler {
     est.accel_tilt = !x.gps_tilt_aided;
     let e = est.update_compensated(x.gyro, x.accel_lpf, x.comp_ned, x.mag_new, x.dt_s);
     if let Some(c) = &x.gps_tilt {
-        est.correct_tilt_error(c);
+        est.apply_tilt_correction(c);
     }
     e
 }

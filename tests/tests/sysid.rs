@@ -16,7 +16,7 @@
 //! k2 ±0.06 1/s).
 //!
 //! The fit is on the *estimated* tilt: when the roll/pitch estimate became GPS-velocity aided
-//! (`fcc_nav::gps_tilt`) this fit moved from 9.17 (then inside its interval) to 10.19 ± 0.80,
+//! (the aid before `fcc_nav::tilt_kf`) this fit moved from 9.17 (then inside its interval) to 10.19 ± 0.80,
 //! and the default k1 was refitted to 10.14 (the fit with it in the loop: 10.16 ± 0.75).
 
 mod common;

@@ -24,7 +24,7 @@ use fcc_firmware::params::Params;
 use fcc_firmware::scheduler::TICK_US;
 use fcc_firmware::sensors::SensorInputs;
 use fcc_msgs::StreamRates;
-use fcc_nav::gps_tilt::TiltError;
+use fcc_nav::tilt_kf::TiltCorrection;
 use fcc_sim::linux::LinuxSide;
 use fcc_sim::scenario::Scenario;
 use fcc_sim::sim::Sim;
@@ -64,7 +64,7 @@ pub struct Tick {
     pub gps_tilt_aided_next: bool,
     /// The tilt correction the GPS velocity made in this tick, after the attitude step
     /// (`Navigator::gps_tilt_applied`).
-    pub gps_tilt: Option<TiltError>,
+    pub gps_tilt: Option<TiltCorrection>,
 }
 
 pub struct Capture {
