@@ -11,7 +11,8 @@
 //! `t` is anchored (`t = ĥ − h_agl`, with ĥ the current altitude estimate) when the aid starts,
 //! whenever the ground filter re-acquires after a **terrain step**, and when the range altitude
 //! stays more than [`SUSPECT_M`] from the estimate for [`REANCHOR_S`] (an edge the filter is
-//! still re-acquiring, a slope; meanwhile the corrected barometer stands in): so over a step the
+//! still re-acquiring, a slope; meanwhile the corrected barometer stands in, and the vertical
+//! filter takes it at the barometer's crossover, [`RangeAid::range_measured`]): so over a step the
 //! vehicle keeps its altitude (it neither jumps nor follows the step); over flat or gently
 //! varying ground the height is held to the rangefinder's few centimetres.
 
@@ -92,6 +93,12 @@ impl RangeAid {
     /// The aid is in use.
     pub fn aiding(&self) -> bool {
         self.terrain_alt_m.is_some()
+    }
+
+    /// The last measurement was the range altitude (not the barometer standing in while the
+    /// range altitude is suspect).
+    pub fn range_measured(&self) -> bool {
+        self.terrain_alt_m.is_some() && self.suspect_s == 0.0
     }
 
     /// Terrain altitude under the vehicle in the navigation frame, m (while aiding).
