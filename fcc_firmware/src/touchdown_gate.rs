@@ -14,7 +14,8 @@
 //! whose demand the level limit clips (`d > LEVEL_TILT_DEG`: a gust it cannot hold without
 //! sliding) or that is pushed faster than [`ABORT_SPEED_MPS`] while still above
 //! [`ABORT_ABOVE_M`] goes back to the gate — unless the gear meets the ground on its way
-//! back ([`REFEEL_S`]): sent back 1–3 cm up, it touches anyway, and climbing on is a hop.
+//! back ([`REFEEL_S`]): sent back 1–3 cm up, it touches anyway, and climbing on is a hop;
+//! the same for a gust that pushes the hold at the gate down onto the gear.
 //! Judging the demand, not the tilt alone, is what keeps a commit out of a gust the controller
 //! is already leaning into (mag seed 1014 committed at 2.3° of tilt with the command at the
 //! then 4.5° limit, and slid to 0.40 m/s).
@@ -46,7 +47,7 @@
 //!   k_last = 1 + (wait_s − MAX_WAIT_S) / LAST_RELAX_S
 //!   committed, not forced, not felt, c > ABORT_ABOVE, d > k_abort·LEVEL_TILT or
 //!       v > min(k_abort·ABORT_SPEED, ABORT_SPEED_CAP) → waiting
-//!   waiting, < REFEEL_S after that, c < IMPACT_BELOW, a contact → committed, felt
+//!   waiting (at the gate, or < REFEEL_S after that), c < IMPACT_BELOW, a contact → committed, felt
 //!   committed:  descend (final speed)
 //!   never within ARRIVED of the gate yet:  hold (the approach)
 //!   waiting:  hold c = GATE;  wait_s += dt;  calm_s += dt while d ≤ k·CALM_TILT and
@@ -214,9 +215,11 @@ impl TouchdownGate {
         if self.committed && clearance_m < IMPACT_BELOW_M && impact {
             self.felt = true;
         }
-        // Just sent back by a gust: a contact now is the ground met anyway (no hop).
+        // Just sent back by a gust, or holding at the gate: a contact now is the ground met
+        // anyway (no hop). (`tests/zenoh/faults.sh`, uav3 through the stack: a dip of the hold
+        // touched down at 0.36 m/s, the gate climbed back and touched down again 2.5 s later.)
         if !self.committed
-            && self.since_abort_s < REFEEL_S
+            && (self.since_abort_s < REFEEL_S || self.arrived)
             && clearance_m < IMPACT_BELOW_M
             && step_drop_mps > REFEEL_DECEL_MPS2 * dt_s
         {
@@ -593,10 +596,36 @@ mod tests {
         assert!(g.felt() && g.committed());
         // Felt: no gust sends it back any more.
         assert_eq!(run(&mut g, 0.2, 0.04, 10.0, 0.5), GateAction::Descend);
-        // The same contact REFEEL_S after the abort is a hop already: it is not taken.
+        // The same contact later, still waiting at the gate: the ground met anyway, taken too.
         let mut g = sent_back();
         descend(&mut g, (REFEEL_S / DT) as usize + 1, 0.04, |_| 0.3);
-        assert_eq!(descend(&mut g, 3, 0.04, |i| contact[i]), GateAction::Hold);
+        assert_eq!(
+            descend(&mut g, 3, 0.04, |i| contact[i]),
+            GateAction::Descend
+        );
+        assert!(g.felt() && g.committed());
+    }
+
+    #[test]
+    fn a_dip_of_the_hold_onto_the_ground_stays_down() {
+        // Waiting at the gate (never committed), a gust pushes the hold down onto the gear
+        // (`tests/zenoh/faults.sh`, uav3): the contact is the touchdown, no climb back.
+        let mut g = TouchdownGate::new();
+        assert_eq!(run(&mut g, 1.0, GATE, 10.0, 0.5), GateAction::Hold);
+        assert!(!g.committed());
+        let contact = [0.36, 0.12, 0.02];
+        assert_eq!(
+            descend(&mut g, 3, 0.02, |i| contact[i]),
+            GateAction::Descend
+        );
+        assert!(g.felt() && g.committed());
+        // A gentle sink at the gate is not a contact.
+        let mut g = TouchdownGate::new();
+        run(&mut g, 1.0, GATE, 10.0, 0.5);
+        assert_eq!(
+            descend(&mut g, 50, 0.05, |i| 0.1 + 0.004 * i as f32),
+            GateAction::Hold
+        );
         assert!(!g.felt());
     }
 
