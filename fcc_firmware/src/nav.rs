@@ -12,11 +12,11 @@ use fcc_msgs::geodesy::{Lla, LocalNed};
 use fcc_nav::attitude::{
     accel_tilt_rad, linear_accel_ned_mps2, mag_heading_rad, AttitudeEstimator, Euler,
 };
-use fcc_nav::tilt_kf::{GpsTiltKf, TiltCorrection};
 use fcc_nav::ground_altitude::{GroundAltitude, GroundAltitudeFilter, GroundAltitudeParams};
 use fcc_nav::horizontal::HorizontalEstimator;
 use fcc_nav::lowpass::LowPass2;
 use fcc_nav::range_aid::RangeAid;
+use fcc_nav::tilt_kf::{GpsTiltKf, TiltCorrection};
 use fcc_nav::vertical::{pressure_to_alt_m, VerticalEstimator};
 
 /// Largest accelerometer bias the navigation filters may attribute (m/s²).

@@ -60,7 +60,10 @@ pub struct TiltCorrection {
 /// See the module documentation.
 #[derive(Clone, Debug)]
 pub struct GpsTiltKf {
+    /// The accelerometer's integral (N, E), uncorrected; the filter's velocity is it plus
+    /// `offset_ne_mps` (every correction moves the whole history alike).
     vel_ne_mps: [f32; 2],
+    offset_ne_mps: [f32; 2],
     hist: [[f32; 2]; HIST],
     head: usize,
     filled: usize,
@@ -78,6 +81,7 @@ impl GpsTiltKf {
     pub const fn new() -> Self {
         Self {
             vel_ne_mps: [0.0; 2],
+            offset_ne_mps: [0.0; 2],
             hist: [[0.0; 2]; HIST],
             head: 0,
             filled: 0,
@@ -114,21 +118,14 @@ impl GpsTiltKf {
             return None;
         }
         let then = self.hist[(self.head + HIST - delay_steps) % HIST];
-        let y = [vel_ne_mps[0] - then[0], vel_ne_mps[1] - then[1]];
-        let realign = !self.aligned
-            || !(y[0].is_finite() && y[1].is_finite())
-            || crate::math::hypotf(y[0], y[1]) > REALIGN_MPS;
-        let k = if realign { 1.0 } else { K_VEL };
+        let y = [0, 1].map(|i| vel_ne_mps[i] - (then[i] + self.offset_ne_mps[i]));
         if !(y[0].is_finite() && y[1].is_finite()) {
             return None;
         }
-        let dv = [k * y[0], k * y[1]];
-        self.vel_ne_mps[0] += dv[0];
-        self.vel_ne_mps[1] += dv[1];
-        for h in self.hist.iter_mut() {
-            h[0] += dv[0];
-            h[1] += dv[1];
-        }
+        let realign = !self.aligned || crate::math::hypotf(y[0], y[1]) > REALIGN_MPS;
+        let k = if realign { 1.0 } else { K_VEL };
+        self.offset_ne_mps[0] += k * y[0];
+        self.offset_ne_mps[1] += k * y[1];
         if realign {
             self.aligned = true;
             return None;
@@ -200,8 +197,14 @@ mod tests {
     #[test]
     fn gps_velocities_remove_a_tilt_error_and_a_gyro_bias() {
         let [r, p, rr, pr] = fly(true, 120.0);
-        assert!(r.abs() < 0.02 && p.abs() < 0.02, "tilt error {r:.4}° {p:.4}°");
-        assert!(rr.abs() < 0.002 && pr.abs() < 0.002, "rate error {rr:.5} {pr:.5} °/s");
+        assert!(
+            r.abs() < 0.02 && p.abs() < 0.02,
+            "tilt error {r:.4}° {p:.4}°"
+        );
+        assert!(
+            rr.abs() < 0.002 && pr.abs() < 0.002,
+            "rate error {rr:.5} {pr:.5} °/s"
+        );
         // Without the corrections the bias integrates: 0.05 °/s for 120 s.
         let [r0, _, _, _] = fly(false, 120.0);
         assert!(r0 > 6.0, "uncorrected roll error {r0:.2}°");
@@ -213,9 +216,17 @@ mod tests {
         for _ in 0..200 {
             kf.step([0.0, 0.0], DT);
         }
-        assert_eq!(kf.gps_velocity([0.0, 0.0], DELAY, 0.0), None, "first fix aligns");
+        assert_eq!(
+            kf.gps_velocity([0.0, 0.0], DELAY, 0.0),
+            None,
+            "first fix aligns"
+        );
         assert!(kf.gps_velocity([0.1, 0.0], DELAY, 0.0).is_some());
-        assert_eq!(kf.gps_velocity([5.0, 0.0], DELAY, 0.0), None, "a 5 m/s jump realigns");
+        assert_eq!(
+            kf.gps_velocity([5.0, 0.0], DELAY, 0.0),
+            None,
+            "a 5 m/s jump realigns"
+        );
         let c = kf.gps_velocity([5.0, 0.0], DELAY, 0.0).unwrap();
         assert!(c.pitch_rad.abs() < 1e-6 && c.roll_rad.abs() < 1e-6);
     }

@@ -53,8 +53,8 @@ use common::{best_of, capture_seeded, note, row, thousands, verdict};
 use fcc_firmware::nav::GPS_ACCEL_MAX_AGE_US;
 use fcc_firmware::params::NavParams;
 use fcc_nav::attitude::{accel_tilt_rad, mag_heading_rad, AttitudeEstimator, Euler};
-use fcc_nav::tilt_kf::TiltCorrection;
 use fcc_nav::lowpass::LowPass2;
+use fcc_nav::tilt_kf::TiltCorrection;
 use nalgebra_034::{UnitQuaternion, Vector3};
 use std::f64::consts::PI;
 

@@ -159,7 +159,10 @@ fn a_step_and_the_laser_back_do_not_move_the_height() {
     let (o, log) = fcc_sim::campaign::fly_logged(&f);
     let t = fcc_sim::truth::report(&log);
     let err = t.leg_alt_err_m.expect("legs flown");
-    println!("{}: true altitude error max {err:.3} m; {:?}", f.what, o.failures);
+    println!(
+        "{}: true altitude error max {err:.3} m; {:?}",
+        f.what, o.failures
+    );
     assert!(err < 0.5, "true altitude error over the step {err:.3} m");
     assert!(o.failures.is_empty(), "{:?}", o.failures);
 }
