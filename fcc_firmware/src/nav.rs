@@ -427,6 +427,8 @@ impl Navigator {
                 alt,
                 self.aid_height_m(),
                 self.ground.reinit_count(),
+                self.ground.rate_residual_mps(),
+                fcc_nav::math::hypotf(self.state.vel_ned_mps[0], self.state.vel_ned_mps[1]),
             );
             self.vert.baro_alt(z);
             // The range's crossover only while the measurement is the range altitude: the barometer

@@ -152,7 +152,11 @@ fn landing_over_a_step_onto_a_dark_patch() {
 /// altitude is suspect the barometer stands in, and it must do so at the barometer's own
 /// crossover: at the range's (fast) one the height followed the barometer's error, dropped
 /// 0.58 m in 0.2 s when the laser came back, was re-anchored there, and the vehicle climbed to
-/// 1.77 m above its commanded height (true) and stayed 1.6–1.9 m off its estimate.
+/// 1.77 m above its commanded height (true) and stayed 1.6–1.9 m off its estimate. With the
+/// faster attitude loop (2026-12-06) the same flight left the box's far edge on a different
+/// beat: the sonar's cone turned the 0.5-m edge into a 0.6-s ramp, the ground filter followed it
+/// with its residual rate (no re-acquisition), and the height followed the terrain down by 0.75 m
+/// — the range aid now bridges such a ramp with the barometer (`fcc_nav::range_aid`).
 #[test]
 fn a_step_and_the_laser_back_do_not_move_the_height() {
     let f = fcc_sim::campaign::generate("landing", 5063, true);
