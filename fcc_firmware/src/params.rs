@@ -200,9 +200,10 @@ pub struct ControlParams {
     /// 178 ms with 1.4 % overshoot (`tests/tests/attitude_model.rs`); 6 / 1.4 gave 264 ms, and a
     /// gust's change of wind then slid the vehicle for ≈ 0.3 s before its lean followed (the
     /// gale's touchdowns). Campaign, 10 seed sets of `fcc-campaign --per-family 72 --long`
-    /// (2026-12-06): gale touchdown horizontal p95 0.250 → 0.230 m/s, estimated hover box
-    /// −5 … −6 % (the gale's −4 %), velocity mode's tilt wobble 1.63° → 1.27° (p95); failing
-    /// flights 14 → 12 (gale 9 → 3, GPS loss 4 → 7 with the same distribution, mission 0 → 2).
+    /// (2026-12-06): gale touchdown horizontal p95 0.250 → 0.230 m/s, estimated hover box p95
+    /// −3 % (the gale's −4 %), velocity mode's tilt wobble p95 1.63° → 1.27°, touchdown tilt
+    /// p95 +0.05 … 0.1°; failing flights 14 → 12 (gale 10 → 3, GPS loss 4 → 7 with the same
+    /// distribution, mission 0 → 2). Other gains tried: scripts/bench_history.md.
     pub att_p_nm_per_rad: f32,
     pub att_i_nm_per_rad_s: f32,
     pub att_d_nm_per_radps: f32,
