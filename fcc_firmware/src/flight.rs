@@ -596,7 +596,7 @@ impl FlightCore {
                     self.pilot
                         .demand(l.max_horiz_speed_mps, l.max_climb_mps, l.max_descent_mps);
                 let pos = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
-                let speed = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
+                let speed = nav.ground_speed_mps();
                 let v = match d.vel_fr_mps {
                     Some(v) => {
                         self.hold_ne_m = pos;
@@ -667,7 +667,7 @@ impl FlightCore {
         let tilt_rad =
             fcc_nav::ground_altitude::tilt_angle_rad(nav.euler.roll_rad, nav.euler.pitch_rad)
                 .max(self.tilt_demand_rad);
-        let speed_mps = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
+        let speed_mps = nav.ground_speed_mps();
         if !nav.gps_ok {
             self.touchdown_gate.commit_blind();
         }
@@ -786,7 +786,7 @@ impl FlightCore {
     /// the height noise); a commit whose command the level limit clips goes back to the gate.
     fn tilt_limit_rad(&self, nav: &NavState) -> f32 {
         let on_ground_m = self.params.airframe.sensor_height_on_ground_m;
-        let speed = fcc_nav::math::hypotf(nav.vel_ned_mps[0], nav.vel_ned_mps[1]);
+        let speed = nav.ground_speed_mps();
         // The speed exception needs a speed over the ground: dead-reckoned (GPS lost), the
         // estimate drifts, and braking a slide it only imagines leans the vehicle over.
         let slow = speed < LAND_LEVEL_MAX_SPEED_MPS || !nav.gps_ok;

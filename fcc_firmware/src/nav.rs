@@ -88,6 +88,13 @@ pub struct NavState {
     pub mag_disturbed_s: f32,
 }
 
+impl NavState {
+    /// Horizontal speed over the ground, m/s.
+    pub fn ground_speed_mps(&self) -> f32 {
+        fcc_nav::math::hypotf(self.vel_ned_mps[0], self.vel_ned_mps[1])
+    }
+}
+
 /// Why the navigation task is not ready to fly.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NavNotReady {
@@ -428,7 +435,7 @@ impl Navigator {
                 self.aid_height_m(),
                 self.ground.reinit_count(),
                 self.ground.rate_residual_mps(),
-                fcc_nav::math::hypotf(self.state.vel_ned_mps[0], self.state.vel_ned_mps[1]),
+                self.state.ground_speed_mps(),
             );
             self.vert.baro_alt(z);
             // The range's crossover only while the measurement is the range altitude: the barometer

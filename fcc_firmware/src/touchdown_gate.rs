@@ -524,6 +524,16 @@ mod tests {
         a
     }
 
+    /// Three steps of a contact's descent rates at `clearance`: the gate takes it as the
+    /// touchdown (committed, felt, descending).
+    fn assert_touches_down(g: &mut TouchdownGate, clearance: f32, contact: [f32; 3]) {
+        assert_eq!(
+            descend(g, 3, clearance, |i| contact[i]),
+            GateAction::Descend
+        );
+        assert!(g.felt() && g.committed());
+    }
+
     /// Committed at the gate, then 0.1 s of a calm descent at `rate` (m/s) at `clearance`.
     fn committed_descent(clearance: f32, rate: f32) -> TouchdownGate {
         let mut g = TouchdownGate::new();
@@ -589,21 +599,13 @@ mod tests {
         assert!(!g.felt());
         // Then the gear stops the rest in a few steps.
         let contact = [0.12, 0.05, 0.01];
-        assert_eq!(
-            descend(&mut g, 3, 0.04, |i| contact[i]),
-            GateAction::Descend
-        );
-        assert!(g.felt() && g.committed());
+        assert_touches_down(&mut g, 0.04, contact);
         // Felt: no gust sends it back any more.
         assert_eq!(run(&mut g, 0.2, 0.04, 10.0, 0.5), GateAction::Descend);
         // The same contact later, still waiting at the gate: the ground met anyway, taken too.
         let mut g = sent_back();
         descend(&mut g, (REFEEL_S / DT) as usize + 1, 0.04, |_| 0.3);
-        assert_eq!(
-            descend(&mut g, 3, 0.04, |i| contact[i]),
-            GateAction::Descend
-        );
-        assert!(g.felt() && g.committed());
+        assert_touches_down(&mut g, 0.04, contact);
     }
 
     #[test]
@@ -613,12 +615,7 @@ mod tests {
         let mut g = TouchdownGate::new();
         assert_eq!(run(&mut g, 1.0, GATE, 10.0, 0.5), GateAction::Hold);
         assert!(!g.committed());
-        let contact = [0.36, 0.12, 0.02];
-        assert_eq!(
-            descend(&mut g, 3, 0.02, |i| contact[i]),
-            GateAction::Descend
-        );
-        assert!(g.felt() && g.committed());
+        assert_touches_down(&mut g, 0.02, [0.36, 0.12, 0.02]);
         // A gentle sink at the gate is not a contact.
         let mut g = TouchdownGate::new();
         run(&mut g, 1.0, GATE, 10.0, 0.5);

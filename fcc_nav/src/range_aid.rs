@@ -10,20 +10,23 @@
 //! ```
 //! `t` is anchored (`t = ĥ − h_agl`, with ĥ the current altitude estimate) when the aid starts,
 //! whenever the ground filter re-acquires after a **terrain step**, and when the range altitude
-//! stays suspect for [`REANCHOR_S`] — more than [`SUSPECT_M`] from the estimate, or moving
-//! against the inertial vertical velocity faster than [`SUSPECT_RATE_MPS`] (the ground filter's
-//! residual rate `r`, `ḣ_agl = −v_down + r`): an edge the filter is still re-acquiring, a slope;
-//! meanwhile the corrected barometer stands in, and the vertical filter takes it at the
-//! barometer's crossover, [`RangeAid::range_measured`]. So over a step the vehicle keeps its
-//! altitude (it neither jumps nor follows the step); over flat or gently varying ground the
-//! height is held to the rangefinder's few centimetres.
+//! stays more than [`SUSPECT_M`] from the estimate for [`REANCHOR_S`] (an edge the filter is
+//! still re-acquiring, a slope). While the range altitude is suspect — that far off, or, as the
+//! vehicle moves over the ground at [`RAMP_MIN_SPEED_MPS`] or faster, moving against the
+//! inertial vertical velocity faster than [`SUSPECT_RATE_MPS`] for up to [`RAMP_MAX_S`] (the
+//! ground filter's residual rate `r`, `ḣ_agl = −v_down + r`) — the corrected barometer stands
+//! in, and the vertical filter takes it at the barometer's crossover
+//! ([`RangeAid::range_measured`]). So over a step the vehicle keeps its altitude (it neither
+//! jumps nor follows the step); over flat or gently varying ground the height is held to the
+//! rangefinder's few centimetres.
 //!
 //! The rate test is for an edge the sonar sees gradually: its 15° cone keeps the nearest point
 //! of a box's edge in view for `h·tan 15°` of travel, so flying off a 0.5-m box at 4.5 m the
 //! fused height ramps down over ≈ 0.6 s instead of stepping, the ground filter follows the ramp
 //! with its residual rate (0.49 m/s) and never re-acquires, and the range altitude never left
 //! the estimate by [`SUSPECT_M`] because the estimate followed it: the vehicle's altitude
-//! followed the terrain down by 0.5 m (campaign `landing` 5063, `tests/tests/ground_altitude.rs`).
+//! followed the terrain down (campaign `landing` 5063: 0.75 m of true altitude error,
+//! `tests/tests/ground_altitude.rs`).
 
 use crate::math::fabsf;
 
@@ -75,7 +78,7 @@ impl RangeAid {
     /// height when valid and within the aid's range, else `None`; `reinit_count`: the ground
     /// filter's step re-acquisitions so far, `rate_residual_mps` its residual rate (how fast the
     /// fused height moves against the inertial vertical velocity); `alt_est_m`: the filter's
-    /// current altitude.
+    /// current altitude; `ground_speed_mps`: the horizontal speed (a ramp needs motion).
     pub fn measurement(
         &mut self,
         dt_s: f32,
