@@ -55,7 +55,7 @@ else
 fi
 # While running (before the exit summary, which repeats the outcome): exactly one error line.
 errs="$(grep -c 'recording to .* stopped' "$tmp/bridge.err" || true)"
-line="$(grep 'recording to .* stopped' "$tmp/bridge.err" | head -1)"
+line="$(grep -m1 'recording to .* stopped' "$tmp/bridge.err")"
 if [ "$errs" = 1 ] && echo "$line" | grep -qE 'No space left on device|File too large'; then
   echo "PASS one error line on stderr, naming the cause: $line"
 else

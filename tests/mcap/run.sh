@@ -73,7 +73,7 @@ pty=$(fake f 30)
 b=$!; sleep 3
 n=$(grep -c "recording to /dev/full stopped" "$tmp/f.log" || true)
 if kill -0 $b 2>/dev/null && [ "$n" = 1 ]; then
-  echo "PASS disk full: one error ($(grep -o 'stopped: .*' "$tmp/f.log" | head -1)), bridge still running"
+  echo "PASS disk full: one error ($(grep -m1 -o 'stopped: .*' "$tmp/f.log")), bridge still running"
 else echo "FAIL disk full: alive=$(kill -0 $b 2>/dev/null && echo yes || echo no), errors=$n"; tail -5 "$tmp/f.log"; rc=1; fi
 kill -INT $b; wait $b || true
 # 4. recorder options

@@ -69,7 +69,7 @@ out=$(ROS_SECURITY_STRATEGY=Permissive ROS_SECURITY_KEYSTORE="$ks" timeout 3 "$b
 set -e
 printf '%s' "$out" | grep -q "running WITHOUT security"
 check "Permissive runs without the missing enclave and says so" $? \
-  "$(printf '%s\n' "$out" | grep -o 'security (Permissive).*' | head -1)"
+  "$(printf '%s\n' "$out" | grep -m1 -o 'security (Permissive).*')"
 
 # --- 2. The secure bridge and the independent secure peers.
 # A rogue enclave: the observer's identity and permissions with a governance that does not
@@ -148,7 +148,7 @@ if [ $lrc -ne 0 ] && grep -q 'I need my lock!!' "$tmp/launch.log" \
     "messages; attempt 1's launch log ends:"
   grep -v '^\s*$' "$tmp/launch.log" | grep -v 'I need my lock' | tail -15 | sed 's/^/  attempt 1: /'
   # rustdds names the waiting thread and call site and the lock's holder (thread, call site).
-  grep 'I need my lock' "$tmp/launch.log" | head -2 | sed 's/^/  attempt 1 (first waits): /'
+  grep -m2 'I need my lock' "$tmp/launch.log" | sed 's/^/  attempt 1 (first waits): /'
   mv "$tmp/launch.log" "$tmp/launch1.log"
   part3
 fi
