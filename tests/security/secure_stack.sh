@@ -137,10 +137,11 @@ part3() {
   set -e
 }
 part3
-# An open defect (README, "Security"): now and then (2 of 4 CI rehearsals on 2026-12-05, none
-# of 4 runs alone) the mission node's rustdds hangs at start-up on its security plugins' lock
-# ("I need my lock!!" every 100 ms) and the mission never starts. Only that case is retried,
-# once, and said: any other failure, or the same hang twice, fails the test.
+# A fixed defect (README, "Security"): now and then (3 of ~8 CI rehearsals until 2026-12-06,
+# never alone) the mission node's rustdds hung at start-up on its security plugins' lock ("I
+# need my lock!!" every 100 ms): a lock-order inversion, removed (vendor/rustdds/VENDOR.md;
+# fcc_bridge/tests/secure_entity_race.rs). Should a hang come back (a new cause) it is retried
+# once and said, with the holder: any other failure, or the same hang twice, fails the test.
 if [ $lrc -ne 0 ] && grep -q 'I need my lock!!' "$tmp/launch.log" \
     && ! grep -q 'fcc-mission: mission complete' "$tmp/launch.log"; then
   echo "RETRY part 3 (known rustdds security-lock hang of the mission node): fcc-launch exit" \
