@@ -606,7 +606,8 @@ impl Discovery {
       builtin_topic_type_names::DCPS_PARTICIPANT_STATELESS_MESSAGE,
       ParticipantStatelessMessage,
       Some(Self::create_participant_stateless_message_qos()),
-      None, // Reader QoS: as above
+      // fcc (vendored): the reader keeps the last 64 messages, not 1 (VENDOR.md).
+      Some(Self::create_participant_stateless_message_reader_qos()),
       true, // Important: STATELESS RTPS Reader & Writer (see Security spec. section 7.4.3)
       EntityId::P2P_BUILTIN_PARTICIPANT_STATELESS_READER,
       P2P_PARTICIPANT_STATELESS_MESSAGE_TOKEN,
@@ -2257,6 +2258,20 @@ impl Discovery {
     QosPolicyBuilder::new()
       .reliability(Reliability::BestEffort) // Important!
       .history(History::KeepLast { depth: 1 })
+      .build()
+  }
+
+  /// fcc (vendored): the local reader of the stateless messages keeps the last 64. The topic
+  /// has no key, so one instance holds the handshake messages of every remote participant:
+  /// with the spec's `KeepLast 1` a message that arrived before Discovery took the previous one
+  /// replaced it, and that participant's handshake stalled for good (neither side resends; a
+  /// Cyclone DDS peer among three joining together, `tests/security/secure_stack.sh`). History
+  /// is not a requested-offered policy: matching and the wire are unchanged.
+  #[cfg(feature = "security")]
+  pub const fn create_participant_stateless_message_reader_qos() -> QosPolicies {
+    QosPolicyBuilder::new()
+      .reliability(Reliability::BestEffort)
+      .history(History::KeepLast { depth: 64 })
       .build()
   }
 
