@@ -53,34 +53,27 @@ fn topics_readers_and_writers_created_together_never_deadlock() {
     let publisher = dp.create_publisher(&qos).unwrap();
 
     let (done_tx, done_rx) = mpsc::channel::<&'static str>();
-    let (d, q, tx) = (dp.clone(), qos.clone(), done_tx.clone());
-    thread::spawn(move || {
-        for i in 0..ROUNDS {
-            let name = if i % 2 == 0 { sub_name } else { pub_name };
-            d.create_topic(name.into(), ty.into(), &q, TopicKind::NoKey)
-                .expect("create_topic");
-        }
-        let _ = tx.send("topics");
+    let (d, q) = (dp.clone(), qos.clone());
+    let mut i = 0;
+    rounds(&done_tx, "topics", move || {
+        i += 1;
+        let name = if i % 2 == 0 { sub_name } else { pub_name };
+        d.create_topic(name.into(), ty.into(), &q, TopicKind::NoKey)
+            .expect("create_topic");
     });
-    let tx = done_tx.clone();
-    thread::spawn(move || {
-        for _ in 0..ROUNDS {
-            let r = subscriber
+    rounds(&done_tx, "readers", move || {
+        drop(
+            subscriber
                 .create_datareader_no_key_cdr::<u8>(&sub_topic, None)
-                .expect("create_datareader");
-            drop(r);
-        }
-        let _ = tx.send("readers");
+                .expect("create_datareader"),
+        )
     });
-    let tx = done_tx;
-    thread::spawn(move || {
-        for _ in 0..ROUNDS {
-            let w = publisher
+    rounds(&done_tx, "writers", move || {
+        drop(
+            publisher
                 .create_datawriter_no_key_cdr::<u8>(&pub_topic, None)
-                .expect("create_datawriter");
-            drop(w);
-        }
-        let _ = tx.send("writers");
+                .expect("create_datawriter"),
+        )
     });
     let mut finished = Vec::new();
     while finished.len() < 3 {
@@ -97,4 +90,19 @@ fn topics_readers_and_writers_created_together_never_deadlock() {
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs `create` [`ROUNDS`] times on a thread of its own, then says `who` on `done`.
+fn rounds(
+    done: &mpsc::Sender<&'static str>,
+    who: &'static str,
+    mut create: impl FnMut() + Send + 'static,
+) {
+    let done = done.clone();
+    thread::spawn(move || {
+        for _ in 0..ROUNDS {
+            create();
+        }
+        let _ = done.send(who);
+    });
 }
