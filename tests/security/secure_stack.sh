@@ -145,7 +145,7 @@ part3
 # once and said, with the holder: any other failure, or the same hang twice, fails the test.
 if [ $lrc -ne 0 ] && grep -q 'I need my lock!!' "$tmp/launch.log" \
     && ! grep -q 'fcc-mission: mission complete' "$tmp/launch.log"; then
-  echo "RETRY part 3 (known rustdds security-lock hang of the mission node): fcc-launch exit" \
+  echo "RETRY part 3 (rustdds security-lock hang of the mission node, fixed once: a new cause?): fcc-launch exit" \
     "$lrc after $((SECONDS - t0)) s, $(grep -c 'I need my lock!!' "$tmp/launch.log") lock" \
     "messages; attempt 1's launch log ends:"
   grep -v '^\s*$' "$tmp/launch.log" | grep -v 'I need my lock' | tail -15 | sed 's/^/  attempt 1: /'

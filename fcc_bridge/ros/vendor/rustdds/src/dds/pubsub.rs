@@ -563,11 +563,10 @@ impl InnerPublisher {
     if let Some(sec_handle) = self.security_plugins_handle.as_ref() {
       // Security is enabled.
       // Check are we allowed to create the DataWriter from Access control.
-      // fcc (vendored): the domain id is read BEFORE the plugins are locked. `dp.domain_id()` locks the
-      // participant, and DomainParticipant::create_topic holds that lock while it waits for
-      // the plugins: read as an argument of the locked call it was a lock-order inversion
-      // (the mission node's start-up hang, its spinner creating a reader while the set-up
-      // thread created a topic; VENDOR.md).
+      // fcc (vendored): the domain id is read BEFORE the plugins are locked.
+      // `dp.domain_id()` locks the participant, and DomainParticipant::create_topic holds
+      // that lock while it waits for the plugins: read as an argument of the locked call it
+      // was a lock-order inversion (the mission node's start-up hang; VENDOR.md).
       let domain_id = dp.domain_id();
       let check_res = sec_handle.get_plugins().check_create_datawriter(
         guid.prefix,
@@ -1184,11 +1183,8 @@ impl InnerSubscriber {
     if let Some(sec_handle) = self.security_plugins_handle.as_ref() {
       // Security is enabled.
       // Check are we allowed to create the DataReader from Access control.
-      // fcc (vendored): the domain id is read BEFORE the plugins are locked. `dp.domain_id()` locks the
-      // participant, and DomainParticipant::create_topic holds that lock while it waits for
-      // the plugins: read as an argument of the locked call it was a lock-order inversion
-      // (the mission node's start-up hang, its spinner creating a reader while the set-up
-      // thread created a topic; VENDOR.md).
+      // fcc (vendored): the domain id is read BEFORE the plugins are locked (the lock-order
+      // inversion of InnerPublisher::create_datawriter's check; VENDOR.md).
       let domain_id = dp.domain_id();
       let check_res = sec_handle.get_plugins().check_create_datareader(
         reader_guid.prefix,
