@@ -13,7 +13,7 @@ use fcc_board::replay::{encode, Event};
 use fcc_firmware::commands::{Command, VelocitySetpoint, YawSetpoint};
 use fcc_firmware::geometry::MOTOR_COUNT;
 use fcc_firmware::scheduler::{FlightComputer, TICK_US};
-use fcc_firmware::sensors::{MotorOutputs, SensorBoard, SensorInputs};
+use fcc_firmware::sensors::{SensorBoard, SensorInputs};
 use fcc_sim::scenario::Scenario;
 use fcc_sim::sim::Sim;
 use nalgebra::Vector3;
