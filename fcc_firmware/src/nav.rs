@@ -5,7 +5,7 @@
 //! bias and the barometric reference over `calibration_s`. The first valid GPS fix becomes the
 //! local NED origin (home).
 
-use crate::nav_health::{Innovations, NavHealth};
+use crate::nav_health::{GpsInnovation, Innovations, NavHealth};
 use crate::params::NavParams;
 use crate::sensors::{BaroSample, GpsFix, ImuSample, SensorInputs};
 use fcc_msgs::geodesy::{Lla, LocalNed};
@@ -483,9 +483,13 @@ impl Navigator {
                 let delay_steps = self.gps_delay_steps();
                 let p = self.horiz.pos_ne_m();
                 let d = fcc_nav::math::hypotf(ned[0] as f32 - p[0], ned[1] as f32 - p[1]);
-                innov.gps_m = Some(d);
+                let gps = GpsInnovation {
+                    distance_m: d,
+                    gate_m: crate::nav_health::gps_gate_m(g.h_acc_m),
+                };
+                innov.gps = Some(gps);
                 self.last_gps_us = Some(now_us);
-                if !NavHealth::gps_acceptable(d) {
+                if !gps.acceptable() {
                     // A jump (multipath, spoofing): not fused; the monitor times it.
                     self.horiz.clear_gps();
                 } else {

@@ -5,7 +5,7 @@
 //! | bit | filter | innovation | fault when |
 //! |---|---|---|---|
 //! | [`FAULT_VERTICAL`] | vertical | \|barometer (offset-corrected) − estimate\| | > [`VERT_INNOV_M`] for [`VERT_FAULT_S`] |
-//! | [`FAULT_HORIZONTAL`] | horizontal (GPS) | \|GPS position − estimate\| (fix refused beyond the gate) | > [`GPS_GATE_M`] for [`GPS_FAULT_S`] |
+//! | [`FAULT_HORIZONTAL`] | horizontal (GPS) | \|GPS position − estimate\| (fix refused beyond the gate) | > [`gps_gate_m`] for [`GPS_FAULT_S`] |
 //! | [`FAULT_ATTITUDE`] | roll/pitch | angle between the accelerometer's and the estimate's gravity | > [`TILT_INNOV_RAD`] for [`TILT_FAULT_S`] |
 //!
 //! The magnetometer has its own gate (`fcc_nav::attitude`): a disturbed field is reported, not
@@ -26,8 +26,33 @@ pub const FAULT_ATTITUDE: u8 = 4;
 pub const VERT_INNOV_M: f32 = 3.0;
 /// … for this long, s.
 pub const VERT_FAULT_S: f32 = 2.0;
-/// A GPS fix further than this from the estimate is refused (multipath, a jump), m.
-pub const GPS_GATE_M: f32 = 5.0;
+/// A GPS fix further from the estimate than this many of the receiver's own accuracy
+/// estimates (`GpsFix::h_acc_m`, 1σ) is refused (multipath, a jump) …
+///
+/// The position estimate follows the GPS position only through a crossover of hundreds of
+/// seconds (`NavParams::horiz_omega_radps`): the receiver's slowly wandering error is what it
+/// leaves out, so the distance of a fix from the estimate is that error's change since the
+/// estimate last agreed with it — per axis ≈ √2 × the receiver's per-axis σ, ≈ its `h_acc`
+/// (the 2-D figure). Five of them leave a healthy fix out about once in 3·10⁵ (Rayleigh,
+/// e^(−12.5)); a fixed 5 m gate refused 2 s of fixes in a gale hover whose error had wandered
+/// 5.2 m from home's (`hover_gale` 35016: an estimator fault and a GPS-less landing).
+pub const GPS_GATE_SIGMAS: f32 = 5.0;
+/// … the gate never narrower than this, m …
+pub const GPS_GATE_MIN_M: f32 = 5.0;
+/// … nor wider (a receiver reporting a poor accuracy does not open it further), m.
+pub const GPS_GATE_MAX_M: f32 = 10.0;
+
+/// The GPS gate for a fix whose receiver reports `h_acc_m` (1σ), m: [`GPS_GATE_SIGMAS`] of it
+/// within [`GPS_GATE_MIN_M`] … [`GPS_GATE_MAX_M`] (the minimum for a missing or non-finite
+/// accuracy).
+pub fn gps_gate_m(h_acc_m: f32) -> f32 {
+    let g = GPS_GATE_SIGMAS * h_acc_m;
+    if g.is_finite() {
+        fcc_nav::math::clampf(g, GPS_GATE_MIN_M, GPS_GATE_MAX_M)
+    } else {
+        GPS_GATE_MIN_M
+    }
+}
 /// Fixes refused for this long: the horizontal filter has lost GPS agreement, s.
 pub const GPS_FAULT_S: f32 = 2.0;
 /// Tilt innovation (accelerometer vs estimate) beyond which the attitude is suspect, rad (15°).
@@ -40,9 +65,24 @@ pub const TILT_FAULT_S: f32 = 5.0;
 pub struct Innovations {
     /// |offset-corrected barometric altitude − estimate|, m.
     pub baro_alt_m: Option<f32>,
-    /// A GPS fix arrived: its distance from the estimate, m.
-    pub gps_m: Option<f32>,
+    /// A GPS fix arrived: its distance from the estimate and its gate.
+    pub gps: Option<GpsInnovation>,
     pub tilt_rad: Option<f32>,
+}
+
+/// A GPS fix's distance from the position estimate, and the gate it is judged by
+/// ([`gps_gate_m`]), m.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GpsInnovation {
+    pub distance_m: f32,
+    pub gate_m: f32,
+}
+
+impl GpsInnovation {
+    /// Within the gate (a NaN distance is not).
+    pub fn acceptable(&self) -> bool {
+        self.distance_m <= self.gate_m
+    }
 }
 
 /// One monitor: whether its latest innovation was beyond the limit, and for how long (the
@@ -98,21 +138,18 @@ impl NavHealth {
         }
     }
 
-    /// Whether a GPS fix this far from the estimate is to be fused.
-    pub fn gps_acceptable(distance_m: f32) -> bool {
-        distance_m <= GPS_GATE_M
-    }
-
     /// One step (`dt_s`: the step's length; samples arrive at their own rates); returns the
     /// fault bits (latched until [`Self::clear`]).
     pub fn update(&mut self, dt_s: f32, x: &Innovations) -> u8 {
-        if x.gps_m.is_some_and(|d| !Self::gps_acceptable(d)) {
+        if x.gps.is_some_and(|g| !g.acceptable()) {
             self.gps_refused = self.gps_refused.wrapping_add(1);
         }
         if self.vert.update(dt_s, x.baro_alt_m, VERT_INNOV_M) >= VERT_FAULT_S {
             self.faults |= FAULT_VERTICAL;
         }
-        if self.gps.update(dt_s, x.gps_m, GPS_GATE_M) >= GPS_FAULT_S {
+        // Judged as the distance in gates (a NaN stays NaN: bad).
+        let gates = x.gps.map(|g| g.distance_m / g.gate_m);
+        if self.gps.update(dt_s, gates, 1.0) >= GPS_FAULT_S {
             self.faults |= FAULT_HORIZONTAL;
         }
         if self.tilt.update(dt_s, x.tilt_rad, TILT_INNOV_RAD) >= TILT_FAULT_S {
@@ -151,11 +188,37 @@ mod tests {
     }
 
     #[test]
+    fn the_gps_gate_follows_the_receivers_accuracy_within_bounds() {
+        // The simulated u-blox reports 1.4 m: 7 m.
+        assert!((gps_gate_m(1.4) - 7.0).abs() < 1e-5);
+        assert_eq!(gps_gate_m(0.3), GPS_GATE_MIN_M);
+        assert_eq!(gps_gate_m(50.0), GPS_GATE_MAX_M);
+        assert_eq!(gps_gate_m(f32::NAN), GPS_GATE_MIN_M);
+        assert_eq!(gps_gate_m(f32::INFINITY), GPS_GATE_MIN_M);
+        let at = |d: f32| GpsInnovation {
+            distance_m: d,
+            gate_m: gps_gate_m(1.4),
+        };
+        assert!(at(6.0).acceptable());
+        assert!(!at(8.0).acceptable());
+        assert!(!at(f32::NAN).acceptable());
+        // A receiver claiming a poor accuracy still has a 36 m jump refused.
+        let jump = GpsInnovation {
+            distance_m: 36.0,
+            gate_m: gps_gate_m(99.0),
+        };
+        assert!(!jump.acceptable());
+    }
+
+    #[test]
     fn healthy_innovations_raise_nothing() {
         let mut h = NavHealth::new();
         let x = Innovations {
             baro_alt_m: Some(1.5),
-            gps_m: Some(2.0),
+            gps: Some(GpsInnovation {
+                distance_m: 4.0,
+                gate_m: gps_gate_m(1.4),
+            }),
             tilt_rad: Some(0.1),
         };
         assert_eq!(run(&mut h, x, 60.0), 0);
@@ -176,7 +239,10 @@ mod tests {
             h.update(
                 0.002,
                 &Innovations {
-                    gps_m: Some(30.0),
+                    gps: Some(GpsInnovation {
+                        distance_m: 30.0,
+                        gate_m: gps_gate_m(1.4),
+                    }),
                     ..Default::default()
                 },
             );

@@ -56,10 +56,17 @@ pub struct NavParams {
     /// Yaw: tilt-compensated magnetometer through F_L (rides through short disturbances).
     pub yaw_omega_radps: f32,
     pub yaw_zeta: f32,
-    /// Horizontal: GPS position through F_L, NED acceleration through F_H. Low (≈ 2-min
+    /// Horizontal: GPS position through F_L, NED acceleration through F_H. Low (≈ 8-min
     /// time constant): the GPS Doppler velocity ([`Self::gps_vel_gain`]) carries the short
     /// term, and the position follows the receiver's slowly wandering error (σ ≈ 1 m, τ ≈ 1
     /// min) only slowly — with ω = 0.3 the hold point wandered with it (BENCHMARKS.md, campaign).
+    /// 0.005 → 0.002 rad/s, 10 seed sets of `fcc-campaign --per-family 72 --long` (5,760
+    /// flights), the truth: `hover` true box p95 0.64 → 0.42 m, hold excursion p95 1.27 →
+    /// 0.78 m; `hover_gale` hold excursion p95 1.32 → 0.83 m, worst 1.99 → 1.27 m; `mission`
+    /// distance from the intended line p95 0.95 → 0.63 m; the Doppler noise's random walk,
+    /// which grows as the crossover falls, stays below the wander it leaves out. The GPS gate
+    /// widens with it (`nav_health::gps_gate_m`): the fix's distance from the estimate is the
+    /// receiver's error's change, and at 5 m a gale hover refused 2 s of healthy fixes.
     pub horiz_omega_radps: f32,
     pub horiz_zeta: f32,
     /// Vertical: barometric altitude through F_L, vertical acceleration through F_H (eqs. 5–6).
@@ -111,7 +118,7 @@ impl Default for NavParams {
             tilt_zeta: 0.5,
             yaw_omega_radps: 0.1,
             yaw_zeta: 1.0,
-            horiz_omega_radps: 0.005,
+            horiz_omega_radps: 0.002,
             horiz_zeta: 0.8,
             vert_omega_radps: 0.08,
             vert_zeta: 0.7,

@@ -166,17 +166,19 @@ mod tests {
         assert_eq!(est.vel_ne_mps(), [0.5, -0.5]);
     }
 
-    /// The production structure (position crossover ω = 0.005 rad/s, Doppler velocity at 5 Hz
+    /// The production structure (position crossover ω = 0.002 rad/s, Doppler velocity at 5 Hz
     /// with 0.3 per fix, the bias learnt from the velocity with its pole at 0.05 rad/s) at rest
     /// with a 0.1 m/s² accelerometer bias and a GPS position error wandering ±1 m: the bias is
-    /// learnt, the velocity stays true, and the position ignores most of the GPS wander. Without
-    /// the bias learning the same bias leaves ≈ 0.1/(k2 + K·k1) ≈ 8 m of position error and a
-    /// steady velocity error `k1·x̃`.
+    /// learnt, the velocity stays true, and the position ignores most of the GPS wander (0.33 m
+    /// worst after 200 s in this one realisation, 0.22 m at the earlier 0.005 rad/s: the
+    /// Doppler noise's random walk weighs more at the lower crossover; over many flights the
+    /// lower one drifts less, `fcc_firmware::params`). Without the bias learning the same bias
+    /// leaves ≈ 10 m of position error and a steady velocity error `k1·x̃`.
     #[test]
     fn velocity_learnt_bias_with_slow_position_crossover() {
         let run = |bias_pole: f32| {
             let mut rng = Rng::new(7);
-            let mut est = HorizontalEstimator::new(CfGains::new(0.005, 0.8));
+            let mut est = HorizontalEstimator::new(CfGains::new(0.002, 0.8));
             est.n.set_bias_limit(0.5);
             est.e.set_bias_limit(0.5);
             est.reset([0.0, 0.0], [0.0, 0.0]);
