@@ -179,7 +179,7 @@ pub fn sincosf(x: f32) -> (f32, f32) {
     } else if x.is_finite() {
         reduce_large(x)
     } else {
-        return (x - x, x - x); // NaN, ±∞ → NaN
+        return (f32::NAN, f32::NAN); // NaN, ±∞ → NaN
     };
     let zz = z * z;
     // Cephes sinf/cosf polynomials on [−π/4, π/4] (single-precision minimax).
