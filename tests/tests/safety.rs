@@ -1,7 +1,8 @@
 //! Failsafes of the flight-safety issue, injected in the simulator and judged on truth:
 //! an estimator fault (a 30 m GPS jump the horizontal filter's innovation monitor must refuse
 //! and report), wind beyond the vehicle's authority (reported as `WindLimit`, answered by a
-//! landing where it is), and the emergency kill (the only way to stop the motors in flight).
+//! landing where it is), the emergency kill (the only way to stop the motors in flight), and
+//! the other side of the GPS gate: a receiver's healthy wander is fused, not a fault.
 
 mod common;
 
@@ -144,4 +145,58 @@ fn an_estimator_fault_landing_cannot_be_cancelled_by_the_operator() {
     );
     assert_eq!(sim.fc.core.mode(), Mode::Land);
     assert_eq!(sim.fc.core.failsafe(), FailsafeCause::EstimatorFault);
+}
+
+/// The GPS gate scales with the receiver's accuracy (`nav_health::gps_gate_m`): the position
+/// estimate follows the receiver's wandering error only through a crossover of minutes, so a
+/// fix's distance from it is that error's change since home, and a receiver twice as poor as
+/// the default (σ 2 m per axis, reporting 2.8 m) wanders beyond a fixed 5-m gate within a hold.
+/// Healthy wander is fused, never an estimator fault: four seeds, each hold's wander measured
+/// from the simulator (it must pass 5 m in at least one, or the test proves nothing).
+#[test]
+fn a_receiver_wandering_beyond_five_metres_is_not_a_fault() {
+    let mut widest_m = 0.0f64;
+    for seed in 1..=4u64 {
+        let mut s = common::load("hover");
+        s.seed = seed;
+        s.sensors.gps.h_sigma_m = 2.0;
+        let mut sim = Sim::new(s).unwrap();
+        let mut home_err = None;
+        let mut wander_m = 0.0f64;
+        while !sim.finished() {
+            sim.tick();
+            let e = sim.board.gps.error_ned_m();
+            if sim.fc.core.nav().home_set {
+                let h = *home_err.get_or_insert(e);
+                wander_m = wander_m.max((e.x - h.x).hypot(e.y - h.y));
+            }
+        }
+        let log = sim.finish();
+        let t = truth::report(log);
+        let faults = log
+            .samples
+            .iter()
+            .map(|x| x.nav.nav_faults)
+            .fold(0, |a, b| a | b);
+        let refused = sim.fc.core.navigator().health().gps_refused();
+        println!(
+            "seed {seed}: the receiver's error wandered {wander_m:.2} m from home's; fault bits \
+             {faults}, fixes refused {refused}; true hold excursion {:.2} m",
+            t.hold_excursion_m.unwrap_or(f64::NAN)
+        );
+        assert_eq!(
+            faults, 0,
+            "seed {seed}: an estimator fault from healthy wander"
+        );
+        assert_eq!(refused, 0, "seed {seed}: healthy fixes refused");
+        assert!(
+            !t.crashed && t.unplanned_contacts == 0 && t.contacts.len() == 1,
+            "seed {seed}: {t}"
+        );
+        widest_m = widest_m.max(wander_m);
+    }
+    assert!(
+        widest_m > 5.0,
+        "the wander never passed 5 m ({widest_m:.2} m)"
+    );
 }
