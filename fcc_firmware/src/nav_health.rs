@@ -53,6 +53,7 @@ pub fn gps_gate_m(h_acc_m: f32) -> f32 {
         GPS_GATE_MIN_M
     }
 }
+
 /// Fixes refused for this long: the horizontal filter has lost GPS agreement, s.
 pub const GPS_FAULT_S: f32 = 2.0;
 /// Tilt innovation (accelerometer vs estimate) beyond which the attitude is suspect, rad (15°).
