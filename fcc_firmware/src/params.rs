@@ -67,6 +67,10 @@ pub struct NavParams {
     /// which grows as the crossover falls, stays below the wander it leaves out. The GPS gate
     /// widens with it (`nav_health::gps_gate_m`): the fix's distance from the estimate is the
     /// receiver's error's change, and at 5 m a gale hover refused 2 s of healthy fixes.
+    /// Not lower: a Doppler velocity biased by `b` holds the estimate `b/ω` from the GPS
+    /// position — 0.01 m/s leaves 5 m here, inside the gate's 10-m cap, and would reach the
+    /// cap (an estimator fault) at 0.001 rad/s, which the simulator's unbiased Doppler
+    /// cannot show (there, 5 seed sets: hover true box p95 0.41 → 0.35 m, no fault).
     pub horiz_omega_radps: f32,
     pub horiz_zeta: f32,
     /// Vertical: barometric altitude through F_L, vertical acceleration through F_H (eqs. 5–6).
