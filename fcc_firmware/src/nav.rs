@@ -5,7 +5,7 @@
 //! bias and the barometric reference over `calibration_s`. The first valid GPS fix becomes the
 //! local NED origin (home).
 
-use crate::nav_health::{GpsInnovation, Innovations, NavHealth};
+use crate::nav_health::{gps_gate_m, GpsInnovation, Innovations, NavHealth};
 use crate::params::NavParams;
 use crate::sensors::{BaroSample, GpsFix, ImuSample, SensorInputs};
 use fcc_msgs::geodesy::{Lla, LocalNed};
@@ -485,7 +485,7 @@ impl Navigator {
                 let d = fcc_nav::math::hypotf(ned[0] as f32 - p[0], ned[1] as f32 - p[1]);
                 let gps = GpsInnovation {
                     distance_m: d,
-                    gate_m: crate::nav_health::gps_gate_m(g.h_acc_m),
+                    gate_m: gps_gate_m(g.h_acc_m),
                 };
                 innov.gps = Some(gps);
                 self.last_gps_us = Some(now_us);

@@ -167,7 +167,8 @@ mod tests {
     }
 
     /// The production structure (position crossover ω = 0.002 rad/s, Doppler velocity at 5 Hz
-    /// with 0.3 per fix, the bias learnt from the velocity with its pole at 0.05 rad/s) at rest
+    /// with 0.3 per fix, the bias learnt from the velocity — its pole at 0.05 rad/s here, 0.2 in
+    /// flight, `NavParams::horiz_bias_pole_radps`) at rest
     /// with a 0.1 m/s² accelerometer bias and a GPS position error wandering ±1 m: the bias is
     /// learnt, the velocity stays true, and the position ignores most of the GPS wander (0.33 m
     /// worst after 200 s in this one realisation, 0.22 m at the earlier 0.005 rad/s: the
