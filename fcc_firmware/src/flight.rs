@@ -653,7 +653,7 @@ impl FlightCore {
     /// for a lull ([`crate::touchdown_gate`]), then descends at the final speed `v_f`.
     /// The gate judges the tilt demand `d = max(tilt, |θ_cmd|)`, `θ_cmd` last step's tilt
     /// command before the limit (the lean the wind of the moment asks for), and the estimated
-    /// ground speed. Waiting (and approaching), the height loop holds the gate clearance, never
+    /// ground speed (on the way down, extrapolated to the contact at `v_f`). Waiting (and approaching), the height loop holds the gate clearance, never
     /// descending faster than `v_f`. Committed: `v = max(v_f − (v_down − v_f)⁺, v_f/2)`, with
     /// `v_down` the descent rate over the ground — a brake on the overshoot of the step from
     /// the hold (to 0.40 m/s at contact without it).
@@ -673,10 +673,13 @@ impl FlightCore {
         }
         self.touchdown_gate
             .feel_ground(dt_s, clearance_m, nav.vel_ned_mps[2]);
-        match self
-            .touchdown_gate
-            .update(dt_s, clearance_m, tilt_rad, speed_mps)
-        {
+        match self.touchdown_gate.update(
+            dt_s,
+            clearance_m,
+            tilt_rad,
+            speed_mps,
+            l.land_final_speed_mps,
+        ) {
             GateAction::Descend => {
                 let over = (-nav.ground_rate_up_mps - l.land_final_speed_mps).max(0.0);
                 (l.land_final_speed_mps - over).max(0.5 * l.land_final_speed_mps)
