@@ -671,8 +671,12 @@ impl FlightCore {
         if !nav.gps_ok {
             self.touchdown_gate.commit_blind();
         }
-        self.touchdown_gate
-            .feel_ground(dt_s, clearance_m, nav.vel_ned_mps[2]);
+        self.touchdown_gate.feel_ground(
+            dt_s,
+            clearance_m,
+            nav.vel_ned_mps[2],
+            nav.accel_ned_mps2[2],
+        );
         match self.touchdown_gate.update(
             dt_s,
             clearance_m,
