@@ -662,11 +662,19 @@ impl FlightCore {
         if !self.ground_usable(nav) {
             return l.land_final_speed_mps;
         }
-        let clearance_m =
-            self.height_above_ground_m(nav) - self.params.airframe.sensor_height_on_ground_m;
-        let tilt_rad =
-            fcc_nav::ground_altitude::tilt_angle_rad(nav.euler.roll_rad, nav.euler.pitch_rad)
-                .max(self.tilt_demand_rad);
+        // The lowest foot's clearance: leaning into a gust at the gate brings a foot down by
+        // several centimetres.
+        let a = self.params.airframe;
+        let lean_rad =
+            fcc_nav::ground_altitude::tilt_angle_rad(nav.euler.roll_rad, nav.euler.pitch_rad);
+        let clearance_m = self.height_above_ground_m(nav)
+            - a.sensor_height_on_ground_m
+            - crate::geometry::foot_drop_m(
+                lean_rad,
+                a.gear_half_span_m,
+                a.sensor_height_on_ground_m,
+            );
+        let tilt_rad = lean_rad.max(self.tilt_demand_rad);
         let speed_mps = nav.ground_speed_mps();
         if !nav.gps_ok {
             self.touchdown_gate.commit_blind();

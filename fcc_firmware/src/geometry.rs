@@ -11,6 +11,16 @@
 
 pub const MOTOR_COUNT: usize = 8;
 
+/// How much closer to the ground the lowest foot of the landing gear is when the body leans
+/// `tilt_rad` than when level, m: the gear turns about the centre of mass, `height_m` above
+/// the feet's plane, and the foot at `half_span_m` on the side of the lean comes down by
+/// `r·sin φ − h·(1 − cos φ)` (feet taken in every direction: the worst case). Leaning 17°
+/// into a gust with paper A's gear (r 0.3 m, h 0.25 m), 7.7 cm.
+pub fn foot_drop_m(tilt_rad: f32, half_span_m: f32, height_m: f32) -> f32 {
+    let (s, c) = fcc_nav::math::sincosf(tilt_rad.clamp(0.0, core::f32::consts::FRAC_PI_2));
+    half_span_m * s - height_m * (1.0 - c)
+}
+
 /// Azimuth of motor `i` in radians from body x towards body y.
 pub fn motor_azimuth_rad(i: usize) -> f32 {
     (22.5 + 45.0 * i as f32) * core::f32::consts::PI / 180.0
@@ -29,5 +39,24 @@ pub fn spin_cw(i: usize) -> f32 {
         1.0
     } else {
         -1.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_foot_on_the_side_of_the_lean_comes_down() {
+        assert_eq!(foot_drop_m(0.0, 0.3, 0.25), 0.0);
+        assert!((foot_drop_m(17f32.to_radians(), 0.3, 0.25) - 0.0767).abs() < 1e-3);
+        // Negative tilt is the same lean seen the other way: clamped to level.
+        assert_eq!(foot_drop_m(-0.1, 0.3, 0.25), 0.0);
+        let mut prev = 0.0;
+        for deg in 1..45 {
+            let d = foot_drop_m((deg as f32).to_radians(), 0.3, 0.25);
+            assert!(d > prev, "{deg}°");
+            prev = d;
+        }
     }
 }

@@ -21,8 +21,12 @@ pub struct AirframeParams {
     pub max_thrust_per_motor_n: f32,
     /// Motor command while armed on the ground (spinning, no lift).
     pub idle_cmd: f32,
-    /// Height of the downward rangefinders above the ground when standing on the gear, m.
+    /// Height of the downward rangefinders above the ground when standing on the gear, m
+    /// (they sit at the centre of mass).
     pub sensor_height_on_ground_m: f32,
+    /// Distance from the centre to the landing gear's feet, m (paper A's skids ≈ 0.6 m
+    /// apart): leaning, the foot on that side comes down ([`crate::geometry::foot_drop_m`]).
+    pub gear_half_span_m: f32,
 }
 
 impl Default for AirframeParams {
@@ -34,6 +38,7 @@ impl Default for AirframeParams {
             max_thrust_per_motor_n: 12.0,
             idle_cmd: 0.1,
             sensor_height_on_ground_m: 0.25,
+            gear_half_span_m: 0.3,
         }
     }
 }
@@ -491,6 +496,7 @@ impl Params {
             500.0,
         )?;
         check("airframe.idle_cmd", a.idle_cmd, 0.0, 0.3)?;
+        check("airframe.gear_half_span_m", a.gear_half_span_m, 0.0, 3.0)?;
         let n = &self.nav;
         check("nav.tilt_omega_radps", n.tilt_omega_radps, 0.001, 20.0)?;
         check("nav.yaw_omega_radps", n.yaw_omega_radps, 0.001, 20.0)?;

@@ -209,6 +209,8 @@ pub struct Sim {
     rx: Vec<u8>,
     /// The gear has been truly airborne since the last ground contact.
     airborne_since_contact: bool,
+    /// The gear touched the ground in the last substep (a foot, or the whole gear).
+    gear_touching: bool,
     /// A crash or tip-over ended the flight (truth).
     crashed: bool,
     /// The simulator's own events (crashes), merged into the log's at [`Self::finish`].
@@ -283,6 +285,7 @@ impl Sim {
             link: None,
             rx: Vec::new(),
             airborne_since_contact: false,
+            gear_touching: true,
             crashed: false,
             sim_events: Vec::new(),
             spill: None,
@@ -375,18 +378,24 @@ impl Sim {
     }
 
     /// One physics substep, watching the gear: the first contact after true flight is scored
-    /// ([`super::truth::classify_contact`]).
+    /// ([`super::truth::classify_contact`]) — the whole gear on the ground, or before it the
+    /// lowest foot of a leaning vehicle ([`super::truth::foot_clearance_m`]).
     fn physics_substep(&mut self, ground_down: f64, sub: f64) {
-        let was_on_ground = self.body.on_ground();
+        let was_touching = self.gear_touching;
         let v = self.body.state.vel_ned_mps;
         let q = self.body.state.q_body_to_ned;
         self.body
             .step(&self.motors.0, self.wind_ned, ground_down, sub);
-        let clearance = ground_down - self.body.state.pos_ned_m.z;
-        if clearance > super::truth::AIRBORNE_CLEARANCE_M {
+        let foot_m = super::truth::foot_clearance_m(
+            ground_down - self.body.state.pos_ned_m.z,
+            tilt_deg(&self.body.state.q_body_to_ned),
+            self.body.params.gear_height_m,
+        );
+        if foot_m > super::truth::AIRBORNE_CLEARANCE_M {
             self.airborne_since_contact = true;
         }
-        if was_on_ground || !self.body.on_ground() || !self.airborne_since_contact {
+        self.gear_touching = self.body.on_ground() || foot_m <= 0.0;
+        if was_touching || !self.gear_touching || !self.airborne_since_contact {
             return;
         }
         self.airborne_since_contact = false;

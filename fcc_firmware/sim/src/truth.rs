@@ -60,6 +60,19 @@ pub struct Contact {
     pub gate_forced: bool,
 }
 
+/// Clearance of the lowest foot over the ground, m: `plane_clearance_m` is the contact plane's
+/// (the centre of mass `cg_height_m` above it when standing level), `tilt_deg` the body's tilt.
+/// The gear turns with the body about the centre of mass, and the foot on the side of the lean
+/// comes down by `r·sin φ − h·(1 − cos φ)` (ASSUMPTION: feet at [`GEAR_HALF_SPAN_M`] in every
+/// direction, the worst case of paper A's skids): holding 12 cm up leaning 20° into a gust, the
+/// foot is ≈ 0.1 m lower than level, at the ground.
+pub fn foot_clearance_m(plane_clearance_m: f64, tilt_deg: f64, cg_height_m: f64) -> f64 {
+    let phi = tilt_deg
+        .to_radians()
+        .clamp(0.0, core::f64::consts::FRAC_PI_2);
+    plane_clearance_m + cg_height_m * (1.0 - phi.cos()) - GEAR_HALF_SPAN_M * phi.sin()
+}
+
 /// The crash / tip-over model (module doc). `cg_height_m`: centre of mass above the contact
 /// plane when standing (the simulator's gear height).
 pub fn classify_contact(
@@ -291,6 +304,15 @@ mod tests {
         assert_eq!(classify_contact(0.3, 1.8, 0.0, h), ContactOutcome::TipOver);
         // Leaning 20° lowers it (≈ 1.0 m/s).
         assert_eq!(classify_contact(0.3, 1.2, 20.0, h), ContactOutcome::TipOver);
+    }
+
+    #[test]
+    fn a_leaning_foot_comes_down() {
+        let h = 0.25;
+        assert_eq!(foot_clearance_m(0.12, 0.0, h), 0.12);
+        // Holding 12 cm up leaning 20°: the foot 3.3 cm up; leaning 25°, on the ground.
+        assert!((foot_clearance_m(0.12, 20.0, h) - 0.0325).abs() < 1e-3);
+        assert!(foot_clearance_m(0.12, 25.0, h) < 0.0);
     }
 
     #[test]
