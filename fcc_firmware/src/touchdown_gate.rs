@@ -51,7 +51,9 @@
 //! position, its tilt capped near the ground (flight.rs).
 //!
 //! ```text
-//!   clearance c = h_agl − h_on_ground;  d = max(tilt, |θ_cmd| unlimited);  v = |v_NE|
+//!   clearance c = h_agl − h_on_ground − (r·sin φ − h_on_ground·(1 − cos φ))
+//!       (the lowest foot's: φ the estimated lean, r the gear's half-span; flight.rs)
+//!   d = max(tilt, |θ_cmd| unlimited);  v = |v_NE|
 //!   late = max(0, wait_s − PATIENCE_S) / RELAX_S
 //!   k = min(1 + wait_s/RELAX_S, RELAX_MAX) + late;   k_abort = 1 + late
 //!   k_last = 1 + (wait_s − MAX_WAIT_S) / LAST_RELAX_S
@@ -79,11 +81,11 @@
 //! Measured on the simulator's truth (576-flight campaign, `fcc-campaign --per-family 72
 //! --long`): see BENCHMARKS.md. Pure logic, time passed in (`dt_s`).
 
-/// Gear clearance at which the final descent waits, m (0.4 s at the final descent speed: the
-/// shorter the committed descent, the less a gust that rises on the way down slides the level
-/// vehicle — failing flights of 576 per seed set 1000 / 3000 / 5000 at 0.15 m: 8 / 10 / 14,
-/// at 0.12 m: 6 / 6 / 11; at 0.10 m the hold's dips touch the ground leaning, at 0.07 m most
-/// gale landings do).
+/// Clearance of the lowest foot at which the final descent waits, m (0.4 s at the final descent
+/// speed: the shorter the committed descent, the less a gust that rises on the way down slides the
+/// level vehicle — failing flights of 576 per seed set 1000 / 3000 / 5000 at 0.15 m: 8 / 10 / 14,
+/// at 0.12 m: 6 / 6 / 11; at 0.10 m the hold's dips touch the ground leaning, at 0.07 m most gale
+/// landings do; these on the gear's plane, before the gate judged the lowest foot).
 pub const GATE_CLEARANCE_M: f32 = 0.12;
 /// The gate is reached (the wait starts) within this above it, m.
 pub const ARRIVED_M: f32 = 0.02;
