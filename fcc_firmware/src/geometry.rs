@@ -1,4 +1,5 @@
-//! Airframe geometry shared by the mixer and the simulator: the paper's octorotor in X layout.
+//! Airframe geometry shared by the mixer and the simulator: the paper's octorotor in X layout,
+//! and the landing gear's lowest foot when leaning (the touchdown gate and the simulator's truth).
 //!
 //! Motors are numbered clockwise seen from above, starting front-right. Motor `i` sits at
 //! azimuth `22.5° + i·45°` from the body x (forward) axis towards body y (right), at `arm_m`

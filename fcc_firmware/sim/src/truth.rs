@@ -63,14 +63,17 @@ pub struct Contact {
 /// Clearance of the lowest foot over the ground, m: `plane_clearance_m` is the contact plane's
 /// (the centre of mass `cg_height_m` above it when standing level), `tilt_deg` the body's tilt.
 /// The gear turns with the body about the centre of mass, and the foot on the side of the lean
-/// comes down by `r·sin φ − h·(1 − cos φ)` (ASSUMPTION: feet at [`GEAR_HALF_SPAN_M`] in every
-/// direction, the worst case of paper A's skids): holding 12 cm up leaning 20° into a gust, the
-/// foot is 8.8 cm lower than level, 3 cm from the ground.
+/// comes down by [`fcc_firmware::geometry::foot_drop_m`] — the same geometry the firmware's
+/// touchdown gate judges, with the simulated airframe's gear (ASSUMPTION: feet at
+/// [`GEAR_HALF_SPAN_M`] in every direction, the worst case of paper A's skids): holding 12 cm
+/// up leaning 20° into a gust, the foot is 8.8 cm lower than level, 3 cm from the ground.
 pub fn foot_clearance_m(plane_clearance_m: f64, tilt_deg: f64, cg_height_m: f64) -> f64 {
-    let phi = tilt_deg
-        .to_radians()
-        .clamp(0.0, core::f64::consts::FRAC_PI_2);
-    plane_clearance_m + cg_height_m * (1.0 - phi.cos()) - GEAR_HALF_SPAN_M * phi.sin()
+    let drop_m = fcc_firmware::geometry::foot_drop_m(
+        tilt_deg.to_radians() as f32,
+        GEAR_HALF_SPAN_M as f32,
+        cg_height_m as f32,
+    );
+    plane_clearance_m - drop_m as f64
 }
 
 /// The crash / tip-over model (module doc). `cg_height_m`: centre of mass above the contact
