@@ -296,10 +296,15 @@ pub struct LimitParams {
     /// A velocity setpoint older than its time-to-live → hold; no fresh setpoint for this long
     /// (while in velocity mode or in the hold it caused) → land.
     pub setpoint_lost_land_s: f32,
-    /// Landing: descent speed high up, and the slow final descent below `land_slow_alt_m`.
+    /// Landing: descent speed high up, and the slow final descent below `land_slow_alt_m`
+    /// (to the touchdown gate, and while the rangefinders do not see the ground, to the ground).
     pub land_speed_mps: f32,
     pub land_final_speed_mps: f32,
     pub land_slow_alt_m: f32,
+    /// Landing: the touchdown gate's committed descent, the last centimetres (the vertical speed
+    /// the gear meets the ground with), on the inertial vertical velocity
+    /// (`fcc_firmware::touchdown_gate`).
+    pub land_touchdown_speed_mps: f32,
     /// Touchdown: on ground for this long (low vertical speed, thrust well below hover) → disarm.
     pub touchdown_s: f32,
     /// Terrain floor: outside LAND, a level or climbing command never lets the vehicle sink
@@ -321,6 +326,7 @@ impl Default for LimitParams {
             land_speed_mps: 0.8,
             land_final_speed_mps: 0.3,
             land_slow_alt_m: 2.0,
+            land_touchdown_speed_mps: 0.38,
             touchdown_s: 1.0,
             min_agl_m: 1.0,
         }
@@ -548,6 +554,12 @@ impl Params {
         check(
             "limits.land_final_speed_mps",
             l.land_final_speed_mps,
+            0.1,
+            1.0,
+        )?;
+        check(
+            "limits.land_touchdown_speed_mps",
+            l.land_touchdown_speed_mps,
             0.1,
             1.0,
         )?;

@@ -10,11 +10,12 @@
 //! the estimated tilt and the tilt the horizontal loops ask for before any limit, i.e. how far
 //! the vehicle must lean to stay put in the wind of the moment — at most [`CALM_TILT_DEG`], and
 //! the estimated ground speed at most [`CALM_SPEED_MPS`]. Then it commits and descends at the
-//! final speed with the tilt limited to [`LEVEL_TILT_DEG`] (flight.rs). A committed descent
+//! touchdown speed `v_t` (`limits.land_touchdown_speed_mps`, on the inertial vertical
+//! velocity) with the tilt limited to [`LEVEL_TILT_DEG`] (flight.rs). A committed descent
 //! whose demand the level limit clips (`d > LEVEL_TILT_DEG`: a gust it cannot hold without
 //! sliding) or that would meet the ground faster than [`ABORT_SPEED_MPS`] — the estimated
 //! ground speed `v`, plus its rise `v̇` (low-passed over [`SPEED_RATE_TAU_S`]) until the contact
-//! at the final speed while the level limit clips the demand — while still above
+//! at the touchdown speed while the level limit clips the demand — while still above
 //! [`ABORT_ABOVE_M`] (the mean of the fused clearance and the one dead-reckoned since the
 //! commit: [`HOLD_CLEARANCE_TAU_S`]) goes back to the gate — unless the gear meets the ground on its way
 //! back ([`REFEEL_S`]): sent back 1–3 cm up, it touches anyway, and climbing on is a hop;
@@ -57,13 +58,13 @@
 //!   late = max(0, wait_s − PATIENCE_S) / RELAX_S
 //!   k = min(1 + wait_s/RELAX_S, RELAX_MAX) + late;   k_abort = 1 + late
 //!   k_last = 1 + (wait_s − MAX_WAIT_S) / LAST_RELAX_S
-//!   v_c = v + max(0, v̇)·c/v_f  if d > LEVEL_TILT, else v
-//!         (v̇ = d|v|/dt low-passed, v_f the final descent speed)
+//!   v_c = v + max(0, v̇)·c/v_t  if d > LEVEL_TILT, else v
+//!         (v̇ = d|v|/dt low-passed, v_t the touchdown speed)
 //!   c_dr = c low-passed while waiting; at the commit on, c_dr −= v_down·dt
 //!   committed, not forced, not felt, (c + c_dr)/2 > ABORT_ABOVE, d > k_abort·LEVEL_TILT or
 //!       v_c > min(k_abort·ABORT_SPEED, ABORT_SPEED_CAP) → waiting
 //!   waiting (at the gate, or < REFEEL_S after that), c < IMPACT_BELOW, a contact → committed, felt
-//!   committed:  descend (final speed)
+//!   committed:  descend (touchdown speed)
 //!   never within ARRIVED of the gate yet:  hold (the approach)
 //!   waiting:  hold c = GATE;  wait_s += dt;  calm_s += dt while d ≤ k·CALM_TILT and
 //!             v ≤ min(k·CALM_SPEED, CALM_SPEED_CAP), else 0
@@ -81,8 +82,8 @@
 //! Measured on the simulator's truth (576-flight campaign, `fcc-campaign --per-family 72
 //! --long`): see BENCHMARKS.md. Pure logic, time passed in (`dt_s`).
 
-/// Clearance of the lowest foot at which the final descent waits, m (0.4 s at the final descent
-/// speed: the shorter the committed descent, the less a gust that rises on the way down slides the
+/// Clearance of the lowest foot at which the final descent waits, m (0.32 s at the touchdown
+/// speed, 0.4 s at the final speed it was measured with below: the shorter the committed descent, the less a gust that rises on the way down slides the
 /// level vehicle — failing flights of 576 per seed set 1000 / 3000 / 5000 at 0.15 m: 8 / 10 / 14,
 /// at 0.12 m: 6 / 6 / 11; at 0.10 m the hold's dips touch the ground leaning, at 0.07 m most gale
 /// landings do; these on the gear's plane, before the gate judged the lowest foot).
@@ -197,7 +198,7 @@ pub const IMPACT_BELOW_M: f32 = 0.1;
 /// What the final descent does this step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GateAction {
-    /// Descend at the final speed.
+    /// Descend at the touchdown speed.
     Descend,
     /// Hold the gear at [`GATE_CLEARANCE_M`] (and approach it at no more than the final speed).
     Hold,
@@ -314,14 +315,14 @@ impl TouchdownGate {
     /// One step: `clearance_m` of the gear over the ground, the tilt demand `demand_rad` (the
     /// larger of the estimated tilt and the horizontal loops' unlimited tilt command), the
     /// estimated horizontal `speed_mps` over the ground and the committed descent's speed
-    /// `final_speed_mps`.
+    /// `touchdown_speed_mps`.
     pub fn update(
         &mut self,
         dt_s: f32,
         clearance_m: f32,
         demand_rad: f32,
         speed_mps: f32,
-        final_speed_mps: f32,
+        touchdown_speed_mps: f32,
     ) -> GateAction {
         self.track_speed(dt_s, speed_mps);
         let late = (self.wait_s - PATIENCE_S).max(0.0) / RELAX_S;
@@ -333,7 +334,7 @@ impl TouchdownGate {
             let k = 1.0 + late;
             let clipped = demand_rad > LEVEL_TILT_DEG.to_radians();
             let gust = demand_rad > k * LEVEL_TILT_DEG.to_radians()
-                || self.contact_speed_mps(speed_mps, clipped, clearance_m, final_speed_mps)
+                || self.contact_speed_mps(speed_mps, clipped, clearance_m, touchdown_speed_mps)
                     > (k * ABORT_SPEED_MPS).min(ABORT_SPEED_CAP_MPS);
             if gust {
                 self.committed = false;
@@ -412,19 +413,19 @@ impl TouchdownGate {
     }
 
     /// The ground speed at the contact, m/s: while the level limit `clipped` the demand, if it
-    /// keeps rising as now, `v + max(0, v̇)·c/v_f` (a falling speed is taken as it is); else
+    /// keeps rising as now, `v + max(0, v̇)·c/v_t` (a falling speed is taken as it is); else
     /// `v` (the loops oppose the push).
     fn contact_speed_mps(
         &self,
         speed_mps: f32,
         clipped: bool,
         clearance_m: f32,
-        final_speed_mps: f32,
+        touchdown_speed_mps: f32,
     ) -> f32 {
         if !clipped {
             return speed_mps;
         }
-        let to_contact_s = clearance_m.max(0.0) / final_speed_mps.max(0.05);
+        let to_contact_s = clearance_m.max(0.0) / touchdown_speed_mps.max(0.05);
         speed_mps + self.speed_rate_mps2.max(0.0) * to_contact_s
     }
 
