@@ -74,7 +74,10 @@ fn touchdowns_meet_the_ground_at_the_touchdown_speed(out: &[campaign::Outcome]) 
         dev.len()
     );
     assert!(dev.len() >= 40, "{} touchdowns scored", dev.len());
-    assert!(rms <= 0.02, "touchdown vertical speed RMS {rms:.4} m/s about {v_t:.2}");
+    assert!(
+        rms <= 0.02,
+        "touchdown vertical speed RMS {rms:.4} m/s about {v_t:.2}"
+    );
 }
 
 /// The velocity family's flights at the speed limit (commanded ≥ 7.8 of 8 m/s, in 3 m/s wind
