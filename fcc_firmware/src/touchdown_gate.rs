@@ -454,6 +454,13 @@ impl TouchdownGate {
         self.committed
     }
 
+    /// The gate has been reached (holding at it or waiting for a lull since) or the descent is
+    /// committed: the last centimetres, where the climb-rate loop closes on the inertial
+    /// vertical velocity (flight.rs).
+    pub fn at_gate(&self) -> bool {
+        self.arrived || self.committed
+    }
+
     /// Seconds spent waiting at the gate so far.
     pub fn wait_s(&self) -> f32 {
         self.wait_s
