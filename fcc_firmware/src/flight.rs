@@ -470,11 +470,12 @@ impl FlightCore {
                     self.failsafe = FailsafeCause::SetpointStale;
                 }
             }
-            Mode::Hold if self.failsafe == FailsafeCause::SetpointStale => {
-                if since_sp_s > l.setpoint_lost_land_s {
-                    self.enter_land(nav);
-                    self.failsafe = FailsafeCause::SetpointLost;
-                }
+            Mode::Hold
+                if self.failsafe == FailsafeCause::SetpointStale
+                    && since_sp_s > l.setpoint_lost_land_s =>
+            {
+                self.enter_land(nav);
+                self.failsafe = FailsafeCause::SetpointLost;
             }
             _ => {}
         }

@@ -36,7 +36,7 @@ pub fn motor_position_m(i: usize, arm_m: f32) -> (f32, f32) {
 
 /// +1 for a clockwise rotor (seen from above), −1 for counter-clockwise.
 pub fn spin_cw(i: usize) -> f32 {
-    if i % 2 == 0 {
+    if i.is_multiple_of(2) {
         1.0
     } else {
         -1.0

@@ -470,6 +470,7 @@ impl Navigator {
                 if dt > 0.05 && dt < 1.0 {
                     // First-order smoothing (~0.5 s) of the differenced GPS velocity.
                     let k = (dt / 0.5).min(1.0);
+                    #[allow(clippy::needless_range_loop)] // one axis of three arrays
                     for i in 0..3 {
                         let a = (g.vel_ned_mps[i] - v0[i]) / dt;
                         self.gps_accel_ned_mps2[i] += k * (a - self.gps_accel_ned_mps2[i]);

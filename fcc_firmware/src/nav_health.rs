@@ -105,8 +105,10 @@ impl Monitor {
     /// A sample (`None`: none this step), its limit; returns the time it has been bad.
     fn update(&mut self, dt_s: f32, sample: Option<f32>, limit: f32) -> f32 {
         if let Some(v) = sample {
-            // NaN counts as bad.
-            self.bad = !(v <= limit);
+            // NaN counts as bad (hence the negated comparison).
+            #[allow(clippy::neg_cmp_op_on_partial_ord)]
+            let bad = !(v <= limit);
+            self.bad = bad;
             if !self.bad {
                 self.bad_s = 0.0;
             }

@@ -442,8 +442,8 @@ impl TouchdownGate {
 
     /// Committed at [`LAST_CHANCE_S`] with a tilt demand beyond [`LEVEL_TILT_DEG`]: a wind the
     /// vehicle cannot touch down level in (the wind limit's landing, beyond the vehicle's
-    /// authority). Leveled, it would slide with the wind into the ground (`hover` in 16 m/s
-    /// + W20 30 kt: 1.3 m/s, tipped over); it touches down holding its position instead, the
+    /// authority). Leveled, it would slide with the wind into the ground (`hover` in 16 m/s and
+    /// W20 30 kt: 1.3 m/s, tipped over); it touches down holding its position instead, the
     /// tilt capped by flight.rs.
     pub fn unlevel(&self) -> bool {
         self.unlevel

@@ -111,7 +111,7 @@ pub fn hypotf(x: f32, y: f32) -> f32 {
     let (hi, lo) = if a >= b { (a, b) } else { (b, a) };
     const TWO_P60: f32 = f32::from_bits(0x5d80_0000); // 2^60
     const TWO_M60: f32 = f32::from_bits(0x2180_0000); // 2^-60
-    if hi < TWO_P60 && hi >= TWO_M60 {
+    if (TWO_M60..TWO_P60).contains(&hi) {
         // lo² may underflow here only when it is below hi²·2^-66: negligible.
         return sqrtf(hi * hi + lo * lo);
     }
@@ -156,7 +156,10 @@ pub fn tanf(x: f32) -> f32 {
 /// π/2 split for Cody–Waite reduction: `P1` has 8 significant bits and `P2` 11, so `k·P1` and
 /// `k·P2` are exact for |k| < 2¹³; `P1 + P2 + P3` = π/2 to 1.7e−15.
 const PIO2_1: f32 = 1.570_312_5;
+// The split's exact decimal values as published (more digits than an f32 holds, on purpose).
+#[allow(clippy::excessive_precision)]
 const PIO2_2: f32 = 4.837_512_969_970_703_125e-4;
+#[allow(clippy::excessive_precision)]
 const PIO2_3: f32 = 7.549_790_126_404_332e-8;
 const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
 /// Above this |x| the reduction switches to [`reduce_large`] (Cody–Waite's residual error
@@ -183,8 +186,10 @@ pub fn sincosf(x: f32) -> (f32, f32) {
     };
     let zz = z * z;
     // Cephes sinf/cosf polynomials on [−π/4, π/4] (single-precision minimax).
+    #[allow(clippy::excessive_precision)] // the coefficients as Cephes publishes them
     let s =
         ((-1.951_529_589_1e-4 * zz + 8.332_160_873_6e-3) * zz - 1.666_665_461_1e-1) * zz * z + z;
+    #[allow(clippy::excessive_precision)]
     let c = ((2.443_315_711_809_948e-5 * zz - 1.388_731_625_493_765e-3) * zz
         + 4.166_664_568_298_827e-2)
         * zz

@@ -79,6 +79,7 @@ impl RangeAid {
     /// filter's step re-acquisitions so far, `rate_residual_mps` its residual rate (how fast the
     /// fused height moves against the inertial vertical velocity); `alt_est_m`: the filter's
     /// current altitude; `ground_speed_mps`: the horizontal speed (a ramp needs motion).
+    #[allow(clippy::too_many_arguments)] // each is one of the filters' outputs, named in units
     pub fn measurement(
         &mut self,
         dt_s: f32,

@@ -118,6 +118,7 @@ impl Mixer {
     pub fn wrench(&self, t: &[f32; MOTOR_COUNT]) -> (f32, [f32; 3]) {
         let mut f = 0.0;
         let mut tau = [0.0f32; 3];
+        #[allow(clippy::needless_range_loop)] // i is also the motor's number for spin_cw
         for i in 0..MOTOR_COUNT {
             let (x, y) = self.pos_m[i];
             f += t[i];
