@@ -83,8 +83,8 @@
 //! --long`): see BENCHMARKS.md. Pure logic, time passed in (`dt_s`).
 
 /// Clearance of the lowest foot at which the final descent waits, m (0.32 s at the touchdown
-/// speed, 0.4 s at the final speed it was measured with below: the shorter the committed descent, the less a gust that rises on the way down slides the
-/// level vehicle — failing flights of 576 per seed set 1000 / 3000 / 5000 at 0.15 m: 8 / 10 / 14,
+/// speed, 0.4 s at the 0.3 m/s the figures below were measured with: the shorter the committed
+/// descent, the less a gust that rises on the way down slides the level vehicle — failing flights of 576 per seed set 1000 / 3000 / 5000 at 0.15 m: 8 / 10 / 14,
 /// at 0.12 m: 6 / 6 / 11; at 0.10 m the hold's dips touch the ground leaning, at 0.07 m most gale
 /// landings do; these on the gear's plane, before the gate judged the lowest foot).
 pub const GATE_CLEARANCE_M: f32 = 0.12;
