@@ -870,6 +870,7 @@ impl FlightCore {
             tilt_limit_rad: self.tilt_limit_rad(nav),
             cross_track: self.mode == Mode::Velocity,
             climb_over_ground,
+            touchdown: self.mode == Mode::Land && self.touchdown_gate.committed(),
             airborne,
         };
         let out = self.cascade.update(dt_s, nav, &demand);

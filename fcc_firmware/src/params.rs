@@ -176,6 +176,15 @@ pub struct ControlParams {
     pub cross_track_k_per_s: f32,
     /// Horizontal velocity PI → acceleration command.
     pub vel_p_per_s: f32,
+    /// The same gain in LAND's committed descent (the touchdown gate's last ≈ 0.3 s, the tilt
+    /// limited to 4°): a gust that builds on the way down is answered by the lean the level
+    /// limit allows before it has slid the vehicle. At 3 /s a 0.2-m/s slide asks for 0.6 m/s²,
+    /// 3.4° — less than the limit — and the gale's slides ran on at 0.2 m/s into the
+    /// touchdown (`hover_gale` 17071: committed at 0.23 m/s, touched down at 0.34 with 0.8° of
+    /// tilt). Waiting at the gate the loop keeps the flight gain: stiffer there, the lean it
+    /// commands is noisier, fewer instants are calm, the waits grow and more holds put a foot
+    /// down. Measured: README.md (Landing), `scripts/bench_history.md`.
+    pub vel_p_touchdown_per_s: f32,
     pub vel_i_per_s2: f32,
     pub vel_i_limit_mps2: f32,
     pub accel_cmd_limit_mps2: f32,
@@ -239,6 +248,7 @@ impl Default for ControlParams {
             pos_p_per_s: 2.0,
             cross_track_k_per_s: param_default::CROSS_TRACK_K_PER_S,
             vel_p_per_s: param_default::VEL_P_PER_S,
+            vel_p_touchdown_per_s: 5.0,
             vel_i_per_s2: 1.0,
             vel_i_limit_mps2: 1.5,
             accel_cmd_limit_mps2: 4.0,
@@ -566,6 +576,12 @@ impl Params {
         check("limits.touchdown_s", l.touchdown_s, 0.2, 10.0)?;
         check("limits.min_agl_m", l.min_agl_m, 0.0, 50.0)?;
         let c = &self.control;
+        check(
+            "control.vel_p_touchdown_per_s",
+            c.vel_p_touchdown_per_s,
+            0.05,
+            10.0,
+        )?;
         check("control.accel_forgetting", c.accel_forgetting, 0.9, 1.0)?;
         check(
             "control.yaw_rate_forgetting",

@@ -61,8 +61,10 @@
 //!   v_c = v + max(0, v̇)·c/v_t  if d > LEVEL_TILT, else v
 //!         (v̇ = d|v|/dt low-passed, v_t the touchdown speed)
 //!   c_dr = c low-passed while waiting; at the commit on, c_dr −= v_down·dt
-//!   committed, not forced, not felt, (c + c_dr)/2 > ABORT_ABOVE, d > k_abort·LEVEL_TILT or
+//!   d_lp = d low-passed over DEMAND_TAU_S (a 2-ms spike of the command is no gust)
+//!   committed, not forced, not felt, (c + c_dr)/2 > ABORT_ABOVE, d_lp > k_abort·LEVEL_TILT or
 //!       v_c > min(k_abort·ABORT_SPEED, ABORT_SPEED_CAP) → waiting
+//!       (v_c extrapolated while d_lp > LEVEL_TILT)
 //!   waiting (at the gate, or < REFEEL_S after that), c < IMPACT_BELOW, a contact → committed, felt
 //!   committed:  descend (touchdown speed)
 //!   never within ARRIVED of the gate yet:  hold (the approach)
@@ -133,6 +135,12 @@ pub const ABORT_SPEED_MPS: f32 = 0.2;
 /// sets of `hover_gale`, 1,440 flights, extrapolating whatever the demand: touchdowns beyond
 /// 0.25 m/s 57 without the extrapolation, 26 at 0.05 s, 27 at 0.1 s, 44 at 0.2 s.)
 pub const SPEED_RATE_TAU_S: f32 = 0.05;
+/// The time constant of the tilt demand a committed descent's abort judges, s: a gust's lean
+/// builds over ≈ 0.1–0.3 s, while single 2-ms steps of the command spike by 1–2° (the
+/// acceleration loop on the observer's noisy â, the velocity loop on the estimate's noise —
+/// more at the committed descent's touchdown gain). One such spike past the level limit sent
+/// `mag` 33030's calm descent (0.03 m/s, 3° of command) back 2 cm above the ground: a hop.
+pub const DEMAND_TAU_S: f32 = 0.02;
 /// The calm thresholds widen by their own value per this much waiting, s …
 pub const RELAX_S: f32 = 15.0;
 /// … up to this factor (`RELAX_MAX·CALM_TILT_DEG` < [`LEVEL_TILT_DEG`]).
@@ -228,6 +236,8 @@ pub struct TouchdownGate {
     speed_prev_mps: f32,
     /// The ground speed's rate of change, low-passed with [`SPEED_RATE_TAU_S`], m/s².
     speed_rate_mps2: f32,
+    /// The tilt demand low-passed with [`DEMAND_TAU_S`], rad (NaN: none yet).
+    demand_lp_rad: f32,
     /// Waiting: the clearance low-passed with [`HOLD_CLEARANCE_TAU_S`]; committed: that at the
     /// commit less the descent since, m (NaN: none yet).
     dead_reckoned_clearance_m: f32,
@@ -249,6 +259,7 @@ impl TouchdownGate {
             since_jolt_s: f32::INFINITY,
             speed_prev_mps: f32::NAN,
             speed_rate_mps2: 0.0,
+            demand_lp_rad: f32::NAN,
             dead_reckoned_clearance_m: f32::NAN,
         }
     }
@@ -325,6 +336,7 @@ impl TouchdownGate {
         touchdown_speed_mps: f32,
     ) -> GateAction {
         self.track_speed(dt_s, speed_mps);
+        let gust_demand_rad = self.track_demand(dt_s, demand_rad);
         let late = (self.wait_s - PATIENCE_S).max(0.0) / RELAX_S;
         if self.committed
             && !self.forced
@@ -332,8 +344,8 @@ impl TouchdownGate {
             && self.abort_clearance_m(clearance_m) > ABORT_ABOVE_M
         {
             let k = 1.0 + late;
-            let clipped = demand_rad > LEVEL_TILT_DEG.to_radians();
-            let gust = demand_rad > k * LEVEL_TILT_DEG.to_radians()
+            let clipped = gust_demand_rad > LEVEL_TILT_DEG.to_radians();
+            let gust = gust_demand_rad > k * LEVEL_TILT_DEG.to_radians()
                 || self.contact_speed_mps(speed_mps, clipped, clearance_m, touchdown_speed_mps)
                     > (k * ABORT_SPEED_MPS).min(ABORT_SPEED_CAP_MPS);
             if gust {
@@ -400,6 +412,17 @@ impl TouchdownGate {
         } else {
             clearance_m
         }
+    }
+
+    /// The tilt demand the abort judges: low-passed ([`DEMAND_TAU_S`]), rad.
+    fn track_demand(&mut self, dt_s: f32, demand_rad: f32) -> f32 {
+        let d = &mut self.demand_lp_rad;
+        if d.is_finite() {
+            *d += (dt_s / DEMAND_TAU_S).min(1.0) * (demand_rad - *d);
+        } else {
+            *d = demand_rad;
+        }
+        *d
     }
 
     /// The ground speed's rate of change `v̇`, low-passed ([`SPEED_RATE_TAU_S`]).
@@ -566,9 +589,10 @@ mod tests {
     fn a_clipped_demand_or_a_push_on_the_way_down_sends_it_back() {
         let mut g = TouchdownGate::new();
         assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
-        // Still 8 cm up, the controller asks for more than the level limit: back to waiting.
+        // Still 8 cm up, the controller asks for more than the level limit (for 0.1 s: the
+        // demand is low-passed, DEMAND_TAU_S): back to waiting.
         assert_eq!(
-            run(&mut g, 0.01, 0.08, LEVEL_TILT_DEG + 0.5, 0.05),
+            run(&mut g, 0.1, 0.08, LEVEL_TILT_DEG + 0.5, 0.05),
             GateAction::Hold
         );
         assert!(!g.committed());
@@ -578,6 +602,19 @@ mod tests {
         assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
         // Below ABORT_ABOVE the same gust no longer stops it.
         assert_eq!(run(&mut g, 0.1, 0.02, 10.0, 0.5), GateAction::Descend);
+    }
+
+    #[test]
+    fn a_spike_of_the_demand_is_no_gust() {
+        // `mag` 33030: a calm descent at 3° of command, one 2-ms step of it past the level
+        // limit: it goes on down (sent back, 2 cm above the ground, it hopped) …
+        let mut g = TouchdownGate::new();
+        assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
+        assert_eq!(run(&mut g, 0.05, 0.09, 3.0, 0.05), GateAction::Descend);
+        assert_eq!(run(&mut g, DT, 0.09, 6.0, 0.05), GateAction::Descend);
+        assert_eq!(run(&mut g, 0.05, 0.09, 3.0, 0.05), GateAction::Descend);
+        // … while the same demand held for 0.05 s is a gust.
+        assert_eq!(run(&mut g, 0.05, 0.09, 6.0, 0.05), GateAction::Hold);
     }
 
     #[test]
@@ -628,9 +665,9 @@ mod tests {
         // After 25 s: k_abort = 2, so a 7° demand at 8 cm does not send it back …
         let mut g = waited(25.0);
         assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
-        assert_eq!(run(&mut g, 0.01, 0.08, 7.0, 0.05), GateAction::Descend);
+        assert_eq!(run(&mut g, 0.1, 0.08, 7.0, 0.05), GateAction::Descend);
         // … 10° does.
-        assert_eq!(run(&mut g, 0.01, 0.08, 10.0, 0.05), GateAction::Hold);
+        assert_eq!(run(&mut g, 0.1, 0.08, 10.0, 0.05), GateAction::Hold);
         // The abort speed stops widening at its cap: 0.3 m/s (< k_abort·0.2 = 0.4) sends it back.
         assert_eq!(run(&mut g, 0.3, GATE, 2.0, 0.05), GateAction::Descend);
         assert_eq!(
@@ -788,8 +825,8 @@ mod tests {
     }
 
     /// Committed after a calm hold at the gate, `s` seconds of a calm descent at the final
-    /// speed, the fused clearance following it; then one step with the fused clearance
-    /// `fused` and a gust's demand (8°): that step's action.
+    /// speed, the fused clearance following it; then 20 ms with the fused clearance `fused`
+    /// and a gust's demand (8°): the last action.
     fn gust_after_descending(s: f32, fused: f32) -> GateAction {
         let mut g = TouchdownGate::new();
         assert_eq!(run(&mut g, 0.5, GATE, 2.0, 0.05), GateAction::Descend);
@@ -801,8 +838,12 @@ mod tests {
                 GateAction::Descend
             );
         }
-        g.feel_ground(DT, fused, FINAL, 0.0);
-        g.update(DT, fused, 8f32.to_radians(), 0.05, FINAL)
+        let mut a = GateAction::Descend;
+        for _ in 0..10 {
+            g.feel_ground(DT, fused, FINAL, 0.0);
+            a = g.update(DT, fused, 8f32.to_radians(), 0.05, FINAL);
+        }
+        a
     }
 
     #[test]
@@ -832,11 +873,15 @@ mod tests {
         let up = ABORT_ABOVE_M + 0.01;
         let sent_back = || {
             let mut g = committed_descent(up, 0.3);
-            g.feel_ground(DT, up - 0.005, 0.3, 0.0);
-            assert_eq!(
-                g.update(DT, up - 0.005, 8f32.to_radians(), 0.05, FINAL),
-                GateAction::Hold
-            );
+            let mut a = GateAction::Descend;
+            for _ in 0..10 {
+                g.feel_ground(DT, up - 0.005, 0.3, 0.0);
+                a = g.update(DT, up - 0.005, 8f32.to_radians(), 0.05, FINAL);
+                if a == GateAction::Hold {
+                    break;
+                }
+            }
+            assert_eq!(a, GateAction::Hold);
             g
         };
         let mut g = sent_back();

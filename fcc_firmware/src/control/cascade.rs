@@ -52,6 +52,9 @@ pub struct Demand {
     /// Close the climb-rate loop on the rate over the ground (the rangefinder fusion's
     /// `ground_rate_up_mps`, LAND's final descent) instead of the inertial estimate.
     pub climb_over_ground: bool,
+    /// LAND's committed descent (the touchdown gate's last centimetres): the velocity loop
+    /// flies its touchdown gain `control.vel_p_touchdown_per_s`.
+    pub touchdown: bool,
     /// In the air (the land detector has not confirmed touchdown): every loop flies.
     pub airborne: bool,
 }
@@ -90,7 +93,8 @@ pub struct CascadeOutput {
     /// The tilt command was over [`Demand::tilt_limit_rad`] (and was scaled to it).
     pub tilt_limited: bool,
     /// The tilt the horizontal loops asked for before the limit, `|θ_cmd|`, rad: how far the
-    /// vehicle has to lean to follow the velocity command (against the wind, in a gust).
+    /// vehicle has to lean to follow the velocity command (against the wind, in a gust) — at
+    /// the flight gain also in LAND's committed descent (`Cascade::touchdown_extra_ne_mps2`).
     pub tilt_demand_rad: f32,
     /// `|v_cmd' − v|`, the horizontal velocity error after cross-track compensation, m/s.
     pub vel_err_mps: f32,
@@ -323,6 +327,8 @@ impl Cascade {
         let airborne = demand.airborne;
         let vel_ne_mps = [nav.vel_ned_mps[0], nav.vel_ned_mps[1]];
         let (v_cmd_ne_mps, mut a_cmd_ne_mps2) = self.velocity(dt_s, nav, heading, demand);
+        let stiffer_fr_mps2 =
+            heading.to_fr(self.touchdown_extra_ne_mps2(nav, v_cmd_ne_mps, demand));
         // Heading frame (forward, right): observer and acceleration controller per axis.
         let a_cmd_fr = heading.to_fr(a_cmd_ne_mps2);
         let vel_fr_mps = heading.to_fr(vel_ne_mps);
@@ -346,6 +352,15 @@ impl Cascade {
             };
         }
         let n = fcc_nav::math::hypotf(tilt_cmd[0], tilt_cmd[1]);
+        // The lean the wind asks for: the command less what the touchdown gain adds to it —
+        // and no more than the command (a lean the limit would not clip slides nothing).
+        let c = self.params.control;
+        let per_mps2 = 1.0 / c.model_k1_mps2_per_rad + c.accel_p_rad_per_mps2;
+        let wind_demand_rad = fcc_nav::math::hypotf(
+            tilt_cmd[0] - per_mps2 * stiffer_fr_mps2[0],
+            tilt_cmd[1] - per_mps2 * stiffer_fr_mps2[1],
+        )
+        .min(n);
         self.tilt_sat_fr = [0.0; 2];
         let vel_err_mps = fcc_nav::math::hypotf(
             v_cmd_ne_mps[0] - vel_ne_mps[0],
@@ -367,9 +382,35 @@ impl Cascade {
             a_meas_fr_mps2,
             tilt_cmd_fr_rad: tilt_cmd,
             tilt_limited,
-            tilt_demand_rad: n,
+            tilt_demand_rad: wind_demand_rad,
             vel_err_mps,
         }
+    }
+
+    /// The part of the velocity PI's acceleration command (NED north, east, m/s²) that the
+    /// touchdown gain adds to the flight gain's: `(k_td − k_v)·(v_cmd − v)` in LAND's
+    /// committed descent, else zero. The tilt demand the touchdown gate judges
+    /// ([`CascadeOutput::tilt_demand_rad`]) leaves it out — through the acceleration
+    /// controller's sensitivity `∂θ/∂a = 1/k1 + K_p,a` — so that it stays the lean the wind
+    /// asks for: with it, the stiffer loop's answer to the velocity estimate's noise (0.05
+    /// m/s × 5 /s ≈ 3.7° of command) read as gusts, sent calm descents back to the gate and
+    /// hopped (20 seed sets of `fcc-campaign --per-family 72 --long`: `velocity` 29020
+    /// aborted three times at 3 m/s of wind and touched down twice).
+    fn touchdown_extra_ne_mps2(
+        &self,
+        nav: &NavState,
+        v_cmd_ne_mps: [f32; 2],
+        demand: &Demand,
+    ) -> [f32; 2] {
+        if !demand.touchdown || !demand.airborne {
+            return [0.0; 2];
+        }
+        let c = self.params.control;
+        let k = c.vel_p_touchdown_per_s - c.vel_p_per_s;
+        [
+            k * (v_cmd_ne_mps[0] - nav.vel_ned_mps[0]),
+            k * (v_cmd_ne_mps[1] - nav.vel_ned_mps[1]),
+        ]
     }
 
     /// Step 1: the compensated velocity command and the velocity PI's acceleration command
@@ -395,6 +436,12 @@ impl Cascade {
         let sat_ne = heading.to_ne(self.tilt_sat_fr);
         let sat_ne = [sign_or_zero(sat_ne[0]), sign_or_zero(sat_ne[1])];
         let a_cmd = if airborne {
+            let c = self.params.control;
+            self.vel_ctrl.set_p(if demand.touchdown {
+                c.vel_p_touchdown_per_s
+            } else {
+                c.vel_p_per_s
+            });
             self.vel_ctrl.update(dt_s, v_cmd, vel_ne_mps, sat_ne)
         } else {
             self.vel_ctrl.reset();
@@ -481,6 +528,7 @@ mod tests {
             tilt_limit_rad: 0.6,
             cross_track: true,
             climb_over_ground: false,
+            touchdown: false,
             airborne,
         }
     }
@@ -557,6 +605,42 @@ mod tests {
         assert_eq!(out.telemetry.torque_nm, [-d * 0.2, d * 0.1, 0.0]);
         assert_eq!(integrals(&c), [0.0; 5], "integrators held at rest");
         assert!(!out.telemetry.attitude_active && !out.tilt_limited);
+    }
+
+    #[test]
+    fn the_committed_descent_flies_the_touchdown_gain() {
+        let p = Params::default();
+        let slide = |touchdown: bool| {
+            let mut c = Cascade::from_params(&p);
+            let d = Demand {
+                vel_ne_mps: [0.0; 2],
+                cross_track: false,
+                touchdown,
+                ..demand(true)
+            };
+            let nav = NavState {
+                vel_ned_mps: [0.2, 0.0, 0.0],
+                ..Default::default()
+            };
+            let out = c.update(0.002, &nav, &d);
+            (out.telemetry.accel_cmd_ne_mps2[0], out.tilt_demand_rad)
+        };
+        // One step of a 0.2-m/s slide: the proportional term (the integral adds 0.4 mm/s²).
+        let ((flight, flight_demand), (touchdown, touchdown_demand)) = (slide(false), slide(true));
+        assert!(
+            (flight + p.control.vel_p_per_s * 0.2).abs() < 1e-3,
+            "{flight}"
+        );
+        assert!(
+            (touchdown + p.control.vel_p_touchdown_per_s * 0.2).abs() < 1e-3,
+            "{touchdown}"
+        );
+        // The tilt demand the gate judges is the wind's, not the stiffer loop's answer.
+        assert!(flight_demand > 0.05, "{flight_demand}");
+        assert!(
+            (touchdown_demand - flight_demand).abs() < 1e-4,
+            "{touchdown_demand} vs {flight_demand}"
+        );
     }
 
     #[test]

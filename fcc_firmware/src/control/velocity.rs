@@ -104,6 +104,13 @@ impl VelocityController {
         self.pi[1].reset();
     }
 
+    /// The proportional gain from now on (1/s), the integral kept: LAND's committed descent
+    /// flies a stiffer loop than the rest of the flight (`control.vel_p_touchdown_per_s`).
+    pub fn set_p(&mut self, kp_per_s: f32) {
+        self.pi[0].kp = kp_per_s;
+        self.pi[1].kp = kp_per_s;
+    }
+
     /// `saturated`: per axis, the sign in which the downstream tilt limit is active.
     pub fn update(
         &mut self,
