@@ -15,7 +15,8 @@
       * every publisher, subscription, service server and client token of those nodes carries
         the REP-2016 type hash computed here for its type (none the placeholder RIHS01_000…);
       * every topic those nodes publish (their MP tokens, namespaced ones) was received and
-        decodes with rosbags' typestore;
+        decodes with rosbags' typestore (the transient-local ones subscribed as rmw_zenoh does:
+        with history, so a /tf_static published before the peer joined still arrives);
       * state/odom = its own vehicle's estimate in its CSV at the same simulated time (none more
         than 1 m off) and does not fit any other vehicle's log; gps/fix nearest its own home;
       * uav1 obeyed the far site: on its TRUE track each waypoint passed within 1 m
@@ -39,6 +40,8 @@ here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, here)
 sys.path.insert(0, os.path.join(here, "..", "lib"))
 
+import zenoh  # noqa: E402
+import zenoh.ext  # noqa: E402
 import zenoh_ros as zr  # noqa: E402
 from action_flight import check_flight, fly_waypoints  # noqa: E402
 from truth import Checks, interp, load_csv, pct, t_of  # noqa: E402
@@ -51,6 +54,12 @@ GLOBAL = {"/rosout", "/parameter_events"}
 # Published only on demand: fcc-mission sends a heading only for waypoints with yaw_deg (none in
 # these missions).
 ON_DEMAND = {"setpoint/heading"}
+# The transient-local topics (fcc_ros::topics): published once (/tf_static at the bridge's start)
+# or rarely (home). A ground station joining after that gets them as rmw_zenoh's TRANSIENT_LOCAL
+# subscription does: an AdvancedSubscriber querying the publishers' caches (history, late
+# publishers detected). A plain subscriber would miss a /tf_static published before the peer's
+# subscription reached router A (CI stop 46: all four vehicles' /tf_static missed).
+TRANSIENT_LOCAL = ("tf_static", "home")
 # An action's feedback and status are published only while it has goals: of the mission nodes'
 # four actions, only uav1's follow_waypoints gets one (its checks are action_flight.py's).
 
@@ -126,6 +135,10 @@ def subscribe_all(peer, fleet):
 
     sub = peer.session.declare_subscriber(f"{peer.domain}/**", on_sample)
     peer._keep.append(sub)
+    for rel in TRANSIENT_LOCAL:
+        peer._keep.append(zenoh.ext.declare_advanced_subscriber(
+            peer.session, zr.topic_wildcard(peer.domain, f"*/{rel}"), on_sample,
+            history=zenoh.ext.HistoryConfig(detect_late_publishers=True)))
 
 
 def wait(pred, secs, what):
