@@ -535,9 +535,11 @@ impl Navigator {
         }
     }
 
-    /// Ground altitude (paper B): predict with the vertical velocity, fuse the rangefinders.
+    /// Ground altitude (paper B): predict with the vertical velocity (the process noise
+    /// scaled with the speed over the ground), fuse the rangefinders.
     fn ground_update(&mut self, imu_dt_s: f32, s: &SensorInputs) {
         let e = self.state.euler;
+        self.ground.set_ground_speed(self.state.ground_speed_mps());
         self.ground.predict(imu_dt_s, self.vert.vel_down_mps());
         if let Some(l) = s.laser {
             self.state.laser_m = Some(l.range_m);
