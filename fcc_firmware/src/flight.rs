@@ -878,6 +878,7 @@ impl FlightCore {
         self.motors = out.motors;
         self.telemetry = out.telemetry;
         self.tilt_demand_rad = out.tilt_demand_rad;
+        self.touchdown_gate.command_limited(dt_s, out.tilt_limited);
     }
 
     /// The wind limit's count: time at the tilt limit with the velocity command missed by
