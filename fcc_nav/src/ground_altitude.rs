@@ -372,17 +372,22 @@ impl GroundAltitudeFilter {
         }
     }
 
+    /// A process-noise value at the current speed: from `at_rest` to `moving` linearly.
+    fn at_speed(&self, at_rest: f32, moving: f32) -> f32 {
+        at_rest + self.moving_fraction() * (moving - at_rest)
+    }
+
     /// The height random walk at the current speed \[m/√s].
     fn height_rw_now(&self) -> f32 {
-        let p = &self.params;
-        p.height_rw_rest_m_rts
-            + self.moving_fraction() * (p.height_rw_m_rts - p.height_rw_rest_m_rts)
+        self.at_speed(
+            self.params.height_rw_rest_m_rts,
+            self.params.height_rw_m_rts,
+        )
     }
 
     /// The residual rate's steady-state 1σ at the current speed \[m/s].
     fn rate_sigma_now(&self) -> f32 {
-        let p = &self.params;
-        p.rate_sigma_rest_mps + self.moving_fraction() * (p.rate_sigma_mps - p.rate_sigma_rest_mps)
+        self.at_speed(self.params.rate_sigma_rest_mps, self.params.rate_sigma_mps)
     }
 
     /// Forget the estimate (counters kept).
