@@ -15,9 +15,8 @@
       * every publisher, subscription, service server and client token of those nodes carries
         the REP-2016 type hash computed here for its type (none the placeholder RIHS01_000…);
       * every topic those nodes publish (their MP tokens, namespaced ones) was received and
-        decodes with rosbags' typestore (the transient-local ones, known by their tokens' QoS,
-        subscribed as rmw_zenoh does: with history, so a /tf_static published before the peer
-        joined still arrives);
+        decodes with rosbags' typestore (the transient-local ones subscribed as rmw_zenoh does:
+        with history, so a /tf_static published before the peer joined still arrives);
       * state/odom = its own vehicle's estimate in its CSV at the same simulated time (none more
         than 1 m off) and does not fit any other vehicle's log; gps/fix nearest its own home;
       * uav1 obeyed the far site: on its TRUE track each waypoint passed within 1 m
@@ -31,7 +30,6 @@ import argparse
 import faulthandler
 import math
 import os
-import queue
 import re
 import sys
 import threading
@@ -56,6 +54,12 @@ GLOBAL = {"/rosout", "/parameter_events"}
 # Published only on demand: fcc-mission sends a heading only for waypoints with yaw_deg (none in
 # these missions).
 ON_DEMAND = {"setpoint/heading"}
+# The transient-local topics (fcc_ros::topics): published once (/tf_static at the bridge's start)
+# or rarely (home). A ground station joining after that gets them as rmw_zenoh's TRANSIENT_LOCAL
+# subscription does: an AdvancedSubscriber querying the publishers' caches (history, late
+# publishers detected). A plain subscriber would miss a /tf_static published before the peer's
+# subscription reached router A (CI stop 46: all four vehicles' /tf_static missed).
+TRANSIENT_LOCAL = ("tf_static", "home")
 # An action's feedback and status are published only while it has goals: of the mission nodes'
 # four actions, only uav1's follow_waypoints gets one (its checks are action_flight.py's).
 
@@ -80,14 +84,6 @@ class Fleet:
         self.seen = {}                         # key → Entity (alive at some time)
         self.clock_s = {}                      # v → newest /uavN/clock
         self.status = {}                       # v → newest status
-        # The transient-local topics, from the publishers' tokens (their QoS says TRANSIENT_LOCAL:
-        # /tf_static, published once at the bridge's start, and home): subscribed as rmw_zenoh's
-        # TRANSIENT_LOCAL subscription does, an AdvancedSubscriber querying the publishers'
-        # caches (history, late publishers detected) — a plain subscriber missed every vehicle's
-        # /tf_static published before the peer's subscription reached router A (CI stop 46).
-        # Declared by subscribe_all's thread, not in the liveliness callback.
-        self.history_topics = set()            # topics subscribed with history
-        self.history_queue = queue.Queue()     # topics to subscribe with history
         peer.watch_graph(self._on_token)
 
     def _vehicle_of(self, topic):
@@ -100,10 +96,6 @@ class Fleet:
             if alive:
                 self.tokens[key] = entity
                 self.seen[key] = entity
-                if (entity.kind == "MP" and zr.transient_local(entity.qos)
-                        and entity.topic not in self.history_topics):
-                    self.history_topics.add(entity.topic)
-                    self.history_queue.put(entity.topic)
             else:
                 self.tokens.pop(key, None)
 
@@ -143,15 +135,10 @@ def subscribe_all(peer, fleet):
 
     sub = peer.session.declare_subscriber(f"{peer.domain}/**", on_sample)
     peer._keep.append(sub)
-
-    def with_history():
-        while True:
-            topic = fleet.history_queue.get()
-            peer._keep.append(zenoh.ext.declare_advanced_subscriber(
-                peer.session, zr.topic_wildcard(peer.domain, topic), on_sample,
-                history=zenoh.ext.HistoryConfig(detect_late_publishers=True)))
-
-    threading.Thread(target=with_history, daemon=True).start()
+    for rel in TRANSIENT_LOCAL:
+        peer._keep.append(zenoh.ext.declare_advanced_subscriber(
+            peer.session, zr.topic_wildcard(peer.domain, f"*/{rel}"), on_sample,
+            history=zenoh.ext.HistoryConfig(detect_late_publishers=True)))
 
 
 def wait(pred, secs, what):
@@ -221,10 +208,6 @@ def check_vehicle(c, a, fleet, v, logs, homes):
     c.check(f"{ns}: every topic its nodes publish received ({len(pubs)} topics)",
             len(pubs) >= 15 and not missing, f"missing {missing}" if missing else
             ", ".join(f"{t} {fleet.count[(v, t)]}" for t in sorted(got)))
-    with fleet.lock:
-        history = sorted(t for t in fleet.history_topics if t.startswith(ns + "/"))
-    c.check(f"{ns}: its transient-local topics (tokens' QoS) subscribed with history",
-            f"{ns}/tf_static" in history, history)
     undecoded = sorted(t for t in got if fleet.decoded[(v, t)] == 0)
     c.check(f"{ns}: every topic decodes (rosbags CDR)", not undecoded, undecoded)
     od = fleet.keep[(v, "state/odom")]
