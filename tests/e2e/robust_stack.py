@@ -701,10 +701,14 @@ def t_sensors(a, tmp):
 
     sts = [(w, stamp_s(s.header), s) for w, s in peer.got["status"]]
     diags = [(w, sim_at(w), arr) for w, arr in peer.got["/diagnostics"]]
-    logs = [(w, sim_at(w), m) for w, m in peer.got["/rosout"] if "sensor health" in m.msg]
-    print("/rosout sensor-health lines (sim s at reception, level, text):")
-    for _, t, m in logs:
-        print(f"  {t:7.2f}  {m.level}  {m.msg}")
+    # A /rosout line is placed by its own stamp (the bridge's wall clock, this machine's), not
+    # by its reception (CI stop 48: 'magnetometer ok again' received 4 s late, together with
+    # the next WARN — most likely a lost reliable sample, repaired when the next line came).
+    logs = [(w, sim_at(m.stamp.sec + m.stamp.nanosec * 1e-9), m)
+            for w, m in peer.got["/rosout"] if "sensor health" in m.msg]
+    print("/rosout sensor-health lines (sim s at the stamp / at reception, level, text):")
+    for w, t, m in logs:
+        print(f"  {t:7.2f} / {sim_at(w):7.2f}  {m.level}  {m.msg}")
 
     def sens_diag(t_from, t_to):
         return [(t, s) for _, t, arr in diags if t_from <= t < t_to for s in arr.status if s.name == "fcc: sensors"]
@@ -722,8 +726,8 @@ def t_sensors(a, tmp):
         return d_recv
 
     def rosout_check(word, level, t_from, t_to, what, exactly_one=True):
-        # Sim time at reception is the latest /clock (50 Hz): a line can arrive before the
-        # /clock of its instant, so the window opens 0.25 s early.
+        # Sim time at the stamp is the latest /clock received before it (50 Hz, read by the
+        # pump): it can lag the line's instant, so the window opens 0.25 s early.
         hits = [(t, m) for _, t, m in logs if word in m.msg and m.level == level and t_from - 0.25 <= t < t_to]
         ok = len(hits) == 1 if exactly_one else len(hits) >= 1
         c.check(f"/rosout: {what}", ok, f"{len(hits)} line(s)" + (f", first at {hits[0][0]:.2f} s: {hits[0][1].msg!r}"

@@ -15,8 +15,9 @@
       * every publisher, subscription, service server and client token of those nodes carries
         the REP-2016 type hash computed here for its type (none the placeholder RIHS01_000…);
       * every topic those nodes publish (their MP tokens, namespaced ones) was received and
-        decodes with rosbags' typestore (the transient-local ones subscribed as rmw_zenoh does:
-        with history, so a /tf_static published before the peer joined still arrives);
+        decodes with rosbags' typestore (the transient-local ones, known by their tokens' QoS,
+        subscribed as rmw_zenoh does: with history, so a /tf_static published before the peer
+        joined still arrives);
       * state/odom = its own vehicle's estimate in its CSV at the same simulated time (none more
         than 1 m off) and does not fit any other vehicle's log; gps/fix nearest its own home;
       * uav1 obeyed the far site: on its TRUE track each waypoint passed within 1 m
@@ -30,6 +31,7 @@ import argparse
 import faulthandler
 import math
 import os
+import queue
 import re
 import sys
 import threading
@@ -54,12 +56,6 @@ GLOBAL = {"/rosout", "/parameter_events"}
 # Published only on demand: fcc-mission sends a heading only for waypoints with yaw_deg (none in
 # these missions).
 ON_DEMAND = {"setpoint/heading"}
-# The transient-local topics (fcc_ros::topics): published once (/tf_static at the bridge's start)
-# or rarely (home). A ground station joining after that gets them as rmw_zenoh's TRANSIENT_LOCAL
-# subscription does: an AdvancedSubscriber querying the publishers' caches (history, late
-# publishers detected). A plain subscriber would miss a /tf_static published before the peer's
-# subscription reached router A (CI stop 46: all four vehicles' /tf_static missed).
-TRANSIENT_LOCAL = ("tf_static", "home")
 # An action's feedback and status are published only while it has goals: of the mission nodes'
 # four actions, only uav1's follow_waypoints gets one (its checks are action_flight.py's).
 
@@ -84,7 +80,27 @@ class Fleet:
         self.seen = {}                         # key → Entity (alive at some time)
         self.clock_s = {}                      # v → newest /uavN/clock
         self.status = {}                       # v → newest status
+        # The transient-local topics, from the publishers' tokens (their QoS says TRANSIENT_LOCAL:
+        # /tf_static, published once at the bridge's start, and home): subscribed as rmw_zenoh's
+        # TRANSIENT_LOCAL subscription does, an AdvancedSubscriber querying the publishers'
+        # caches (history, late publishers detected) — a plain subscriber missed every vehicle's
+        # /tf_static published before the peer's subscription reached router A (CI stop 46).
+        # Declared by subscribe_all's thread, not in the liveliness callback.
+        self.history_topics = set()            # topics subscribed with history
+        self.history_queue = queue.Queue()     # topics to subscribe with history; None: stop
+        self.history_thread = None             # subscribe_all's, joined by stop()
+        self.stopped = False
         peer.watch_graph(self._on_token)
+
+    def stop(self):
+        """Before the session closes: no more history subscribers, their thread joined (a
+        daemon thread left inside a zenoh call at interpreter exit aborted the process, CI
+        stop 53: `FATAL: exception not rethrown`)."""
+        with self.lock:
+            self.stopped = True
+        self.history_queue.put(None)
+        if self.history_thread is not None:
+            self.history_thread.join()
 
     def _vehicle_of(self, topic):
         m = re.match(r"uav(\d+)/(.+)$", topic.strip("/"))
@@ -96,6 +112,10 @@ class Fleet:
             if alive:
                 self.tokens[key] = entity
                 self.seen[key] = entity
+                if (entity.kind == "MP" and not self.stopped and zr.transient_local(entity.qos)
+                        and entity.topic not in self.history_topics):
+                    self.history_topics.add(entity.topic)
+                    self.history_queue.put(entity.topic)
             else:
                 self.tokens.pop(key, None)
 
@@ -135,10 +155,16 @@ def subscribe_all(peer, fleet):
 
     sub = peer.session.declare_subscriber(f"{peer.domain}/**", on_sample)
     peer._keep.append(sub)
-    for rel in TRANSIENT_LOCAL:
-        peer._keep.append(zenoh.ext.declare_advanced_subscriber(
-            peer.session, zr.topic_wildcard(peer.domain, f"*/{rel}"), on_sample,
-            history=zenoh.ext.HistoryConfig(detect_late_publishers=True)))
+
+    def with_history():
+        while (topic := fleet.history_queue.get()) is not None:
+            peer._keep.append(zenoh.ext.declare_advanced_subscriber(
+                peer.session, zr.topic_wildcard(peer.domain, topic), on_sample,
+                history=zenoh.ext.HistoryConfig(detect_late_publishers=True)))
+
+    fleet.history_thread = threading.Thread(target=with_history, name="history_subscribers",
+                                            daemon=True)
+    fleet.history_thread.start()
 
 
 def wait(pred, secs, what):
@@ -208,6 +234,10 @@ def check_vehicle(c, a, fleet, v, logs, homes):
     c.check(f"{ns}: every topic its nodes publish received ({len(pubs)} topics)",
             len(pubs) >= 15 and not missing, f"missing {missing}" if missing else
             ", ".join(f"{t} {fleet.count[(v, t)]}" for t in sorted(got)))
+    with fleet.lock:
+        history = sorted(t for t in fleet.history_topics if t.startswith(ns + "/"))
+    c.check(f"{ns}: its transient-local topics (tokens' QoS) subscribed with history",
+            f"{ns}/tf_static" in history, history)
     undecoded = sorted(t for t in got if fleet.decoded[(v, t)] == 0)
     c.check(f"{ns}: every topic decodes (rosbags CDR)", not undecoded, undecoded)
     od = fleet.keep[(v, "state/odom")]
@@ -243,27 +273,31 @@ def observe(a):
     log = lambda s: print(f"[peer {time.monotonic() - t0:5.1f} s] {s}", flush=True)  # noqa: E731
     peer = zr.RosPeer(connect=a.connect, node="ground_station")
     fleet = Fleet(peer, a.vehicles)
-    subscribe_all(peer, fleet)
-    log(f"connected to {a.connect}, subscribed to every vehicle's topics")
-    flown = fly_waypoints(peer, c, a.fly, log)
-    while not os.path.exists(a.until_file) and time.monotonic() - t0 < a.timeout:
-        time.sleep(0.2)
-    time.sleep(0.5)
-    with fleet.lock:
-        seen, alive = dict(fleet.seen), dict(fleet.tokens)
-    print(f"graph: {sum(1 for e in seen.values() if e.kind == 'NN')} nodes, {len(seen)} tokens "
-          f"seen; {sum(fleet.count.values())} samples", flush=True)
-    left = sorted({e.node_fqn for e in alive.values() if e.namespace.startswith("/uav")})
-    c.check("every vehicle node's tokens withdrawn once the launcher stopped them", not left, left)
-    vehicles = range(1, a.vehicles + 1)
-    logs = {v: load_csv(os.path.join(a.csv_dir, f"uav{v}.csv")) for v in vehicles}
-    homes = {v: home_of(os.path.join(a.scenarios_dir, f"uav{v}.yaml")) for v in vehicles}
-    c.check("every sample's key parses and decodes", not fleet.bad, fleet.bad[:3])
-    for v in vehicles:
-        check_vehicle(c, a, fleet, v, logs, homes)
-    if flown:
-        check_flight(c, a.fly, logs[a.fly], flown)
-    peer.close()
+    try:
+        subscribe_all(peer, fleet)
+        log(f"connected to {a.connect}, subscribed to every vehicle's topics")
+        flown = fly_waypoints(peer, c, a.fly, log)
+        while not os.path.exists(a.until_file) and time.monotonic() - t0 < a.timeout:
+            time.sleep(0.2)
+        time.sleep(0.5)
+        with fleet.lock:
+            seen, alive = dict(fleet.seen), dict(fleet.tokens)
+        print(f"graph: {sum(1 for e in seen.values() if e.kind == 'NN')} nodes, "
+              f"{len(seen)} tokens seen; {sum(fleet.count.values())} samples", flush=True)
+        left = sorted({e.node_fqn for e in alive.values() if e.namespace.startswith("/uav")})
+        c.check("every vehicle node's tokens withdrawn once the launcher stopped them",
+                not left, left)
+        vehicles = range(1, a.vehicles + 1)
+        logs = {v: load_csv(os.path.join(a.csv_dir, f"uav{v}.csv")) for v in vehicles}
+        homes = {v: home_of(os.path.join(a.scenarios_dir, f"uav{v}.yaml")) for v in vehicles}
+        c.check("every sample's key parses and decodes", not fleet.bad, fleet.bad[:3])
+        for v in vehicles:
+            check_vehicle(c, a, fleet, v, logs, homes)
+        if flown:
+            check_flight(c, a.fly, logs[a.fly], flown)
+    finally:
+        fleet.stop()
+        peer.close()
     return c.done()
 
 
@@ -275,9 +309,13 @@ def silence(a):
     peer = zr.RosPeer(connect=a.connect, node="ground_station")
     control = zr.RosPeer(connect=a.control_connect, node="site_a_control")
     here_, there = Fleet(peer, a.vehicles), Fleet(control, a.vehicles)
-    subscribe_all(peer, here_)
-    subscribe_all(control, there)
-    time.sleep(a.listen_s)
+    try:
+        subscribe_all(peer, here_)
+        subscribe_all(control, there)
+        time.sleep(a.listen_s)
+    finally:
+        here_.stop()
+        there.stop()
     for v in far:
         n_here = sum(n for (w, _), n in here_.count.items() if w == v)
         n_there = sum(n for (w, _), n in there.count.items() if w == v)
@@ -310,4 +348,13 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    rc = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    # Every check has run and printed, every session is closed: exit without the interpreter's
+    # finalization. With the derived history subscribers the peer aborted there after "42
+    # passed, 0 failed" (`FATAL: exception not rethrown`, exit 134: CI stop 53, 1 of 8 local
+    # runs even with their thread joined) — most likely a zenoh runtime thread taking the GIL
+    # of the finalizing interpreter (to call or release a callback), which unwinds it through
+    # Rust frames.
+    os._exit(rc)

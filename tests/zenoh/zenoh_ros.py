@@ -360,6 +360,13 @@ def entity_token(domain, session_id, node_id, entity_id, kind, namespace, node, 
             f"{dds_type_name(ros_type)}/{rihs}/{qos}")
 
 
+def transient_local(qos: str) -> bool:
+    """Does rmw_zenoh's compact QoS (`rel:dur:...`, see `qos_string`) say TRANSIENT_LOCAL (the
+    durability code 1 of rmw_qos_durability_policy_e; empty or 2 is volatile)?"""
+    fields = qos.split(":")
+    return len(fields) > 1 and fields[1] == "1"
+
+
 def qos_string(depth: int = 10) -> str:
     """rmw_zenoh's compact QoS: `rel:dur:hist,depth:deadline:lifespan:liveliness`, a field left
     empty where it is the default (reliable, volatile, keep last, infinite, automatic)."""
