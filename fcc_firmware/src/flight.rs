@@ -434,7 +434,7 @@ impl FlightCore {
             self.motors = [0.0; MOTOR_COUNT];
             return self.motors;
         }
-        let (v_cmd_ne, vz_cmd_down, yaw_cmd) = self.guidance(now_us, dt_s, &nav);
+        let (v_cmd_ne, vz_cmd_down, yaw_cmd) = self.guidance(dt_s, &nav);
         self.control(dt_s, &nav, v_cmd_ne, vz_cmd_down, yaw_cmd);
         self.detect_touchdown(dt_s, &nav, vz_cmd_down);
         self.motors
@@ -529,125 +529,144 @@ impl FlightCore {
         self.yaw_hold_rad = wrap_pi(yaw_rad + lead);
     }
 
-    /// Velocity command (NED north/east, down) and heading command for the current mode.
-    fn guidance(&mut self, now_us: u64, dt_s: f32, nav: &NavState) -> ([f32; 2], f32, f32) {
-        let l = self.params.limits;
-        let c = self.params.control;
+    /// Velocity command (NED north/east, down) and heading command for the current mode, then
+    /// the geofence and the terrain floor.
+    fn guidance(&mut self, dt_s: f32, nav: &NavState) -> ([f32; 2], f32, f32) {
         let alt = -nav.pos_ned_m[2];
-        let hold_ne = |s: &Self| {
-            let e = [
-                s.hold_ne_m[0] - nav.pos_ned_m[0],
-                s.hold_ne_m[1] - nav.pos_ned_m[1],
-            ];
-            clamp_norm(
-                [c.pos_p_per_s * e[0], c.pos_p_per_s * e[1]],
-                l.hold_max_speed_mps,
-            )
-        };
-        let (mut v_ne, mut vz_down, yaw) = match self.mode {
+        let (v_ne, vz_down, yaw) = match self.mode {
             Mode::Hold => {
                 let vz = self.height_loop(0.0, self.hold_alt_m, alt);
-                (hold_ne(self), vz, self.yaw_hold_rad)
+                (self.hold_velocity_ne(nav), vz, self.yaw_hold_rad)
             }
-            Mode::Velocity => match self.setpoint {
-                Some((sp, _)) => {
-                    match sp.yaw {
-                        YawSetpoint::Keep => {}
-                        YawSetpoint::Heading { yaw_ned_rad } => self.yaw_hold_rad = yaw_ned_rad,
-                        YawSetpoint::Rate { yaw_rate_ned_radps } => {
-                            self.advance_yaw_hold(yaw_rate_ned_radps, dt_s, nav.euler.yaw_rad)
-                        }
-                    }
-                    let vz = self.velocity_climb(dt_s, sp.vel_ned_mps[2], alt);
-                    let target = [sp.vel_ned_mps[0], sp.vel_ned_mps[1]];
-                    let v = self.slew_velocity(dt_s, target, nav);
-                    (v, vz, self.yaw_hold_rad)
-                }
-                None => (hold_ne(self), 0.0, self.yaw_hold_rad),
-            },
-            Mode::Land => {
-                // GPS lost: every second adds to the dead-reckoning drift, so the descent is
-                // fast and its slow part short — where the rangefinders see the ground (on the
-                // barometer's metre of error it keeps the usual margin).
-                let gps_lost = !nav.gps_ok && self.ground_usable(nav);
-                let slow_alt_m = if gps_lost {
-                    l.land_slow_alt_m.min(GPS_LOST_SLOW_ALT_M)
-                } else {
-                    l.land_slow_alt_m
-                };
-                if self.height_above_ground_m(nav) > slow_alt_m {
-                    // Dead-reckoned (GPS lost), the position drifts ever faster: no position
-                    // hold, zero velocity (while that estimate is still good), and down at the
-                    // descent limit.
-                    let (v, down) = if nav.gps_ok {
-                        (hold_ne(self), l.land_speed_mps)
-                    } else {
-                        ([0.0; 2], l.max_descent_mps.max(l.land_speed_mps))
-                    };
-                    (v, down, self.yaw_hold_rad)
-                } else {
-                    // Final descent: zero horizontal velocity (no position corrections that
-                    // would slide the gear at touchdown); where it is becomes the hold point.
-                    self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
-                    ([0.0; 2], self.final_descent(dt_s, nav), self.yaw_hold_rad)
-                }
-            }
-            Mode::Pilot => {
-                let d =
-                    self.pilot
-                        .demand(l.max_horiz_speed_mps, l.max_climb_mps, l.max_descent_mps);
-                let pos = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
-                let speed = nav.ground_speed_mps();
-                let v = match d.vel_fr_mps {
-                    Some(v) => {
-                        self.hold_ne_m = pos;
-                        Heading::new(nav.euler.yaw_rad).to_ne(v)
-                    }
-                    None if speed > PILOT_LOCK_SPEED_MPS => {
-                        self.hold_ne_m = pos;
-                        [0.0; 2]
-                    }
-                    None => hold_ne(self),
-                };
-                let vz = match d.climb_mps {
-                    Some(up) => {
-                        self.hold_alt_m = alt;
-                        -up
-                    }
-                    None => self.height_loop(0.0, self.hold_alt_m, alt),
-                };
-                self.advance_yaw_hold(d.yaw_rate_radps, dt_s, nav.euler.yaw_rad);
-                (v, vz, self.yaw_hold_rad)
-            }
+            Mode::Velocity => self.velocity_guidance(dt_s, nav),
+            Mode::Land => self.land_guidance(dt_s, nav),
+            Mode::Pilot => self.pilot_guidance(dt_s, nav),
             Mode::Disarmed => ([0.0; 2], 0.0, nav.euler.yaw_rad),
         };
-        // Geofence: the outward velocity is limited so the vehicle can brake to a stop at the
-        // fence (v ≤ √(2·a·d)); outside it, it is pulled back in.
-        let r = fcc_nav::math::hypotf(nav.pos_ned_m[0], nav.pos_ned_m[1]);
-        if r > 1e-3 {
-            let out = [nav.pos_ned_m[0] / r, nav.pos_ned_m[1] / r];
-            let v_out = v_ne[0] * out[0] + v_ne[1] * out[1];
-            let to_fence = l.fence_radius_m - r;
-            let v_out_max = if to_fence > 0.0 {
-                fcc_nav::math::sqrtf(2.0 * FENCE_BRAKE_MPS2 * to_fence)
-            } else {
-                -0.5 * (-to_fence).min(2.0)
-            };
-            if v_out > v_out_max {
-                let remove = v_out - v_out_max;
-                v_ne = [v_ne[0] - remove * out[0], v_ne[1] - remove * out[1]];
-                if to_fence < FENCE_REPORT_M {
-                    self.failsafe = FailsafeCause::Geofence;
-                }
-            }
-        }
-        vz_down = self.terrain_floor(nav, vz_down);
-        if alt - self.takeoff_alt_m > l.fence_alt_m && vz_down < 0.0 {
+        let v_ne = self.fence_horizontal(nav, v_ne);
+        let mut vz_down = self.terrain_floor(nav, vz_down);
+        if alt - self.takeoff_alt_m > self.params.limits.fence_alt_m && vz_down < 0.0 {
             vz_down = 0.3;
             self.failsafe = FailsafeCause::Geofence;
         }
-        let _ = now_us;
         (v_ne, vz_down, yaw)
+    }
+
+    /// Back to the hold point (NED north, east, m/s): `pos_p·(p_hold − p)`, at most
+    /// `limits.hold_max_speed_mps`.
+    fn hold_velocity_ne(&self, nav: &NavState) -> [f32; 2] {
+        let e = [
+            self.hold_ne_m[0] - nav.pos_ned_m[0],
+            self.hold_ne_m[1] - nav.pos_ned_m[1],
+        ];
+        let k = self.params.control.pos_p_per_s;
+        clamp_norm([k * e[0], k * e[1]], self.params.limits.hold_max_speed_mps)
+    }
+
+    /// VELOCITY: the setpoint's velocity (slewed) and climb, its heading or yaw rate; without
+    /// a setpoint, hold.
+    fn velocity_guidance(&mut self, dt_s: f32, nav: &NavState) -> ([f32; 2], f32, f32) {
+        let Some((sp, _)) = self.setpoint else {
+            return (self.hold_velocity_ne(nav), 0.0, self.yaw_hold_rad);
+        };
+        match sp.yaw {
+            YawSetpoint::Keep => {}
+            YawSetpoint::Heading { yaw_ned_rad } => self.yaw_hold_rad = yaw_ned_rad,
+            YawSetpoint::Rate { yaw_rate_ned_radps } => {
+                self.advance_yaw_hold(yaw_rate_ned_radps, dt_s, nav.euler.yaw_rad)
+            }
+        }
+        let vz = self.velocity_climb(dt_s, sp.vel_ned_mps[2], -nav.pos_ned_m[2]);
+        let target = [sp.vel_ned_mps[0], sp.vel_ned_mps[1]];
+        let v = self.slew_velocity(dt_s, target, nav);
+        (v, vz, self.yaw_hold_rad)
+    }
+
+    /// LAND: down at the landing speed holding the point, then the final descent.
+    fn land_guidance(&mut self, dt_s: f32, nav: &NavState) -> ([f32; 2], f32, f32) {
+        let l = self.params.limits;
+        // GPS lost: every second adds to the dead-reckoning drift, so the descent is
+        // fast and its slow part short — where the rangefinders see the ground (on the
+        // barometer's metre of error it keeps the usual margin).
+        let gps_lost = !nav.gps_ok && self.ground_usable(nav);
+        let slow_alt_m = if gps_lost {
+            l.land_slow_alt_m.min(GPS_LOST_SLOW_ALT_M)
+        } else {
+            l.land_slow_alt_m
+        };
+        if self.height_above_ground_m(nav) > slow_alt_m {
+            // Dead-reckoned (GPS lost), the position drifts ever faster: no position
+            // hold, zero velocity (while that estimate is still good), and down at the
+            // descent limit.
+            let (v, down) = if nav.gps_ok {
+                (self.hold_velocity_ne(nav), l.land_speed_mps)
+            } else {
+                ([0.0; 2], l.max_descent_mps.max(l.land_speed_mps))
+            };
+            (v, down, self.yaw_hold_rad)
+        } else {
+            // Final descent: zero horizontal velocity (no position corrections that
+            // would slide the gear at touchdown); where it is becomes the hold point.
+            self.hold_ne_m = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
+            ([0.0; 2], self.final_descent(dt_s, nav), self.yaw_hold_rad)
+        }
+    }
+
+    /// PILOT: the sticks' velocity, climb and yaw rate; a centred stick holds (once slower
+    /// than [`PILOT_LOCK_SPEED_MPS`], where it is).
+    fn pilot_guidance(&mut self, dt_s: f32, nav: &NavState) -> ([f32; 2], f32, f32) {
+        let l = self.params.limits;
+        let alt = -nav.pos_ned_m[2];
+        let d = self
+            .pilot
+            .demand(l.max_horiz_speed_mps, l.max_climb_mps, l.max_descent_mps);
+        let pos = [nav.pos_ned_m[0], nav.pos_ned_m[1]];
+        let speed = nav.ground_speed_mps();
+        let v = match d.vel_fr_mps {
+            Some(v) => {
+                self.hold_ne_m = pos;
+                Heading::new(nav.euler.yaw_rad).to_ne(v)
+            }
+            None if speed > PILOT_LOCK_SPEED_MPS => {
+                self.hold_ne_m = pos;
+                [0.0; 2]
+            }
+            None => self.hold_velocity_ne(nav),
+        };
+        let vz = match d.climb_mps {
+            Some(up) => {
+                self.hold_alt_m = alt;
+                -up
+            }
+            None => self.height_loop(0.0, self.hold_alt_m, alt),
+        };
+        self.advance_yaw_hold(d.yaw_rate_radps, dt_s, nav.euler.yaw_rad);
+        (v, vz, self.yaw_hold_rad)
+    }
+
+    /// Geofence: the outward velocity is limited so the vehicle can brake to a stop at the
+    /// fence (v ≤ √(2·a·d)); outside it, it is pulled back in.
+    fn fence_horizontal(&mut self, nav: &NavState, v_ne: [f32; 2]) -> [f32; 2] {
+        let r = fcc_nav::math::hypotf(nav.pos_ned_m[0], nav.pos_ned_m[1]);
+        if r <= 1e-3 {
+            return v_ne;
+        }
+        let out = [nav.pos_ned_m[0] / r, nav.pos_ned_m[1] / r];
+        let v_out = v_ne[0] * out[0] + v_ne[1] * out[1];
+        let to_fence = self.params.limits.fence_radius_m - r;
+        let v_out_max = if to_fence > 0.0 {
+            fcc_nav::math::sqrtf(2.0 * FENCE_BRAKE_MPS2 * to_fence)
+        } else {
+            -0.5 * (-to_fence).min(2.0)
+        };
+        if v_out <= v_out_max {
+            return v_ne;
+        }
+        if to_fence < FENCE_REPORT_M {
+            self.failsafe = FailsafeCause::Geofence;
+        }
+        let remove = v_out - v_out_max;
+        [v_ne[0] - remove * out[0], v_ne[1] - remove * out[1]]
     }
 
     /// LAND's final descent (NED down, m/s): the gear waits at the touchdown gate's clearance
