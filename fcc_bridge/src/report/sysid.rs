@@ -361,68 +361,25 @@ pub fn ci95(r: &fcc_nav::sysid::WindFitResult, inflation: f32) -> [f64; 8] {
 /// low (on the main job's windy bag k1 = 7.8 against the calm-air 9.17 of that firmware, where
 /// IV gave 9.2).
 pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysId, String> {
-    let mut wf = WindPlaneFit::new();
-    let mut ivf = WindIvFit::new();
     let use_iv = !samples.is_empty()
         && samples
             .iter()
             .all(|x| x.instr_ne.iter().flatten().all(|z| z.is_finite()));
-    let mut plain = PlaneFit::new();
-    let mut windows: Vec<Window> = Vec::new();
-    // Window of each sample (index into `windows`, filled as they close).
-    let mut win_of = Vec::with_capacity(samples.len());
-    let mut start: Option<(f64, f64)> = None; // (t0 of the window, t of the last sample)
-    let f32x2 = |x: [f64; 2]| [x[0] as f32, x[1] as f32];
+    let mut acc = Windowed::default();
     for x in samples {
-        if let Some((t0, last)) = start {
-            if x.t_s - t0 >= window_s || x.t_s - last > MAX_GAP_S {
-                // Always pushed (`win_of` counts on it), even if every sample was non-finite.
-                windows.push(Window {
-                    t0_s: t0,
-                    t1_s: last,
-                    means: wf.end_window().unwrap_or_default(),
-                });
-                ivf.end_window();
-                start = None;
-            }
-        }
-        let t0 = start.map_or(x.t_s, |s| s.0);
-        start = Some((t0, x.t_s));
-        wf.add(
-            f32x2(x.tilt_ne_rad),
-            f32x2(x.vel_ne_mps),
-            f32x2(x.accel_ne_mps2),
-        );
-        if use_iv {
-            ivf.add(
-                [f32x2(x.instr_ne[0]), f32x2(x.instr_ne[1])],
-                f32x2(x.tilt_ne_rad),
-                f32x2(x.vel_ne_mps),
-                f32x2(x.accel_ne_mps2),
-            );
-        }
-        win_of.push(windows.len());
-        // Paper A's plain fit (k1, k2 are rotation-invariant, so N/E is the heading-frame
-        // plane).
-        for j in 0..2 {
-            plain.add(
-                x.tilt_ne_rad[j] as f32,
-                x.vel_ne_mps[j] as f32,
-                x.accel_ne_mps2[j] as f32,
-            );
-        }
+        acc.add(x, use_iv, window_s);
     }
-    let ls = wf.solve();
-    let iv = if use_iv { ivf.solve() } else { None };
+    let ls = acc.wf.solve();
+    let iv = if use_iv { acc.ivf.solve() } else { None };
     let (r, estimator) = choose_fit(iv, ls, use_iv, samples.len())?;
     let is_iv = r.instrument_strength.is_finite();
-    if let Some((t0, last)) = start {
-        windows.push(Window {
-            t0_s: t0,
-            t1_s: last,
-            means: wf.end_window().unwrap_or_default(),
-        });
-    }
+    acc.close_window();
+    let Windowed {
+        plain,
+        windows,
+        win_of,
+        ..
+    } = acc;
     let (k1, k2) = (r.k1_mps2_per_rad, r.k2_per_s);
     let rho = residual_lag1(samples, &win_of, &windows, (k1, k2));
     let infl = ar1_inflation(rho as f32);
@@ -477,6 +434,71 @@ pub fn fit(samples: &[Sample], accel_source: &str, window_s: f64) -> Result<SysI
         Err(why) => out.no_suggestion = Some(why),
     }
     Ok(out)
+}
+
+/// [`fit`]'s pass over the samples: the windowed fits with the wind (least squares, and IV
+/// when the samples carry instruments), paper A's plain fit, and the windows as they close.
+#[derive(Default)]
+struct Windowed {
+    wf: WindPlaneFit,
+    ivf: WindIvFit,
+    plain: PlaneFit,
+    windows: Vec<Window>,
+    /// Window of each sample (index into `windows`, filled as they close).
+    win_of: Vec<usize>,
+    /// (t0 of the open window, t of its last sample).
+    open: Option<(f64, f64)>,
+}
+
+impl Windowed {
+    /// One sample; it closes the open window first when that is `window_s` long or the
+    /// sample follows a gap of more than [`MAX_GAP_S`].
+    fn add(&mut self, x: &Sample, use_iv: bool, window_s: f64) {
+        if let Some((t0, last)) = self.open {
+            if x.t_s - t0 >= window_s || x.t_s - last > MAX_GAP_S {
+                self.close_window();
+            }
+        }
+        let t0 = self.open.map_or(x.t_s, |s| s.0);
+        self.open = Some((t0, x.t_s));
+        let f32x2 = |x: [f64; 2]| [x[0] as f32, x[1] as f32];
+        self.wf.add(
+            f32x2(x.tilt_ne_rad),
+            f32x2(x.vel_ne_mps),
+            f32x2(x.accel_ne_mps2),
+        );
+        if use_iv {
+            self.ivf.add(
+                [f32x2(x.instr_ne[0]), f32x2(x.instr_ne[1])],
+                f32x2(x.tilt_ne_rad),
+                f32x2(x.vel_ne_mps),
+                f32x2(x.accel_ne_mps2),
+            );
+        }
+        self.win_of.push(self.windows.len());
+        // Paper A's plain fit (k1, k2 are rotation-invariant, so N/E is the heading-frame
+        // plane).
+        for j in 0..2 {
+            self.plain.add(
+                x.tilt_ne_rad[j] as f32,
+                x.vel_ne_mps[j] as f32,
+                x.accel_ne_mps2[j] as f32,
+            );
+        }
+    }
+
+    /// Close the open window, if any: always pushed (`win_of` counts on it), even if every
+    /// sample was non-finite.
+    fn close_window(&mut self) {
+        if let Some((t0, last)) = self.open.take() {
+            self.windows.push(Window {
+                t0_s: t0,
+                t1_s: last,
+                means: self.wf.end_window().unwrap_or_default(),
+            });
+            self.ivf.end_window();
+        }
+    }
 }
 
 /// The fit to report: instrumental variables when there is one, else least squares (with
