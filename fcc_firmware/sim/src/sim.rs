@@ -472,47 +472,78 @@ impl Sim {
         linux_on
     }
 
-    /// Advance one 2 ms control tick.
+    /// Advance one 2 ms control tick: the airframe (or the carried rig), the truth the
+    /// sensors read, the flight computer's tick, the rangefinder log.
     pub fn tick(&mut self) {
         let dt = TICK_US as f64 * 1e-6;
         let linux_on = self.apply_faults();
         let prev_vel = self.body.state.vel_ned_mps;
-        if let Some(c) = &self.carried {
-            let t = self.t_s() + dt;
-            let (z, v, a) = sample_profile(&c.profile, t);
-            self.body.state.pos_ned_m = Vector3::new(0.0, 0.0, -z);
-            self.body.state.vel_ned_mps = Vector3::new(0.0, 0.0, -v);
-            if let Some(q) = c.attitude {
-                self.body.state.q_body_to_ned = q;
-            }
-            let g = fcc_nav::GRAVITY_MPS2 as f64;
-            let a_ned = Vector3::new(0.0, 0.0, -a);
-            let f_ned = a_ned - Vector3::new(0.0, 0.0, g);
-            let f_body = self
-                .body
-                .state
-                .q_body_to_ned
-                .inverse_transform_vector(&f_ned);
-            self.board.truth.specific_force_frd_mps2 = f_body;
-            self.board.truth.accel_ned_mps2 = a_ned;
-            self.board.truth.in_flight = false;
-        } else {
-            let p = self.body.state.pos_ned_m;
-            let height = (self.board.terrain.ground_down_at(p.x, p.y) - p.z).max(0.0);
-            self.wind_ned = self.wind.step(height, self.body.state.vel_ned_mps, dt);
-            let sub = dt / PHYSICS_SUBSTEPS as f64;
-            let p = self.body.state.pos_ned_m;
-            let ground_down =
-                self.board.terrain.ground_down_at(p.x, p.y) - self.body.params.gear_height_m;
-            for _ in 0..PHYSICS_SUBSTEPS {
-                self.physics_substep(ground_down, sub);
-            }
-            self.board.truth.specific_force_frd_mps2 = self.body.specific_force_frd_mps2();
-            self.board.truth.accel_ned_mps2 = (self.body.state.vel_ned_mps - prev_vel) / dt;
-            self.board.truth.in_flight = !self.body.on_ground();
+        let t_next_s = self.t_s() + dt;
+        let carried = self.carried.as_ref();
+        let carried = carried.map(|c| (sample_profile(&c.profile, t_next_s), c.attitude));
+        match carried {
+            Some(((z, v, a), attitude)) => self.carry(z, v, a, attitude),
+            None => self.fly(dt, prev_vel),
         }
         self.t_us += TICK_US;
         self.ticks += 1;
+        self.publish_truth();
+        let t0 = std::time::Instant::now();
+        self.run_flight_computer(linux_on);
+        self.core_wall_ns += t0.elapsed().as_nanos();
+        self.count_truth();
+        self.keep_polled_ranges();
+        if self.ticks % LOG_EVERY_TICKS == 0 {
+            self.record();
+        }
+    }
+
+    /// Paper B's rig: the vehicle carried along the profile (height `z_m` up, its rate and
+    /// acceleration), at the rig's attitude if it has one; nothing flies.
+    fn carry(
+        &mut self,
+        z_m: f64,
+        v_up_mps: f64,
+        a_up_mps2: f64,
+        attitude: Option<UnitQuaternion<f64>>,
+    ) {
+        self.body.state.pos_ned_m = Vector3::new(0.0, 0.0, -z_m);
+        self.body.state.vel_ned_mps = Vector3::new(0.0, 0.0, -v_up_mps);
+        if let Some(q) = attitude {
+            self.body.state.q_body_to_ned = q;
+        }
+        let g = fcc_nav::GRAVITY_MPS2 as f64;
+        let a_ned = Vector3::new(0.0, 0.0, -a_up_mps2);
+        let f_ned = a_ned - Vector3::new(0.0, 0.0, g);
+        let f_body = self
+            .body
+            .state
+            .q_body_to_ned
+            .inverse_transform_vector(&f_ned);
+        self.board.truth.specific_force_frd_mps2 = f_body;
+        self.board.truth.accel_ned_mps2 = a_ned;
+        self.board.truth.in_flight = false;
+    }
+
+    /// The airframe in the wind of its height over the terrain, [`PHYSICS_SUBSTEPS`] physics
+    /// steps over `dt_s`; `prev_vel` is the velocity before them (the acceleration's truth).
+    fn fly(&mut self, dt_s: f64, prev_vel: Vector3<f64>) {
+        let p = self.body.state.pos_ned_m;
+        let height = (self.board.terrain.ground_down_at(p.x, p.y) - p.z).max(0.0);
+        self.wind_ned = self.wind.step(height, self.body.state.vel_ned_mps, dt_s);
+        let sub = dt_s / PHYSICS_SUBSTEPS as f64;
+        let ground_down =
+            self.board.terrain.ground_down_at(p.x, p.y) - self.body.params.gear_height_m;
+        for _ in 0..PHYSICS_SUBSTEPS {
+            self.physics_substep(ground_down, sub);
+        }
+        self.board.truth.specific_force_frd_mps2 = self.body.specific_force_frd_mps2();
+        self.board.truth.accel_ned_mps2 = (self.body.state.vel_ned_mps - prev_vel) / dt_s;
+        self.board.truth.in_flight = !self.body.on_ground();
+    }
+
+    /// The body's state, as the simulated sensors read it.
+    fn publish_truth(&mut self) {
         let st = &self.body.state;
         self.board.truth.pos_ned_m = st.pos_ned_m;
         self.board.truth.vel_ned_mps = st.vel_ned_mps;
@@ -521,8 +552,11 @@ impl Sim {
         let mean_speed = st.rotor_speed_frac.iter().sum::<f64>() / MOTOR_COUNT as f64;
         self.board.truth.rotor_speed_mean = mean_speed;
         self.board.truth.current_a = self.body.electrical_power_w() / 18.5;
+    }
 
-        let t0 = std::time::Instant::now();
+    /// The flight computer's tick: the R/C frame, then the link bytes in (the pty, unless the
+    /// wire is cut) or the in-process Linux computer, the tick, the link bytes out.
+    fn run_flight_computer(&mut self, linux_on: bool) {
         // The R/C receiver's frame (50 Hz), before the tick that uses it.
         if let Some(p) = self.receiver.poll(self.t_us) {
             self.fc.core.pilot(self.t_us, &p);
@@ -563,8 +597,10 @@ impl Sim {
             self.fc
                 .tick(self.t_us, &[], &mut self.board, &mut self.motors, &mut tx);
         }
-        self.core_wall_ns += t0.elapsed().as_nanos();
-        self.count_truth();
+    }
+
+    /// The ranges the flight computer polled this tick, logged with the true height.
+    fn keep_polled_ranges(&mut self) {
         let p = self.body.state.pos_ned_m;
         let agl = self.board.terrain.ground_down_at(p.x, p.y) - p.z;
         let mut polled = std::mem::take(&mut self.board.polled_ranges);
@@ -578,9 +614,6 @@ impl Sim {
         }
         polled.clear();
         self.board.polled_ranges = polled; // its capacity, reused
-        if self.ticks % LOG_EVERY_TICKS == 0 {
-            self.record();
-        }
     }
 
     fn record(&mut self) {
