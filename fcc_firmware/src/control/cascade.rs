@@ -9,7 +9,9 @@
 //!    `a_cmd = PI(v_cmd' − v)`, `|a_cmd| ≤ a_max`.
 //! 2. Acceleration → tilt, per heading-frame axis (forward, right; [`super::heading`]:
 //!    `a_fr = R(−ψ)·a_ne`): the Luenberger observer's estimate `â` (`fcc_nav::observer`) and
-//!    `θ_cmd = (a_cmd + k2·v)/k1 + PI_λ(a_cmd − â)` (eqs. 15–17, [`super::accel`]).
+//!    `θ_cmd = (a_cmd + k2·v)/k1 + PI_λ(a_cmd − â)` (eqs. 15–17, [`super::accel`]). In LAND's
+//!    committed descent `â` is a second observer's, with the faster gain
+//!    `control.observer_touchdown_l_per_s` ([`Cascade::observe`]).
 //! 3. Tilt limit: if `|θ_cmd| > θ_max` the tilt vector is scaled to `θ_max` (direction kept),
 //!    the clipped side feeds both PIs' anti-windup on the next step, and the reported
 //!    acceleration command is clipped to `k1·θ_max`.
@@ -125,6 +127,9 @@ pub struct Cascade {
     vel_ctrl: VelocityController,
     accel_ctrl: [AccelController; 2],
     observer: [AccelObserver; 2],
+    /// The committed descent's observer (gain `control.observer_touchdown_l_per_s`); it
+    /// follows `observer` until the commit.
+    observer_touchdown: [AccelObserver; 2],
     vert_ctrl: VerticalController,
     roll_pid: TiltPid,
     pitch_pid: TiltPid,
@@ -166,6 +171,9 @@ mod stage {
     }
     pub fn observer(p: &Params) -> AccelObserver {
         AccelObserver::new(p.control.observer_params())
+    }
+    pub fn observer_touchdown(p: &Params) -> AccelObserver {
+        AccelObserver::new(p.control.observer_touchdown_params())
     }
     pub fn vert_ctrl(p: &Params) -> VerticalController {
         let c = p.control;
@@ -217,6 +225,7 @@ impl Cascade {
             vel_ctrl: stage::vel_ctrl(p),
             accel_ctrl: [stage::accel_ctrl(p); 2],
             observer: [stage::observer(p); 2],
+            observer_touchdown: [stage::observer_touchdown(p); 2],
             vert_ctrl: stage::vert_ctrl(p),
             roll_pid: stage::tilt_pid(p),
             pitch_pid: stage::tilt_pid(p),
@@ -251,6 +260,9 @@ impl Cascade {
         if old.control.observer_params() != new.control.observer_params() {
             self.observer = [stage::observer(new); 2];
         }
+        if old.control.observer_touchdown_params() != new.control.observer_touchdown_params() {
+            self.observer_touchdown = [stage::observer_touchdown(new); 2];
+        }
         self.params = *new;
     }
 
@@ -262,6 +274,9 @@ impl Cascade {
             c.reset();
         }
         for o in &mut self.observer {
+            o.reset(0.0);
+        }
+        for o in &mut self.observer_touchdown {
             o.reset(0.0);
         }
         self.vert_ctrl.reset();
@@ -334,17 +349,16 @@ impl Cascade {
         let vel_fr_mps = heading.to_fr(vel_ne_mps);
         let a_meas_fr_mps2 = heading.to_fr([nav.accel_ned_mps2[0], nav.accel_ned_mps2[1]]);
         let tilt_fr_rad = [-nav.euler.pitch_rad, nav.euler.roll_rad];
+        let (a_est_fr_mps2, a_ctl_fr_mps2) = self.observe(
+            dt_s,
+            tilt_fr_rad,
+            a_meas_fr_mps2,
+            demand.touchdown && airborne,
+        );
         let mut tilt_cmd = [0.0f32; 2];
-        let mut a_est_fr_mps2 = [0.0f32; 2];
         for i in 0..2 {
-            a_est_fr_mps2[i] = self.observer[i].update(
-                tilt_fr_rad[i],
-                self.tilt_cmd_fr_rad[i],
-                a_meas_fr_mps2[i],
-                dt_s,
-            );
             tilt_cmd[i] = if airborne {
-                let (a_cmd, a_est, sat) = (a_cmd_fr[i], a_est_fr_mps2[i], self.tilt_sat_fr[i]);
+                let (a_cmd, a_est, sat) = (a_cmd_fr[i], a_ctl_fr_mps2[i], self.tilt_sat_fr[i]);
                 self.accel_ctrl[i].update(dt_s, a_cmd, a_est, vel_fr_mps[i], sat)
             } else {
                 self.accel_ctrl[i].reset();
@@ -352,13 +366,20 @@ impl Cascade {
             };
         }
         let n = fcc_nav::math::hypotf(tilt_cmd[0], tilt_cmd[1]);
-        // The lean the wind asks for: the command less what the touchdown gain adds to it —
-        // and no more than the command (a lean the limit would not clip slides nothing).
+        // The lean the wind asks for: the command less what the touchdown gain adds to it and
+        // less what the touchdown observer's faster â adds through the acceleration loop's
+        // proportional gain — and no more than the command (a lean the limit would not clip
+        // slides nothing).
         let c = self.params.control;
         let per_mps2 = 1.0 / c.model_k1_mps2_per_rad + c.accel_p_rad_per_mps2;
+        let k_pa = c.accel_p_rad_per_mps2;
         let wind_demand_rad = fcc_nav::math::hypotf(
-            tilt_cmd[0] - per_mps2 * stiffer_fr_mps2[0],
-            tilt_cmd[1] - per_mps2 * stiffer_fr_mps2[1],
+            tilt_cmd[0]
+                - per_mps2 * stiffer_fr_mps2[0]
+                - k_pa * (a_est_fr_mps2[0] - a_ctl_fr_mps2[0]),
+            tilt_cmd[1]
+                - per_mps2 * stiffer_fr_mps2[1]
+                - k_pa * (a_est_fr_mps2[1] - a_ctl_fr_mps2[1]),
         )
         .min(n);
         self.tilt_sat_fr = [0.0; 2];
@@ -385,6 +406,36 @@ impl Cascade {
             tilt_demand_rad: wind_demand_rad,
             vel_err_mps,
         }
+    }
+
+    /// Both observers one step (heading frame, m/s²): the flight observer's `â` (paper A's,
+    /// reported in the telemetry) and the one the acceleration loop closes on — in LAND's
+    /// committed descent (`touchdown`) the touchdown observer's, whose faster gain feels a
+    /// gust's drag sooner (the flight observer's `1/(k2 + L)` lag is 0.23 s at L = 4 /s;
+    /// params.rs has the campaign figures), else the flight observer's, which the touchdown
+    /// observer then follows. The gate judges the demand at the flight observer
+    /// ([`CascadeOutput::tilt_demand_rad`]).
+    fn observe(
+        &mut self,
+        dt_s: f32,
+        tilt_fr_rad: [f32; 2],
+        a_meas_fr_mps2: [f32; 2],
+        touchdown: bool,
+    ) -> ([f32; 2], [f32; 2]) {
+        let mut flight = [0.0f32; 2];
+        let mut control = [0.0f32; 2];
+        for i in 0..2 {
+            let (tilt, cmd, meas) = (tilt_fr_rad[i], self.tilt_cmd_fr_rad[i], a_meas_fr_mps2[i]);
+            flight[i] = self.observer[i].update(tilt, cmd, meas, dt_s);
+            let fast = self.observer_touchdown[i].update(tilt, cmd, meas, dt_s);
+            control[i] = if touchdown {
+                fast
+            } else {
+                self.observer_touchdown[i].reset(flight[i]);
+                flight[i]
+            };
+        }
+        (flight, control)
     }
 
     /// The part of the velocity PI's acceleration command (NED north, east, m/s²) that the
@@ -640,6 +691,97 @@ mod tests {
         assert!(
             (touchdown_demand - flight_demand).abs() < 1e-4,
             "{touchdown_demand} vs {flight_demand}"
+        );
+    }
+
+    /// A still, level vehicle in LAND's committed descent (`touchdown`) or not, at yaw 0, for
+    /// `steps` of 2 ms: the attitude loop's first-order model carries the forward tilt θ (nose
+    /// down: −pitch) to the command, and the accelerometer reads its push `k1·θ` plus
+    /// `disturbance(step)` (m/s², north). Each step's forward tilt command and the tilt demand
+    /// the gate judges, rad.
+    fn fly_forward(
+        touchdown: bool,
+        steps: usize,
+        disturbance: impl Fn(usize) -> f32,
+    ) -> Vec<(f32, f32)> {
+        let p = Params::default();
+        let mut c = Cascade::from_params(&p);
+        let d = Demand {
+            vel_ne_mps: [0.0; 2],
+            yaw_rad: 0.0,
+            cross_track: false,
+            touchdown,
+            ..demand(true)
+        };
+        let pc = p.control;
+        let (k1, a, b) = (
+            pc.model_k1_mps2_per_rad,
+            pc.att_model_a_per_s,
+            pc.att_model_b_per_s,
+        );
+        let (mut tilt, mut tilt_cmd) = (0.0f32, 0.0f32);
+        (0..steps)
+            .map(|k| {
+                tilt += (-a * tilt + b * tilt_cmd) * 0.002;
+                let nav = NavState {
+                    accel_ned_mps2: [k1 * tilt + disturbance(k), 0.0, 0.0],
+                    euler: fcc_nav::attitude::Euler {
+                        pitch_rad: -tilt,
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                };
+                let out = c.update(0.002, &nav, &d);
+                tilt_cmd = -out.telemetry.pitch_cmd_rad;
+                (tilt_cmd, out.tilt_demand_rad)
+            })
+            .collect()
+    }
+
+    /// A gust's drag (1 m/s² southwards, from rest): after 0.1 s the committed descent, on
+    /// the faster observer, leans into it by more than half as much again.
+    #[test]
+    fn the_committed_descent_feels_a_gust_through_the_faster_observer() {
+        let p = Params::default();
+        assert!(p.control.observer_touchdown_l_per_s > p.control.observer_l_per_s);
+        let lean = |touchdown| fly_forward(touchdown, 50, |_| -1.0)[49].0;
+        let (flight, touchdown) = (lean(false), lean(true));
+        assert!(
+            flight > 0.0 && touchdown > 1.5 * flight,
+            "{flight} {touchdown}"
+        );
+    }
+
+    /// The faster observer passes more of the accelerometer's vibration (σ 0.5 m/s², white)
+    /// into the command; the demand the gate judges leaves it out — at the flight observer's
+    /// noise, it is not read as gusts (everywhere at 10 /s the gale's landings hopped).
+    #[test]
+    fn the_gates_demand_leaves_out_the_faster_observers_noise() {
+        let noise = |k: usize| {
+            // A fixed pseudo-random sequence: the sum of 12 uniforms, σ 0.5.
+            let mut x = (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+            let mut sum = 0.0f32;
+            for _ in 0..12 {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                sum += (x >> 40) as f32 / (1u64 << 24) as f32;
+            }
+            0.5 * (sum - 6.0)
+        };
+        let rms = |touchdown| {
+            let v = fly_forward(touchdown, 2000, noise);
+            let r = |f: fn(&(f32, f32)) -> f32| {
+                let s: f32 = v[500..].iter().map(|x| f(x) * f(x)).sum();
+                (s / (v.len() - 500) as f32).sqrt()
+            };
+            (r(|x| x.0), r(|x| x.1))
+        };
+        let ((flight_cmd, flight_demand), (td_cmd, td_demand)) = (rms(false), rms(true));
+        assert!(td_cmd > 1.2 * flight_cmd, "{flight_cmd} {td_cmd}");
+        assert!(
+            td_demand < 1.1 * flight_demand,
+            "{td_demand} vs {flight_demand}"
         );
     }
 
