@@ -360,8 +360,8 @@ fn score_safety(o: &mut Outcome, log: &FlightLog, t: &TruthReport, still_armed: 
 }
 
 /// GPS lost: the failsafe's landing must begin within the GPS timeout + 0.5 s of the loss;
-/// measured: the time from the loss to the first contact and the true horizontal distance
-/// travelled in it.
+/// measured: the time from the loss to the first contact, the true horizontal distance
+/// travelled in it and the dead-reckoned velocity's error at the contact.
 fn score_gps_loss(o: &mut Outcome, log: &FlightLog, t: &TruthReport, f: &Flight) {
     use fcc_firmware::commands::FailsafeCause;
     let t_loss = f
@@ -398,6 +398,16 @@ fn score_gps_loss(o: &mut Outcome, log: &FlightLog, t: &TruthReport, f: &Flight)
         None,
     );
     figure(o, "gps_loss_drift_m", drift, None);
+    // The dead-reckoned velocity's error at the contact (truth − estimate, horizontal, the
+    // last sample before it): a slide no loop can see, with nothing on board observing the
+    // ground speed. `scripts/gps_loss_bound.py` has the optimal estimator's error for these
+    // sensors.
+    let before = contact.and_then(|c| log.samples.iter().rev().find(|s| s.t_s < c.t_s));
+    let vel_err = before.map_or(f64::NAN, |s| {
+        let v = s.nav.vel_ned_mps;
+        (s.true_vel_ned_mps[0] - v[0] as f64).hypot(s.true_vel_ned_mps[1] - v[1] as f64)
+    });
+    figure(o, "gps_loss_vel_err_mps", vel_err, None);
 }
 
 /// Hover: the hold's true altitude error and excursion, and the estimate's box (the gale's
