@@ -366,22 +366,8 @@ impl Cascade {
             };
         }
         let n = fcc_nav::math::hypotf(tilt_cmd[0], tilt_cmd[1]);
-        // The lean the wind asks for: the command less what the touchdown gain adds to it and
-        // less what the touchdown observer's faster â adds through the acceleration loop's
-        // proportional gain — and no more than the command (a lean the limit would not clip
-        // slides nothing).
-        let c = self.params.control;
-        let per_mps2 = 1.0 / c.model_k1_mps2_per_rad + c.accel_p_rad_per_mps2;
-        let k_pa = c.accel_p_rad_per_mps2;
-        let wind_demand_rad = fcc_nav::math::hypotf(
-            tilt_cmd[0]
-                - per_mps2 * stiffer_fr_mps2[0]
-                - k_pa * (a_est_fr_mps2[0] - a_ctl_fr_mps2[0]),
-            tilt_cmd[1]
-                - per_mps2 * stiffer_fr_mps2[1]
-                - k_pa * (a_est_fr_mps2[1] - a_ctl_fr_mps2[1]),
-        )
-        .min(n);
+        let wind_demand_rad =
+            self.wind_demand_rad(tilt_cmd, stiffer_fr_mps2, a_est_fr_mps2, a_ctl_fr_mps2);
         self.tilt_sat_fr = [0.0; 2];
         let vel_err_mps = fcc_nav::math::hypotf(
             v_cmd_ne_mps[0] - vel_ne_mps[0],
@@ -406,6 +392,31 @@ impl Cascade {
             tilt_demand_rad: wind_demand_rad,
             vel_err_mps,
         }
+    }
+
+    /// The lean the wind asks for ([`CascadeOutput::tilt_demand_rad`]), rad: the tilt command
+    /// (forward, right, before the limit) less what the touchdown gain adds to it
+    /// (`stiffer_fr_mps2`, through `∂θ/∂a = 1/k1 + K_p,a`) and less what the touchdown
+    /// observer's faster â adds through the acceleration loop's proportional gain
+    /// (`K_p,a·(â_flight − â_control)`) — and no more than the command (a lean the limit would
+    /// not clip slides nothing).
+    fn wind_demand_rad(
+        &self,
+        tilt_cmd_fr_rad: [f32; 2],
+        stiffer_fr_mps2: [f32; 2],
+        a_est_fr_mps2: [f32; 2],
+        a_ctl_fr_mps2: [f32; 2],
+    ) -> f32 {
+        let c = self.params.control;
+        let per_mps2 = 1.0 / c.model_k1_mps2_per_rad + c.accel_p_rad_per_mps2;
+        let k_pa = c.accel_p_rad_per_mps2;
+        let axis = |i: usize| {
+            tilt_cmd_fr_rad[i]
+                - per_mps2 * stiffer_fr_mps2[i]
+                - k_pa * (a_est_fr_mps2[i] - a_ctl_fr_mps2[i])
+        };
+        let n = fcc_nav::math::hypotf(tilt_cmd_fr_rad[0], tilt_cmd_fr_rad[1]);
+        fcc_nav::math::hypotf(axis(0), axis(1)).min(n)
     }
 
     /// Both observers one step (heading frame, m/s²): the flight observer's `â` (paper A's,
