@@ -438,9 +438,8 @@ impl Cascade {
         for i in 0..2 {
             let (tilt, cmd, meas) = (tilt_fr_rad[i], self.tilt_cmd_fr_rad[i], a_meas_fr_mps2[i]);
             flight[i] = self.observer[i].update(tilt, cmd, meas, dt_s);
-            let fast = self.observer_touchdown[i].update(tilt, cmd, meas, dt_s);
             control[i] = if touchdown {
-                fast
+                self.observer_touchdown[i].update(tilt, cmd, meas, dt_s)
             } else {
                 self.observer_touchdown[i].reset(flight[i]);
                 flight[i]
