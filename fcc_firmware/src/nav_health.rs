@@ -284,7 +284,7 @@ mod tests {
         let mut t = 0.0f32;
         while h.faults() == 0 && t < 10.0 {
             let x = Innovations {
-                baro_alt_m: (k % 10 == 0).then_some(4.0),
+                baro_alt_m: k.is_multiple_of(10).then_some(4.0),
                 ..Default::default()
             };
             h.update(0.002, &x);

@@ -160,9 +160,9 @@ mod tests {
     fn positive_roll_torque_lowers_right_motors() {
         let m = mixer();
         let (t, _) = m.mix_thrust(44.0, [1.0, 0.0, 0.0]);
-        for i in 0..MOTOR_COUNT {
+        for (i, t_i) in t.iter().enumerate() {
             let (_, y) = motor_position_m(i, 0.525);
-            assert_eq!(y > 0.0, t[i] < 44.0 / 8.0, "motor {i}");
+            assert_eq!(y > 0.0, *t_i < 44.0 / 8.0, "motor {i}");
         }
     }
 

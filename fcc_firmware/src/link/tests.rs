@@ -45,7 +45,7 @@ impl Linux {
 /// battery 10 — vehicle level and still at a fixed GPS position.
 fn sensors(tick: u64) -> SensorInputs {
     let t_us = tick * TICK_US;
-    let every = |n: u64| tick % n == 0;
+    let every = |n: u64| tick.is_multiple_of(n);
     SensorInputs {
         imu: Some(ImuSample {
             t_us,
