@@ -376,12 +376,12 @@ impl TouchdownGate {
         self.track_speed(dt_s, speed_mps);
         let gust_demand_rad = self.track_demand(dt_s, demand_rad);
         let late = (self.wait_s - PATIENCE_S).max(0.0) / RELAX_S;
-        let floor_m = self.abort_clearance_m(clearance_m);
-        if self.committed && !self.forced && !self.felt && floor_m > ABORT_ABOVE_M {
+        let abort_c_m = self.abort_clearance_m(clearance_m);
+        if self.committed && !self.forced && !self.felt && abort_c_m > ABORT_ABOVE_M {
             let k = 1.0 + late;
             let clipped = gust_demand_rad > LEVEL_TILT_DEG.to_radians() || self.limited_lp > 0.5;
             let lean =
-                floor_m > ABORT_LEAN_ABOVE_M && gust_demand_rad > k * LEVEL_TILT_DEG.to_radians();
+                abort_c_m > ABORT_LEAN_ABOVE_M && gust_demand_rad > k * LEVEL_TILT_DEG.to_radians();
             let push = self.contact_speed_mps(speed_mps, clipped, clearance_m, touchdown_speed_mps)
                 > (k * ABORT_SPEED_MPS).min(ABORT_SPEED_CAP_MPS);
             if lean || push {
