@@ -333,6 +333,7 @@ fn score_safety(o: &mut Outcome, log: &FlightLog, t: &TruthReport, still_armed: 
             figure(o, "touchdown_gate_wait_s", wait_s, None);
             let forced = planned().any(|c| c.gate_forced);
             figure(o, "touchdown_gate_forced", forced as u8 as f64, None);
+            touchdown_estimate(o, log, t);
         }
         None => o.failures.push(("landed", "never landed".into())),
     }
@@ -408,6 +409,33 @@ fn score_gps_loss(o: &mut Outcome, log: &FlightLog, t: &TruthReport, f: &Flight)
         (s.true_vel_ned_mps[0] - v[0] as f64).hypot(s.true_vel_ned_mps[1] - v[1] as f64)
     });
     figure(o, "gps_loss_vel_err_mps", vel_err, None);
+}
+
+/// The estimate at the first landing's contact (the last sample before it): the horizontal
+/// ground speed the vehicle believed it had, and that belief's error against the truth — how
+/// much of a touchdown's slide the loops could not see.
+fn touchdown_estimate(o: &mut Outcome, log: &FlightLog, t: &TruthReport) {
+    let first = t.contacts.iter().find(|c| c.planned);
+    let before = first.and_then(|c| log.samples.iter().rev().find(|s| s.t_s < c.t_s));
+    let (est, err) = before.map_or((f64::NAN, f64::NAN), |s| {
+        let v = s.nav.vel_ned_mps;
+        let est = (v[0] as f64).hypot(v[1] as f64);
+        let err = (s.true_vel_ned_mps[0] - v[0] as f64).hypot(s.true_vel_ned_mps[1] - v[1] as f64);
+        (est, err)
+    });
+    figure(o, "touchdown_est_horiz_mps", est, None);
+    figure(o, "touchdown_vel_err_mps", err, None);
+    // The tilt the vehicle believed it had at the contact, less the true one, deg.
+    let tilt_err = before.map_or(f64::NAN, |s| {
+        let e = s.nav.euler;
+        let est = fcc_nav::ground_altitude::tilt_angle_rad(e.roll_rad, e.pitch_rad) as f64;
+        let tr = fcc_nav::ground_altitude::tilt_angle_rad(
+            s.true_euler_rad[0] as f32,
+            s.true_euler_rad[1] as f32,
+        ) as f64;
+        (est - tr).to_degrees()
+    });
+    figure(o, "touchdown_tilt_err_deg", tilt_err, None);
 }
 
 /// Hover: the hold's true altitude error and excursion, and the estimate's box (the gale's
