@@ -23,8 +23,9 @@ use fcc_nav::vertical::{pressure_to_alt_m, VerticalEstimator};
 const ACCEL_BIAS_LIMIT_MPS2: f32 = 1.5;
 /// The tilt innovation monitor runs on every this-many IMU samples.
 const TILT_CHECK_EVERY: u8 = 10;
-/// The GPS-differenced acceleration stops compensating the tilt correction when the last GPS
-/// velocity is older than this, s (1.5 periods of the 5 Hz u-blox solution). Held for the
+/// The GPS velocity stops correcting the tilt (and the GPS-differenced acceleration stops
+/// compensating the accelerometer) when the last GPS velocity is older than this, s (1.5
+/// periods of the 5 Hz u-blox solution). Held for the
 /// whole GPS timeout (1 s), a stale gust acceleration was read as tilt, and that attitude error
 /// is what the dead-reckoned velocity integrates after the loss (g·δ): `gps_loss.yaml` in still
 /// air, seed 2, 2 s after the loss, 0.78° → 0.47° (0.5 s: 0.56°); campaign family `gps_loss`,
@@ -116,9 +117,11 @@ pub struct Navigator {
     last_mag_frd: Option<[f32; 3]>,
     /// Accelerometer low-pass for the tilt correction only (vibration before asin/atan2).
     tilt_accel_lpf: [LowPass2; 3],
-    /// Vehicle acceleration from successive GPS velocities (NED), smoothed, and when it was
-    /// last updated: subtracted from the accelerometer before the tilt correction so that
-    /// manoeuvres are not mistaken for tilt (as ArduPilot's DCM does).
+    /// Vehicle acceleration from successive GPS velocities (NED), smoothed: subtracted from
+    /// the accelerometer's specific force so that manoeuvres are not mistaken for tilt (as
+    /// ArduPilot's DCM does). Only while the GPS velocity corrects the tilt itself
+    /// ([`Self::gps_tilt_aided`]), so it now shapes the tilt innovation monitor's reading,
+    /// not the tilt.
     gps_accel_ned_mps2: [f32; 3],
     last_gps_vel: Option<(u64, [f32; 3])>,
     /// Roll/pitch and their rate biases from the GPS velocity's innovation (steady-state
@@ -226,11 +229,6 @@ impl Navigator {
     /// measurement (the aid before the Kalman gains): square 0.312/0.337° → 0.249/0.292°,
     /// manoeuvre 0.328/0.537° → 0.218/0.257°.
     pub fn gps_tilt_aided(&self) -> bool {
-        self.gps_vel_fresh()
-    }
-
-    /// A healthy GPS whose last velocity is at most [`GPS_ACCEL_MAX_AGE_S`] old.
-    fn gps_vel_fresh(&self) -> bool {
         self.state.gps_ok
             && self
                 .last_gps_vel
@@ -243,10 +241,12 @@ impl Navigator {
     }
 
     /// The manoeuvre acceleration (NED, m/s²) the next IMU step removes from the specific
-    /// force before the tilt correction: the smoothed GPS-differenced acceleration while GPS
-    /// velocities arrive (the last one at most [`GPS_ACCEL_MAX_AGE_S`] old), else zero.
+    /// force it reads as a gravity direction: the smoothed GPS-differenced acceleration while
+    /// GPS velocities arrive ([`Self::gps_tilt_aided`]: then that reading only feeds the tilt
+    /// innovation monitor, the GPS velocity corrects the tilt), else zero (the tilt is held
+    /// on the gyro first, then corrected from the accelerometer as it is).
     pub fn tilt_accel_comp_ned_mps2(&self) -> [f32; 3] {
-        if self.gps_vel_fresh() {
+        if self.gps_tilt_aided() {
             self.gps_accel_ned_mps2
         } else {
             [0.0; 3]
@@ -374,7 +374,8 @@ impl Navigator {
             self.tilt_accel_lpf[2].update(f[2]),
         ];
         // Remove the manoeuvre acceleration (GPS-derived, NED → body) from the specific
-        // force before it is read as a gravity direction.
+        // force before it is read as a gravity direction (by the tilt monitor while the GPS
+        // velocity corrects the tilt).
         let a = self.tilt_accel_comp_ned_mps2();
         self.att.mag_realign_allowed = on_ground_disarmed;
         self.att.accel_tilt = !self.gps_tilt_aided();

@@ -20,7 +20,7 @@
 //! for a lull (`touchdown_gate_wait_s`) and whether its timeout committed the touchdown
 //! (`touchdown_gate_forced`: its last chance, or GPS lost).
 
-use super::log::FlightLog;
+use super::log::{FlightLog, LogSample};
 use super::metrics;
 use super::scenario::Scenario;
 use super::sim::Sim;
@@ -403,12 +403,20 @@ fn score_gps_loss(o: &mut Outcome, log: &FlightLog, t: &TruthReport, f: &Flight)
     // last sample before it): a slide no loop can see, with nothing on board observing the
     // ground speed. `scripts/gps_loss_bound.py` has the optimal estimator's error for these
     // sensors.
-    let before = contact.and_then(|c| log.samples.iter().rev().find(|s| s.t_s < c.t_s));
-    let vel_err = before.map_or(f64::NAN, |s| {
-        let v = s.nav.vel_ned_mps;
-        (s.true_vel_ned_mps[0] - v[0] as f64).hypot(s.true_vel_ned_mps[1] - v[1] as f64)
-    });
+    let before = contact.and_then(|c| sample_before(log, c.t_s));
+    let vel_err = before.map_or(f64::NAN, horiz_vel_err_mps);
     figure(o, "gps_loss_vel_err_mps", vel_err, None);
+}
+
+/// The last logged sample before `t_s`.
+fn sample_before(log: &FlightLog, t_s: f64) -> Option<&LogSample> {
+    log.samples.iter().rev().find(|s| s.t_s < t_s)
+}
+
+/// The horizontal velocity estimate's error against the truth, m/s.
+fn horiz_vel_err_mps(s: &LogSample) -> f64 {
+    let v = s.nav.vel_ned_mps;
+    (s.true_vel_ned_mps[0] - v[0] as f64).hypot(s.true_vel_ned_mps[1] - v[1] as f64)
 }
 
 /// The estimate at the first landing's contact (the last sample before it): the horizontal
@@ -416,15 +424,18 @@ fn score_gps_loss(o: &mut Outcome, log: &FlightLog, t: &TruthReport, f: &Flight)
 /// much of a touchdown's slide the loops could not see.
 fn touchdown_estimate(o: &mut Outcome, log: &FlightLog, t: &TruthReport) {
     let first = t.contacts.iter().find(|c| c.planned);
-    let before = first.and_then(|c| log.samples.iter().rev().find(|s| s.t_s < c.t_s));
-    let (est, err) = before.map_or((f64::NAN, f64::NAN), |s| {
+    let before = first.and_then(|c| sample_before(log, c.t_s));
+    let est = before.map_or(f64::NAN, |s| {
         let v = s.nav.vel_ned_mps;
-        let est = (v[0] as f64).hypot(v[1] as f64);
-        let err = (s.true_vel_ned_mps[0] - v[0] as f64).hypot(s.true_vel_ned_mps[1] - v[1] as f64);
-        (est, err)
+        (v[0] as f64).hypot(v[1] as f64)
     });
     figure(o, "touchdown_est_horiz_mps", est, None);
-    figure(o, "touchdown_vel_err_mps", err, None);
+    figure(
+        o,
+        "touchdown_vel_err_mps",
+        before.map_or(f64::NAN, horiz_vel_err_mps),
+        None,
+    );
     // The tilt the vehicle believed it had at the contact, less the true one, deg.
     let tilt_err = before.map_or(f64::NAN, |s| {
         let e = s.nav.euler;
