@@ -135,7 +135,7 @@ cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')
     echo
     echo "## Flight-safety campaign (truth)"
     echo
-    echo "\`target/release/fcc-campaign --per-family 72 --long\` ($campaign_wall; exit status $campaign_status: 0 = every check held). Families and checks: \`fcc_firmware/sim/src/campaign.rs\`; every figure is the simulator's truth unless named \`est_\` (the vehicle's own estimate; \`gps_loss_vel_err_mps\`, \`touchdown_vel_err_mps\` and \`touchdown_tilt_err_deg\` compare the estimate with the truth). p50/p95/worst over the family's flights, the worst flight's seed (re-fly it: \`fcc-campaign --only FAMILY:SEED --long --csv log.csv\`). The test command flies the short form (6 seeds per family, 1-minute cruises, \`tests/tests/campaign.rs\`)."
+    echo "\`target/release/fcc-campaign --per-family 72 --long\` ($campaign_wall; exit status $campaign_status: 0 = every check held). Families and checks: \`fcc_firmware/sim/src/campaign.rs\`; every figure is the simulator's truth unless named \`est_\` (the vehicle's own estimate; \`gps_loss_vel_err_mps\`, \`touchdown_vel_err_mps\` and \`touchdown_tilt_err_deg\` compare the estimate with the truth; \`touchdown_late_gain_mps\` is the true horizontal speed the first landing gained in its last \`ABORT_ABOVE_M\` / touchdown speed = 0.16 s, under the touchdown gate's abort floor). p50/p95/worst over the family's flights, the worst flight's seed (re-fly it: \`fcc-campaign --only FAMILY:SEED --long --csv log.csv\`). The test command flies the short form (6 seeds per family, 1-minute cruises, \`tests/tests/campaign.rs\`)."
     echo
     cat "$raw.campaign"
     # What one run cannot say (why figures moved, what was tried): kept by hand.

@@ -273,7 +273,9 @@ fn score(f: &Flight, log: &FlightLog, still_armed: bool) -> Outcome {
         return o;
     }
     let t: TruthReport = truth::report(log);
-    score_safety(&mut o, log, &t, still_armed);
+    let v_t = f.scenario.params.limits.land_touchdown_speed_mps as f64;
+    let floor_s = fcc_firmware::touchdown_gate::ABORT_ABOVE_M as f64 / v_t;
+    score_safety(&mut o, log, &t, still_armed, floor_s);
     match f.family {
         "hover" | "hover_gale" => score_hover(&mut o, log, &t, f.family == "hover_gale"),
         "mission" | "landing" | "mag" => score_mission(&mut o, log, &t, f.family == "mag"),
@@ -305,7 +307,14 @@ fn score_rig(o: &mut Outcome, log: &FlightLog) {
 
 /// The checks of every flying family: no crash, unplanned contact or flyaway, attitude loops
 /// on while airborne, a gentle touchdown, disarmed at the end, no estimator fault.
-fn score_safety(o: &mut Outcome, log: &FlightLog, t: &TruthReport, still_armed: bool) {
+/// `floor_s`: the committed descent's time under the abort floor ([`late_gain_mps`]).
+fn score_safety(
+    o: &mut Outcome,
+    log: &FlightLog,
+    t: &TruthReport,
+    still_armed: bool,
+    floor_s: f64,
+) {
     figure(o, "crashes", t.crashed as u8 as f64, Some(0.0));
     figure(
         o,
@@ -334,6 +343,7 @@ fn score_safety(o: &mut Outcome, log: &FlightLog, t: &TruthReport, still_armed: 
             let forced = planned().any(|c| c.gate_forced);
             figure(o, "touchdown_gate_forced", forced as u8 as f64, None);
             touchdown_estimate(o, log, t);
+            figure(o, "touchdown_late_gain_mps", late_gain_mps(log, t, floor_s), None);
         }
         None => o.failures.push(("landed", "never landed".into())),
     }
@@ -447,6 +457,22 @@ fn touchdown_estimate(o: &mut Outcome, log: &FlightLog, t: &TruthReport) {
         (est - tr).to_degrees()
     });
     figure(o, "touchdown_tilt_err_deg", tilt_err, None);
+}
+
+/// The true horizontal speed the first landing gained in its last `floor_s` before the contact
+/// (the committed descent under the touchdown gate's abort floor,
+/// `touchdown_gate::ABORT_ABOVE_M` at the touchdown speed: there no gust sends it back, since
+/// a climb that low would touch and lift off again), m/s. Its part of a slide is one no abort
+/// could have answered.
+fn late_gain_mps(log: &FlightLog, t: &TruthReport, floor_s: f64) -> f64 {
+    let Some(c) = t.contacts.iter().find(|c| c.planned) else {
+        return f64::NAN;
+    };
+    let speed = |s: &LogSample| s.true_vel_ned_mps[0].hypot(s.true_vel_ned_mps[1]);
+    match (sample_before(log, c.t_s), sample_before(log, c.t_s - floor_s)) {
+        (Some(at), Some(before)) => speed(at) - speed(before),
+        _ => f64::NAN,
+    }
 }
 
 /// Hover: the hold's true altitude error and excursion, and the estimate's box (the gale's
