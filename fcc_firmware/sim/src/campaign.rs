@@ -343,7 +343,12 @@ fn score_safety(
             let forced = planned().any(|c| c.gate_forced);
             figure(o, "touchdown_gate_forced", forced as u8 as f64, None);
             touchdown_estimate(o, log, t);
-            figure(o, "touchdown_late_gain_mps", late_gain_mps(log, t, floor_s), None);
+            figure(
+                o,
+                "touchdown_late_gain_mps",
+                late_gain_mps(log, t, floor_s),
+                None,
+            );
         }
         None => o.failures.push(("landed", "never landed".into())),
     }
@@ -469,7 +474,10 @@ fn late_gain_mps(log: &FlightLog, t: &TruthReport, floor_s: f64) -> f64 {
         return f64::NAN;
     };
     let speed = |s: &LogSample| s.true_vel_ned_mps[0].hypot(s.true_vel_ned_mps[1]);
-    match (sample_before(log, c.t_s), sample_before(log, c.t_s - floor_s)) {
+    match (
+        sample_before(log, c.t_s),
+        sample_before(log, c.t_s - floor_s),
+    ) {
         (Some(at), Some(before)) => speed(at) - speed(before),
         _ => f64::NAN,
     }
