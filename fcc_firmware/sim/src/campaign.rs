@@ -342,13 +342,10 @@ fn score_safety(
             figure(o, "touchdown_gate_wait_s", wait_s, None);
             let forced = planned().any(|c| c.gate_forced);
             figure(o, "touchdown_gate_forced", forced as u8 as f64, None);
-            touchdown_estimate(o, log, t);
-            figure(
-                o,
-                "touchdown_late_gain_mps",
-                late_gain_mps(log, t, floor_s),
-                None,
-            );
+            let first = planned().next();
+            touchdown_estimate(o, log, first);
+            let gain = first.map_or(f64::NAN, |c| late_gain_mps(log, c.t_s, floor_s));
+            figure(o, "touchdown_late_gain_mps", gain, None);
         }
         None => o.failures.push(("landed", "never landed".into())),
     }
@@ -437,8 +434,7 @@ fn horiz_vel_err_mps(s: &LogSample) -> f64 {
 /// The estimate at the first landing's contact (the last sample before it): the horizontal
 /// ground speed the vehicle believed it had, and that belief's error against the truth — how
 /// much of a touchdown's slide the loops could not see.
-fn touchdown_estimate(o: &mut Outcome, log: &FlightLog, t: &TruthReport) {
-    let first = t.contacts.iter().find(|c| c.planned);
+fn touchdown_estimate(o: &mut Outcome, log: &FlightLog, first: Option<&truth::Contact>) {
     let before = first.and_then(|c| sample_before(log, c.t_s));
     let est = before.map_or(f64::NAN, |s| {
         let v = s.nav.vel_ned_mps;
@@ -464,19 +460,16 @@ fn touchdown_estimate(o: &mut Outcome, log: &FlightLog, t: &TruthReport) {
     figure(o, "touchdown_tilt_err_deg", tilt_err, None);
 }
 
-/// The true horizontal speed the first landing gained in its last `floor_s` before the contact
-/// (the committed descent under the touchdown gate's abort floor,
+/// The true horizontal speed a landing gained in its last `floor_s` before its contact at
+/// `contact_t_s` (the committed descent under the touchdown gate's abort floor,
 /// `touchdown_gate::ABORT_ABOVE_M` at the touchdown speed: there no gust sends it back, since
 /// a climb that low would touch and lift off again), m/s. Its part of a slide is one no abort
 /// could have answered.
-fn late_gain_mps(log: &FlightLog, t: &TruthReport, floor_s: f64) -> f64 {
-    let Some(c) = t.contacts.iter().find(|c| c.planned) else {
-        return f64::NAN;
-    };
+fn late_gain_mps(log: &FlightLog, contact_t_s: f64, floor_s: f64) -> f64 {
     let speed = |s: &LogSample| s.true_vel_ned_mps[0].hypot(s.true_vel_ned_mps[1]);
     match (
-        sample_before(log, c.t_s),
-        sample_before(log, c.t_s - floor_s),
+        sample_before(log, contact_t_s),
+        sample_before(log, contact_t_s - floor_s),
     ) {
         (Some(at), Some(before)) => speed(at) - speed(before),
         _ => f64::NAN,
