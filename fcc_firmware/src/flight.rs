@@ -827,7 +827,8 @@ impl FlightCore {
     /// The tilt limit: `limits.max_tilt_deg`, and in LAND's last [`LAND_LEVEL_HEIGHT_M`] above
     /// the gear no more than [`LAND_LEVEL_TILT_DEG`] while slower than
     /// [`LAND_LEVEL_MAX_SPEED_MPS`] (touch down level: a tilted gear catches a foot) — once
-    /// the touchdown gate has committed — and on the gear (ground contact) whatever the speed.
+    /// the touchdown gate has committed — while a gust's abort arrests the committed descent
+    /// ([`TouchdownGate::arresting`]), and on the gear (ground contact) whatever the speed.
     /// Waiting at the gate the vehicle leans as far as the wind needs to stay put (the level
     /// limit there let every gust slide it, and at 0.15 m the limit switched on and off with
     /// the height noise); a commit whose command the level limit clips goes back to the gate.
@@ -844,6 +845,9 @@ impl FlightCore {
             && nav.ground.height_m < on_ground_m + LAND_LEVEL_HEIGHT_M;
         let level = self.mode == Mode::Land
             && ((near_ground && !self.touchdown_gate.unlevel() && slow)
+                // Sent back by a gust and still going down: no lean until the descent has
+                // stopped (a lean during the arrest puts a foot down).
+                || self.touchdown_gate.arresting(nav.vel_ned_mps[2])
                 // On the gear: a lean there tips the vehicle over (PX4 levels the thrust on
                 // ground contact).
                 || self.land.state() != LandState::Airborne);
